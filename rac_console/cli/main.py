@@ -1,0 +1,156 @@
+"""Command-line entry point: options, sub-commands and exit statuses.
+
+Only argparse is imported at start; each mode imports its toolkit when it runs,
+so ``--version``, ``get`` and ``sim`` start fast.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from collections.abc import Sequence
+
+from .. import __version__
+
+DESCRIPTION = "A console for DENSO RC8 controllers speaking RAC (TCP port 5006)."
+EPILOG = """\
+Without -H every command talks to a built-in RC8 simulator.
+Exit status: 0 success, 1 the controller answered an error, 2 refused before
+sending (bad input, read-only), 3 connection failure, timeout or bad reply."""
+
+
+def _positive_seconds(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a number of seconds: {text!r}") from None
+    if not 0 < value <= 3600:
+        raise argparse.ArgumentTypeError(f"timeout must be between 0 and 3600 s, got {text}")
+    return value
+
+
+def _port(text: str) -> int:
+    if not text.isdigit() or not 0 <= int(text) <= 65535:
+        raise argparse.ArgumentTypeError(f"a port is a number from 0 to 65535, got {text!r}")
+    return int(text)
+
+
+def _global_options(parser: argparse.ArgumentParser, suppress: bool) -> None:
+    """The options every command takes, before or after the command word."""
+
+    def default(value: object) -> object:
+        return argparse.SUPPRESS if suppress else value
+
+    parser.add_argument(
+        "-H",
+        "--host",
+        default=default(None),
+        help="controller address (default: the built-in simulator)",
+    )
+    parser.add_argument(
+        "-p", "--port", type=_port, default=default(5006), help="controller port (default 5006)"
+    )
+    parser.add_argument(
+        "--timeout",
+        type=_positive_seconds,
+        default=default(2.0),
+        metavar="SECONDS",
+        help="per-request timeout (default 2)",
+    )
+    parser.add_argument(
+        "--json",
+        action="store_true",
+        default=default(False),
+        help="print one JSON object per result",
+    )
+    parser.add_argument(
+        "--read-only",
+        action="store_true",
+        default=default(False),
+        help="refuse every PUT before sending",
+    )
+    parser.add_argument(
+        "--record",
+        metavar="FILE",
+        default=default(None),
+        help="append every frame sent and received to FILE as JSON lines",
+    )
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="rac-console",
+        description=DESCRIPTION,
+        epilog=EPILOG,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    parser.add_argument("--version", action="version", version=f"rac-console {__version__}")
+    _global_options(parser, suppress=False)
+    commands = parser.add_subparsers(dest="command", metavar="COMMAND")
+
+    def command(name: str, help_text: str) -> argparse.ArgumentParser:
+        sub = commands.add_parser(name, help=help_text, description=help_text)
+        _global_options(sub, suppress=True)
+        return sub
+
+    get = command("get", "read a variable: get P 10")
+    get.add_argument("type", metavar="TYPE", help="I F D S V P J T IO")
+    get.add_argument("index", metavar="INDEX")
+    put = command("put", "write a variable: put P 10 1 2 3 4 5 6 -1")
+    put.add_argument("type", metavar="TYPE", help="I F D S V P J T IO")
+    put.add_argument("index", metavar="INDEX")
+    put.add_argument(
+        "value",
+        metavar="VALUE",
+        nargs=argparse.REMAINDER,
+        help="the value; V/P/J/T take 3/7/8/10 numbers, IO on|off",
+    )
+    send = command("send", "send a raw RAC string as it is and print the reply")
+    send.add_argument("text", metavar="TEXT", help="e.g. 'GET:RC8:10:I:' (CR is added)")
+    run = command("run", "run console commands from FILE (or - for stdin) over one session")
+    run.add_argument("file", metavar="FILE|-")
+    sim = commands.add_parser(
+        "sim",
+        help="run the RC8 simulator as a server",
+        description="Serve the built-in RC8 simulator over TCP.",
+    )
+    sim.add_argument(
+        "--bind",
+        default="127.0.0.1",
+        metavar="ADDR",
+        help="address to listen on (default 127.0.0.1, loopback only)",
+    )
+    sim.add_argument(
+        "--port", dest="sim_port", type=_port, default=5006, help="port to listen on (default 5006)"
+    )
+    return parser
+
+
+def _dispatch(args: argparse.Namespace) -> int:
+    import asyncio
+
+    if args.command in ("get", "put", "send"):
+        from .oneshot import one_command
+
+        return asyncio.run(one_command(args))
+    if args.command == "run":
+        from .oneshot import run_script
+
+        return asyncio.run(run_script(args))
+    if args.command == "sim":
+        from .simulator import serve
+
+        return asyncio.run(serve(args))
+    build_parser().print_help()
+    return 0
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    args = build_parser().parse_args(argv)
+    try:
+        return int(_dispatch(args))
+    except KeyboardInterrupt:
+        print("rac-console: interrupted", file=sys.stderr)
+        return 130
+    except BrokenPipeError:
+        return 0

@@ -1,0 +1,37 @@
+"""Which controller a command talks to: ``-H HOST``, or the built-in simulator."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from collections.abc import AsyncIterator
+from contextlib import AsyncExitStack, asynccontextmanager
+
+from ..client import RacSession
+from ..recorder import FrameRecorder
+from ..sim.server import SimulatorServer
+
+
+@asynccontextmanager
+async def open_session(
+    args: argparse.Namespace, *, announce: bool = True
+) -> AsyncIterator[RacSession]:
+    """A session to ``args.host``, or to an in-process simulator when no host was given."""
+    async with AsyncExitStack() as stack:
+        if args.host:
+            session = RacSession(args.host, args.port, timeout=args.timeout)
+        else:
+            sim = await stack.enter_async_context(SimulatorServer())
+            if announce:
+                print(
+                    f"rac-console: no -H given: talking to the built-in RC8 simulator "
+                    f"at {sim.host}:{sim.port}, not a controller",
+                    file=sys.stderr,
+                )
+            session = RacSession(sim.host, sim.port, timeout=args.timeout)
+        if args.record:
+            recorder = FrameRecorder(args.record)
+            stack.callback(recorder.close)
+            session.add_frame_observer(recorder)
+        stack.push_async_callback(session.close)
+        yield session

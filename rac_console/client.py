@@ -1,0 +1,380 @@
+"""Asyncio RAC session: one TCP connection, one request in flight.
+
+The protocol has no request ids, so a reply is only ever matched to the one
+request waiting for it. After a timeout, a reply that cannot belong to its
+request, or bytes that arrive while nothing waits, the connection is dropped and
+a fresh one is opened for the next request: a late reply can never be taken for
+the answer to a later request.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import heapq
+import itertools
+import os
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Literal
+
+from .protocol import (
+    FrameTooLong,
+    LineDecoder,
+    ProtocolError,
+    RacError,
+    Response,
+    Variant,
+    VarKind,
+    decode_frame,
+    encode_request,
+    escape_bytes,
+    format_variant,
+    get_request,
+    parse_response,
+    put_request,
+)
+
+DEFAULT_PORT = 5006
+DEFAULT_TIMEOUT = 2.0
+MAX_REPLY_LINE = 64 * 1024
+
+PRIORITY_COMMAND = 0
+PRIORITY_POLL = 1
+
+Direction = Literal["tx", "rx"]
+State = Literal["closed", "connecting", "connected"]
+
+
+class TransportError(RacError):
+    """The exchange failed on the way: no trustworthy reply came."""
+
+    def __init__(self, message: str, raw: bytes | None = None) -> None:
+        super().__init__(message)
+        self.raw = raw
+
+
+class ConnectFailed(TransportError):
+    pass
+
+
+class RequestTimeout(TransportError):
+    pass
+
+
+class Disconnected(TransportError):
+    pass
+
+
+class BadReply(TransportError):
+    """A reply came but cannot be parsed or cannot belong to the request."""
+
+
+@dataclass(frozen=True, slots=True)
+class Frame:
+    """One frame that crossed the wire, for logs and recorders.
+
+    ``data`` holds the bytes as they crossed, CR included; a fragment cut off by
+    a closed connection has no CR. ``rtt`` is set on a reply to a request.
+    """
+
+    time: float
+    direction: Direction
+    data: bytes
+    rtt: float | None = None
+    unsolicited: bool = False
+
+
+@dataclass(frozen=True, slots=True)
+class Reply:
+    """A request and the reply that answered it."""
+
+    request: str
+    raw: bytes
+    response: Response
+    rtt: float
+
+    @property
+    def text(self) -> str:
+        return self.raw.decode("ascii")
+
+
+FrameObserver = Callable[[Frame], None]
+StateObserver = Callable[[State], None]
+
+
+class _Turnstile:
+    """A lock granted by priority, then arrival: typed commands overtake queued polls."""
+
+    def __init__(self) -> None:
+        self._held = False
+        self._waiters: list[tuple[int, int, asyncio.Future[None]]] = []
+        self._arrivals = itertools.count()
+
+    async def acquire(self, priority: int) -> None:
+        if not self._held and not self._waiters:
+            self._held = True
+            return
+        waiter: asyncio.Future[None] = asyncio.get_running_loop().create_future()
+        heapq.heappush(self._waiters, (priority, next(self._arrivals), waiter))
+        try:
+            await waiter
+        except asyncio.CancelledError:
+            if waiter.done() and not waiter.cancelled():
+                self.release()
+            raise
+
+    def release(self) -> None:
+        while self._waiters:
+            _, _, waiter = heapq.heappop(self._waiters)
+            if not waiter.done():
+                waiter.set_result(None)
+                return
+        self._held = False
+
+
+class _SessionProtocol(asyncio.Protocol):
+    def __init__(self, session: RacSession) -> None:
+        self._session = session
+
+    def data_received(self, data: bytes) -> None:
+        self._session._on_data(self, data)
+
+    def connection_lost(self, exc: Exception | None) -> None:
+        self._session._on_lost(self)
+
+
+class RacSession:
+    """One session to a controller; ``get``, ``put`` and ``send_raw`` queue up."""
+
+    def __init__(
+        self,
+        host: str,
+        port: int = DEFAULT_PORT,
+        *,
+        timeout: float = DEFAULT_TIMEOUT,
+        connect_timeout: float | None = None,
+        max_line: int = MAX_REPLY_LINE,
+    ) -> None:
+        self.host = host
+        self.port = port
+        self.timeout = timeout
+        self.connect_timeout = connect_timeout if connect_timeout is not None else timeout
+        self.max_line = max_line
+        self.last_rtt: float | None = None
+        self._frame_observers: list[FrameObserver] = []
+        self._state_observers: list[StateObserver] = []
+        self._state: State = "closed"
+        self._turn = _Turnstile()
+        self._transport: asyncio.Transport | None = None
+        self._protocol: _SessionProtocol | None = None
+        self._decoder = LineDecoder(max_line)
+        self._pending: asyncio.Future[tuple[bytes, float]] | None = None
+        self._sent_at = 0.0
+        self._after_cr = False
+
+    # ------------------------------------------------------------ observers
+
+    @property
+    def address(self) -> str:
+        return f"{self.host}:{self.port}"
+
+    @property
+    def state(self) -> State:
+        return self._state
+
+    def add_frame_observer(self, observer: FrameObserver) -> None:
+        self._frame_observers.append(observer)
+
+    def remove_frame_observer(self, observer: FrameObserver) -> None:
+        self._frame_observers.remove(observer)
+
+    def add_state_observer(self, observer: StateObserver) -> None:
+        self._state_observers.append(observer)
+
+    def _publish(self, frame: Frame) -> None:
+        for observer in self._frame_observers:
+            observer(frame)
+
+    def _set_state(self, state: State) -> None:
+        if state != self._state:
+            self._state = state
+            for observer in self._state_observers:
+                observer(state)
+
+    # ------------------------------------------------------------ requests
+
+    async def get(self, kind: VarKind, index: int, *, priority: int = PRIORITY_COMMAND) -> Reply:
+        return await self.request(
+            get_request(kind, index), check=_get_check(kind), priority=priority
+        )
+
+    async def put(self, kind: VarKind, index: int, value: Variant) -> Reply:
+        return await self.request(put_request(kind, index, format_variant(value)), check=_put_check)
+
+    async def send_raw(self, text: str) -> Reply:
+        return await self.request(text)
+
+    async def request(
+        self,
+        text: str,
+        *,
+        check: Callable[[Response], str | None] | None = None,
+        priority: int = PRIORITY_COMMAND,
+    ) -> Reply:
+        """Send one request and wait for its reply.
+
+        Raises InputError before sending when the text cannot be a frame, and a
+        TransportError when no trustworthy reply came.
+        """
+        data = encode_request(text)
+        await self._turn.acquire(priority)
+        try:
+            return await self._exchange(text, data, check)
+        finally:
+            self._turn.release()
+
+    async def _exchange(
+        self, text: str, data: bytes, check: Callable[[Response], str | None] | None
+    ) -> Reply:
+        transport = await self._connected_transport()
+        loop = asyncio.get_running_loop()
+        pending = self._pending = loop.create_future()
+        expiry = loop.call_later(self.timeout, self._expire, pending)
+        self._sent_at = time.perf_counter()
+        transport.write(data)
+        self._publish(Frame(time.time(), "tx", data))
+        try:
+            frame, rtt = await pending
+        finally:
+            expiry.cancel()
+            self._pending = None
+        try:
+            response = parse_response(decode_frame(frame))
+            problem = check(response) if check else None
+        except ProtocolError as exc:
+            problem = str(exc)
+        if problem:
+            self._drop_connection()
+            raise BadReply(f"bad reply '{escape_bytes(frame)}': {problem}", frame)
+        self.last_rtt = rtt
+        return Reply(text, frame, response, rtt)
+
+    def _expire(self, pending: asyncio.Future[tuple[bytes, float]]) -> None:
+        if not pending.done():
+            pending.set_exception(RequestTimeout(f"no reply within {self.timeout:g} s"))
+            self._drop_connection()
+
+    # ---------------------------------------------------------- connection
+
+    async def connect(self) -> None:
+        """Open the connection now rather than at the first request."""
+        await self._connected_transport()
+
+    async def _connected_transport(self) -> asyncio.Transport:
+        if self._transport is not None and not self._transport.is_closing():
+            return self._transport
+        self._set_state("connecting")
+        loop = asyncio.get_running_loop()
+        try:
+            transport, protocol = await asyncio.wait_for(
+                loop.create_connection(lambda: _SessionProtocol(self), self.host, self.port),
+                self.connect_timeout,
+            )
+        except (TimeoutError, OSError) as exc:
+            self._set_state("closed")
+            reason = "timed out"
+            if isinstance(exc, OSError) and not isinstance(exc, asyncio.TimeoutError):
+                reason = os.strerror(exc.errno) if exc.errno else str(exc)
+            raise ConnectFailed(f"cannot connect to {self.address}: {reason}") from None
+        self._transport = transport  # type: ignore[assignment]
+        self._protocol = protocol
+        self._decoder.clear()
+        self._after_cr = False
+        self._set_state("connected")
+        return self._transport  # type: ignore[return-value]
+
+    def _drop_connection(self) -> None:
+        """Abort the connection so nothing more it carries can be read."""
+        if self._transport is not None:
+            self._transport.abort()
+            self._transport = None
+            self._protocol = None
+        self._decoder.clear()
+        self._set_state("closed")
+
+    async def close(self) -> None:
+        self._drop_connection()
+
+    async def __aenter__(self) -> RacSession:
+        return self
+
+    async def __aexit__(self, *exc_info: object) -> None:
+        await self.close()
+
+    # ----------------------------------------------------- protocol events
+
+    def _on_data(self, protocol: _SessionProtocol, data: bytes) -> None:
+        if protocol is not self._protocol:
+            return  # a connection already given up on
+        now = time.perf_counter()
+        if data == b"\n" and self._after_cr:
+            return
+        self._after_cr = data.endswith(b"\r")
+        pending = self._pending
+        try:
+            frames = self._decoder.feed(data)
+        except FrameTooLong as exc:
+            self._publish(Frame(time.time(), "rx", data[:256], unsolicited=pending is None))
+            if pending is not None and not pending.done():
+                pending.set_exception(BadReply(f"reply too long: {exc}", data[:256]))
+            self._drop_connection()
+            return
+        waiting = pending is not None and not pending.done()
+        for frame in frames:
+            if waiting:
+                rtt = now - self._sent_at
+                self._publish(Frame(time.time(), "rx", frame + b"\r", rtt))
+                pending.set_result((frame, rtt))  # type: ignore[union-attr]
+                waiting = False
+            else:
+                self._publish(Frame(time.time(), "rx", frame + b"\r", unsolicited=True))
+                self._drop_connection()
+        if not waiting and self._decoder.pending not in (b"", b"\n") and self._transport:
+            # Bytes of a line nobody asked for: never let them prefix the next reply.
+            self._publish(Frame(time.time(), "rx", self._decoder.pending, unsolicited=True))
+            self._drop_connection()
+
+    def _on_lost(self, protocol: _SessionProtocol) -> None:
+        if protocol is not self._protocol:
+            return
+        fragment = self._decoder.pending
+        pending = self._pending
+        self._transport = None
+        self._protocol = None
+        self._decoder.clear()
+        self._set_state("closed")
+        if fragment:
+            self._publish(Frame(time.time(), "rx", fragment))
+        if pending is not None and not pending.done():
+            detail = f" after '{escape_bytes(fragment)}'" if fragment else ""
+            pending.set_exception(
+                Disconnected(f"the controller closed the connection{detail}", fragment or None)
+            )
+
+
+def _get_check(kind: VarKind) -> Callable[[Response], str | None]:
+    def check(response: Response) -> str | None:
+        if not response.ok:
+            return None
+        if response.variant is None:
+            return "S_OK with no value"
+        return kind.reply_problem(response.variant)
+
+    return check
+
+
+def _put_check(response: Response) -> str | None:
+    if response.variant is not None:
+        return "a PUT reply carries no value"
+    return None

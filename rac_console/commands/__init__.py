@@ -1,0 +1,1 @@
+"""Pure command language, shared by every front end (no I/O, no UI imports)."""

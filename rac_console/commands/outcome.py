@@ -1,0 +1,84 @@
+"""What came of one command: the shared result every front end renders.
+
+Pure data: the JSON object of ``--json`` and the exit status are decided here
+once, for the CLI, ``run``, the REPL and the console alike.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from enum import IntEnum
+from typing import Any
+
+from ..protocol import Response, Variant, describe_hresult, hresult_name
+from .language import VarRef
+
+
+class ExitStatus(IntEnum):
+    OK = 0
+    CONTROLLER_ERROR = 1  # the controller answered an error HRESULT
+    REFUSED = 2  # refused before anything was sent
+    TRANSPORT = 3  # no connection, timeout, or a reply that cannot be parsed
+
+
+@dataclass(frozen=True)
+class Outcome:
+    """The result of one exchange, or why there was none."""
+
+    request: str | None
+    status: ExitStatus
+    var: VarRef | None = None
+    response_text: str | None = None
+    response: Response | None = None
+    rtt: float | None = None
+    error: str | None = None
+    input_line: str | None = None
+    written: Variant | None = None
+
+    @property
+    def ok(self) -> bool:
+        return self.status == ExitStatus.OK
+
+    @property
+    def variant(self) -> Variant | None:
+        return self.response.variant if self.response else None
+
+    @property
+    def rtt_ms(self) -> float | None:
+        return None if self.rtt is None else round(self.rtt * 1000, 3)
+
+    def summary(self) -> str:
+        """One line for people: the HRESULT, or the error."""
+        if self.error:
+            return self.error
+        assert self.response is not None
+        return describe_hresult(self.response.code)
+
+    def to_json(self) -> dict[str, Any]:
+        variant = self.variant
+        data: dict[str, Any] = {
+            "request": self.request,
+            "response": self.response_text,
+            "ok": self.ok,
+            "result": self.response.code if self.response else None,
+            "result_name": hresult_name(self.response.code) if self.response else None,
+            "vt": variant.vt if variant else None,
+            "value": variant.to_json() if variant else None,
+            "rtt_ms": self.rtt_ms,
+        }
+        if self.var is not None:
+            data["variable"] = str(self.var)
+        if self.input_line is not None:
+            data["input"] = self.input_line
+        if self.error:
+            data["error"] = self.error
+        return data
+
+
+def refused(line: str | None, message: str, request: str | None = None) -> Outcome:
+    return Outcome(request, ExitStatus.REFUSED, error=message, input_line=line)
+
+
+def worst(statuses: list[ExitStatus]) -> ExitStatus:
+    """The exit status of a run: the most severe one seen."""
+    return max(statuses, default=ExitStatus.OK)

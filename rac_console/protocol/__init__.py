@@ -1,0 +1,51 @@
+"""Pure RAC protocol code: no sockets, no asyncio, no UI imports."""
+
+from .errors import EncodeError, FrameTooLong, InputError, ProtocolError, RacError
+from .framing import LineDecoder
+from .hresult import HRESULTS, describe_hresult, hresult_name
+from .messages import (
+    MAX_FRAME,
+    Response,
+    decode_frame,
+    encode_request,
+    get_request,
+    parse_response,
+    put_request,
+)
+from .text import escape_bytes, value_text, wire_text
+from .variables import KINDS, VarKind, encode_value, kind_of, parse_index
+from .variant import Variant, format_variant, parse_variant
+from .vartypes import VT, VT_ARRAY, vt_name
+
+__all__ = [
+    "HRESULTS",
+    "KINDS",
+    "MAX_FRAME",
+    "VT",
+    "VT_ARRAY",
+    "EncodeError",
+    "FrameTooLong",
+    "InputError",
+    "LineDecoder",
+    "ProtocolError",
+    "RacError",
+    "Response",
+    "VarKind",
+    "Variant",
+    "decode_frame",
+    "describe_hresult",
+    "encode_request",
+    "encode_value",
+    "escape_bytes",
+    "format_variant",
+    "get_request",
+    "hresult_name",
+    "kind_of",
+    "parse_index",
+    "parse_response",
+    "parse_variant",
+    "put_request",
+    "value_text",
+    "vt_name",
+    "wire_text",
+]

@@ -1,0 +1,313 @@
+"""VARIANT text codec: ``<VARTYPE>,<data>`` both ways (spec section 3).
+
+A decoded value is a :class:`Variant` holding the VARTYPE and a Python value:
+``None`` (VT_EMPTY, VT_NULL), ``int`` (integer types, VT_ERROR as unsigned
+32-bit), ``float`` (VT_R4, VT_R8), ``Decimal`` (VT_CY), ``str`` (VT_BSTR,
+VT_DATE), ``bool`` (VT_BOOL), a nested ``Variant`` (VT_VARIANT) or a ``list`` of
+element values (any VT_ARRAY type).
+
+VT_R4 values are kept canonical: the double nearest to the shortest decimal that
+rounds to the same float32, so ``4,123.01`` decodes to ``123.01`` and writes
+back as ``123.01``.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+import struct
+from dataclasses import dataclass
+from decimal import Decimal, InvalidOperation
+from functools import lru_cache
+from typing import Any
+
+from .errors import EncodeError, ProtocolError
+from .vartypes import INTEGER_RANGES, VT, element_type, is_array, is_known, vt_name
+
+_BLANKS = " \t"
+_INT_RE = re.compile(r"[+-]?\d+")
+_HEX_RE = re.compile(r"0[xX][0-9a-fA-F]+")
+_FLOAT_RE = re.compile(r"[+-]?(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][+-]?\d+)?")
+_CY_RE = re.compile(r"[+-]?(?:\d+(?:\.\d{0,4})?|\.\d{1,4})")
+_CY_LIMIT = Decimal(2**63) / 10000
+_FLOAT32_MAX = 3.4028234663852886e38
+
+
+@dataclass(frozen=True, slots=True)
+class Variant:
+    """A VARTYPE and its value; equal when both are equal."""
+
+    vt: int
+    value: Any
+
+    def to_json(self) -> Any:
+        """The JSON form of the value: nested VARIANTs as ``{"vt": N, "value": V}``."""
+        return json_value(self.value)
+
+
+def json_value(value: Any) -> Any:
+    if isinstance(value, Variant):
+        return {"vt": value.vt, "value": json_value(value.value)}
+    if isinstance(value, list):
+        return [json_value(v) for v in value]
+    if isinstance(value, Decimal):
+        return float(value)
+    return value
+
+
+# --------------------------------------------------------------------- floats
+
+
+def _to_float32(x: float) -> float:
+    return struct.unpack("<f", struct.pack("<f", x))[0]
+
+
+@lru_cache(maxsize=8192)
+def canonical_r4(x: float) -> float:
+    """The double nearest to the shortest decimal that rounds to float32(x).
+
+    Raises OverflowError when x is outside float32's range.
+    """
+    if not math.isfinite(x):
+        raise OverflowError("not finite")
+    f32 = _to_float32(x)
+    for digits in range(1, 10):
+        candidate = float(f"{f32:.{digits}g}")
+        if _to_float32(candidate) == f32:
+            return candidate
+    return f32  # pragma: no cover - 9 significant digits always round-trip
+
+
+def float_text(x: float) -> str:
+    """Shortest round-trip text, with an integer value written without ``.0``."""
+    text = repr(x)
+    return text[:-2] if text.endswith(".0") else text
+
+
+# ------------------------------------------------------------------- parsing
+
+
+def parse_variant(text: str) -> Variant:
+    """Decode ``<VARTYPE>,<data>``; raise :class:`ProtocolError` on anything else."""
+    vt_text, _, data = text.partition(",")
+    vt_field = vt_text.strip(_BLANKS)
+    if not _INT_RE.fullmatch(vt_field):
+        raise ProtocolError(f"VARTYPE must be a number, got {vt_field!r}")
+    vt = int(vt_field)
+    if not is_known(vt):
+        raise ProtocolError(f"unsupported VARTYPE {vt}")
+    if is_array(vt):
+        return Variant(vt, [_parse_scalar(element_type(vt), e) for e in split_elements(data)])
+    return Variant(vt, _parse_scalar(vt, data))
+
+
+def split_elements(data: str) -> list[str]:
+    """Split array data at commas outside parentheses; empty data is an empty array."""
+    if not data.strip(_BLANKS):
+        return []
+    parts: list[str] = []
+    depth = 0
+    start = 0
+    for i, ch in enumerate(data):
+        if ch == "(":
+            depth += 1
+        elif ch == ")":
+            depth -= 1
+            if depth < 0:
+                raise ProtocolError(f"unbalanced ')' in {data!r}")
+        elif ch == "," and depth == 0:
+            parts.append(data[start:i])
+            start = i + 1
+    if depth:
+        raise ProtocolError(f"unbalanced '(' in {data!r}")
+    parts.append(data[start:])
+    return parts
+
+
+def _parse_int(field: str, vt: int) -> int:
+    if not _INT_RE.fullmatch(field):
+        raise ProtocolError(f"{vt_name(vt)} needs an integer, got {field!r}")
+    value = int(field)
+    low, high = INTEGER_RANGES[VT(vt)]
+    if not low <= value <= high:
+        raise ProtocolError(f"{value} is out of range for {vt_name(vt)} ({low}..{high})")
+    return value
+
+
+def _parse_float(field: str, vt: int) -> float:
+    if not _FLOAT_RE.fullmatch(field):
+        raise ProtocolError(f"{vt_name(vt)} needs a number, got {field!r}")
+    value = float(field)
+    if not math.isfinite(value):
+        raise ProtocolError(f"{field!r} is out of range for {vt_name(vt)}")
+    if vt == VT.R4:
+        try:
+            return canonical_r4(value)
+        except OverflowError:
+            raise ProtocolError(f"{field!r} is out of range for VT_R4") from None
+    return value
+
+
+def parse_hresult_number(field: str) -> int:
+    """Signed decimal, unsigned decimal or hex (any case) to an unsigned 32-bit code."""
+    if _HEX_RE.fullmatch(field):
+        value = int(field, 16)
+    elif _INT_RE.fullmatch(field):
+        value = int(field)
+    else:
+        raise ProtocolError(f"a result code must be a number, got {field!r}")
+    if not -(2**31) <= value < 2**32:
+        raise ProtocolError(f"result code {field!r} does not fit 32 bits")
+    return value & 0xFFFFFFFF
+
+
+def _parse_scalar(vt: int, data: str) -> Any:
+    field = data.strip(_BLANKS)
+    if vt in (VT.EMPTY, VT.NULL):
+        if field:
+            raise ProtocolError(f"{vt_name(vt)} carries no data, got {data!r}")
+        return None
+    if vt in INTEGER_RANGES:
+        return _parse_int(field, vt)
+    if vt in (VT.R4, VT.R8):
+        return _parse_float(field, vt)
+    if vt == VT.BOOL:
+        lowered = field.lower()
+        if lowered in ("true", "false"):
+            return lowered == "true"
+        if not _INT_RE.fullmatch(field):
+            raise ProtocolError(f"VT_BOOL needs 0, -1, True or False, got {field!r}")
+        return int(field) != 0
+    if vt == VT.CY:
+        if not _CY_RE.fullmatch(field):
+            raise ProtocolError(
+                f"VT_CY needs a decimal with up to 4 fraction digits, got {field!r}"
+            )
+        value = Decimal(field)
+        if abs(value) >= _CY_LIMIT:
+            raise ProtocolError(f"{field!r} is out of range for VT_CY")
+        return value
+    if vt == VT.ERROR:
+        try:
+            return parse_hresult_number(field)
+        except ProtocolError:
+            raise ProtocolError(f"VT_ERROR needs an error code, got {field!r}") from None
+    if vt in (VT.BSTR, VT.DATE):
+        return data
+    if vt == VT.VARIANT:
+        if len(field) < 2 or field[0] != "(" or field[-1] != ")":
+            raise ProtocolError(f"VT_VARIANT data must be '(vt,data)', got {data!r}")
+        inner = field[1:-1]
+        split_elements(inner)  # rejects unbalanced parentheses inside
+        return parse_variant(inner)
+    raise ProtocolError(f"unsupported VARTYPE {vt}")  # pragma: no cover - is_known guards
+
+
+# ----------------------------------------------------------------- formatting
+
+_TOP, _ELEMENT, _NESTED = "top", "element", "nested"
+
+
+def format_variant(variant: Variant) -> str:
+    """Encode a Variant; raise :class:`EncodeError` when it cannot be written."""
+    return _format(variant, _TOP)
+
+
+def _format(variant: Variant, where: str) -> str:
+    vt = variant.vt
+    if not is_known(vt):
+        raise EncodeError(f"unsupported VARTYPE {vt}")
+    if vt in (VT.EMPTY, VT.NULL):
+        if variant.value is not None:
+            raise EncodeError(f"{vt_name(vt)} carries no value")
+        return str(vt)
+    if is_array(vt):
+        values = variant.value
+        if not isinstance(values, (list, tuple)):
+            raise EncodeError(f"{vt_name(vt)} needs a list of values")
+        base = element_type(vt)
+        if (
+            base in (VT.BSTR, VT.DATE)
+            and len(values) == 1
+            and isinstance(values[0], str)
+            and not values[0].strip(_BLANKS)
+        ):
+            raise EncodeError("an array holding one blank string cannot be written")
+        return f"{vt}," + ",".join(_format_scalar(base, v, _ELEMENT) for v in values)
+    return f"{vt}," + _format_scalar(vt, variant.value, where)
+
+
+def _format_scalar(vt: int, value: Any, where: str) -> str:
+    name = vt_name(vt)
+    if vt in INTEGER_RANGES:
+        if isinstance(value, bool) or not isinstance(value, int):
+            raise EncodeError(f"{name} needs an integer, got {value!r}")
+        low, high = INTEGER_RANGES[VT(vt)]
+        if not low <= value <= high:
+            raise EncodeError(f"{value} is out of range for {name} ({low}..{high})")
+        return str(value)
+    if vt in (VT.R4, VT.R8):
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            raise EncodeError(f"{name} needs a number, got {value!r}")
+        x = float(value)
+        if not math.isfinite(x) or (vt == VT.R4 and abs(x) > _FLOAT32_MAX):
+            raise EncodeError(f"{value!r} is out of range for {name}")
+        if vt == VT.R4:
+            try:
+                x = canonical_r4(x)
+            except OverflowError:
+                raise EncodeError(f"{value!r} is out of range for VT_R4") from None
+        return float_text(x)
+    if vt == VT.BOOL:
+        if not isinstance(value, bool):
+            raise EncodeError(f"VT_BOOL needs true or false, got {value!r}")
+        return "-1" if value else "0"
+    if vt == VT.CY:
+        return _format_currency(value)
+    if vt == VT.ERROR:
+        if isinstance(value, bool) or not isinstance(value, int) or not 0 <= value < 2**32:
+            raise EncodeError(f"VT_ERROR needs a 32-bit code, got {value!r}")
+        return str(value - 2**32 if value >= 2**31 else value)
+    if vt in (VT.BSTR, VT.DATE):
+        return _check_text(value, name, where)
+    if vt == VT.VARIANT:
+        if not isinstance(value, Variant):
+            raise EncodeError(f"VT_VARIANT needs a nested Variant, got {value!r}")
+        return "(" + _format(value, _NESTED) + ")"
+    raise EncodeError(f"unsupported VARTYPE {vt}")  # pragma: no cover
+
+
+def _format_currency(value: Any) -> str:
+    if isinstance(value, bool) or not isinstance(value, (int, Decimal)):
+        raise EncodeError(f"VT_CY needs a decimal number, got {value!r}")
+    try:
+        amount = Decimal(value)
+        if not amount.is_finite() or abs(amount) >= _CY_LIMIT:
+            raise EncodeError(f"{value} is out of range for VT_CY")
+        if amount != amount.quantize(Decimal("0.0001")):
+            raise EncodeError(f"VT_CY takes at most 4 fraction digits, got {value}")
+    except InvalidOperation:
+        raise EncodeError(f"{value} is out of range for VT_CY") from None
+    text = format(amount.normalize(), "f")
+    return "0" if text in ("-0", "0") else text
+
+
+def _check_text(value: Any, name: str, where: str) -> str:
+    if not isinstance(value, str):
+        raise EncodeError(f"{name} needs text, got {value!r}")
+    if "\r" in value or "\n" in value:
+        raise EncodeError("a string cannot contain CR or LF (CR ends a RAC frame)")
+    if where == _TOP:
+        return value
+    if where == _ELEMENT and "," in value:
+        raise EncodeError(f"an array element cannot contain a comma: {value!r}")
+    depth = 0
+    for ch in value:
+        depth += (ch == "(") - (ch == ")")
+        if depth < 0:
+            break
+    if depth:
+        raise EncodeError(
+            f"text inside an array or VT_VARIANT needs balanced parentheses: {value!r}"
+        )
+    return value
