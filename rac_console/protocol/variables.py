@@ -75,7 +75,10 @@ class VarKind:
             raise InputError(
                 f"{self.code} needs {self.count} values: {self.value_hint}, got {len(parts)}"
             )
-        return [_number(p, VT.R4, f"{self.code} {label}") for p, label in zip(parts, self.labels, strict=True)]
+        return [
+            _number(p, VT.R4, f"{self.code} {label}")
+            for p, label in zip(parts, self.labels, strict=True)
+        ]
 
     def reply_problem(self, variant: Variant) -> str | None:
         """Why a successful GET reply cannot be for this type, or None if it can."""
@@ -103,7 +106,9 @@ class VarKind:
         if self.code == "IO" and not isinstance(variant.value, list):
             return [("", "ON" if variant.value else "OFF")]
         if self.labels and isinstance(variant.value, list) and len(variant.value) == self.count:
-            return [(label, scalar_text(v)) for label, v in zip(self.labels, variant.value, strict=True)]
+            return [
+                (label, scalar_text(v)) for label, v in zip(self.labels, variant.value, strict=True)
+            ]
         if isinstance(variant.value, list):
             return [(str(i), scalar_text(v)) for i, v in enumerate(variant.value)]
         return [("", scalar_text(variant.value))]
