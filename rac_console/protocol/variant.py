@@ -30,7 +30,6 @@ _HEX_RE = re.compile(r"0[xX][0-9a-fA-F]+")
 _FLOAT_RE = re.compile(r"[+-]?(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][+-]?\d+)?")
 _CY_RE = re.compile(r"[+-]?(?:\d+(?:\.\d{0,4})?|\.\d{1,4})")
 _CY_LIMIT = Decimal(2**63) / 10000
-_FLOAT32_MAX = 3.4028234663852886e38
 
 
 @dataclass(frozen=True, slots=True)
@@ -73,8 +72,11 @@ def canonical_r4(x: float) -> float:
     f32 = _to_float32(x)
     for digits in range(1, 10):
         candidate = float(f"{f32:.{digits}g}")
-        if _to_float32(candidate) == f32:
-            return candidate
+        try:
+            if _to_float32(candidate) == f32:
+                return candidate
+        except OverflowError:
+            continue
     return f32  # pragma: no cover - 9 significant digits always round-trip
 
 
@@ -250,7 +252,7 @@ def _format_scalar(vt: int, value: Any, where: str) -> str:
         if isinstance(value, bool) or not isinstance(value, (int, float)):
             raise EncodeError(f"{name} needs a number, got {value!r}")
         x = float(value)
-        if not math.isfinite(x) or (vt == VT.R4 and abs(x) > _FLOAT32_MAX):
+        if not math.isfinite(x):
             raise EncodeError(f"{value!r} is out of range for {name}")
         if vt == VT.R4:
             try:
