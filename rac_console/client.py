@@ -83,6 +83,7 @@ class Frame:
     data: bytes
     rtt: float | None = None
     unsolicited: bool = False
+    poll: bool = False
 
 
 @dataclass(frozen=True, slots=True)
@@ -172,6 +173,7 @@ class RacSession:
         self._pending: asyncio.Future[tuple[bytes, float]] | None = None
         self._sent_at = 0.0
         self._after_cr = False
+        self._polling = False
 
     # ------------------------------------------------------------ observers
 
@@ -229,6 +231,7 @@ class RacSession:
         """
         data = encode_request(text)
         await self._turn.acquire(priority)
+        self._polling = priority == PRIORITY_POLL
         try:
             return await self._exchange(text, data, check)
         finally:
@@ -243,7 +246,7 @@ class RacSession:
         expiry = loop.call_later(self.timeout, self._expire, pending)
         self._sent_at = time.perf_counter()
         transport.write(data)
-        self._publish(Frame(time.time(), "tx", data))
+        self._publish(Frame(time.time(), "tx", data, poll=self._polling))
         try:
             frame, rtt = await pending
         finally:
@@ -334,7 +337,7 @@ class RacSession:
         for frame in frames:
             if waiting:
                 rtt = now - self._sent_at
-                self._publish(Frame(time.time(), "rx", frame + b"\r", rtt))
+                self._publish(Frame(time.time(), "rx", frame + b"\r", rtt, poll=self._polling))
                 pending.set_result((frame, rtt))  # type: ignore[union-attr]
                 waiting = False
             else:

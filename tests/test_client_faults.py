@@ -135,35 +135,37 @@ def run(coro: Awaitable[None]) -> None:
 
 def test_get_put_send_raw_against_simulator() -> None:
     async def main() -> None:
-        async with SimulatorServer() as sim:
-            async with RacSession(sim.host, sim.port, timeout=1.0) as session:
-                put = await session.put(KINDS["I"], 10, Variant(VT.I4, 123))
-                assert put.response.ok
-                assert put.response.variant is None
-                assert put.request == "PUT:RC8:10:I:3,123"
-                assert put.raw == b"0"
+        async with (
+            SimulatorServer() as sim,
+            RacSession(sim.host, sim.port, timeout=1.0) as session,
+        ):
+            put = await session.put(KINDS["I"], 10, Variant(VT.I4, 123))
+            assert put.response.ok
+            assert put.response.variant is None
+            assert put.request == "PUT:RC8:10:I:3,123"
+            assert put.raw == b"0"
 
-                got = await session.get(KINDS["I"], 10)
-                assert got.request == "GET:RC8:10:I:"
-                assert got.text == "0,3,123"
-                assert got.response.code == 0
-                assert got.response.variant == Variant(VT.I4, 123)
-                assert got.rtt >= 0
-                assert session.last_rtt == got.rtt
+            got = await session.get(KINDS["I"], 10)
+            assert got.request == "GET:RC8:10:I:"
+            assert got.text == "0,3,123"
+            assert got.response.code == 0
+            assert got.response.variant == Variant(VT.I4, 123)
+            assert got.rtt >= 0
+            assert session.last_rtt == got.rtt
 
-                await session.put(KINDS["P"], 10, Variant(8196, [1.0, 2, 3, 4, 5, 6, -1]))
-                pos = await session.get(KINDS["P"], 10)
-                assert pos.response.variant is not None
-                assert pos.response.variant.vt == 8196
-                assert pos.response.variant.value == [1, 2, 3, 4, 5, 6, -1]
+            await session.put(KINDS["P"], 10, Variant(8196, [1.0, 2, 3, 4, 5, 6, -1]))
+            pos = await session.get(KINDS["P"], 10)
+            assert pos.response.variant is not None
+            assert pos.response.variant.vt == 8196
+            assert pos.response.variant.value == [1, 2, 3, 4, 5, 6, -1]
 
-                raw = await session.send_raw("GET:RC8:10:I:")
-                assert raw.text == "0,3,123"
+            raw = await session.send_raw("GET:RC8:10:I:")
+            assert raw.text == "0,3,123"
 
-                bad = await session.send_raw("PUT:RC8:10:11,0")
-                assert not bad.response.ok
-                assert bad.response.name == "E_INVALIDCOMMAND"
-                assert session.state == "connected"
+            bad = await session.send_raw("PUT:RC8:10:11,0")
+            assert not bad.response.ok
+            assert bad.response.name == "E_INVALIDCOMMAND"
+            assert session.state == "connected"
 
     run(main())
 
@@ -423,6 +425,7 @@ def test_garbage_reply_is_a_bad_reply_with_raw_bytes() -> None:
 @pytest.mark.parametrize(
     "reply",
     [b"banana\r", b"0,99,1\r", b"0,3,abc\r", b"0x1234567890\r", b"\r", b"0,8204,(8,a\r"],
+    ids=["word", "unknown-vt", "bad-int", "code-over-32-bits", "empty", "unbalanced"],
 )
 def test_unparsable_replies_are_bad_replies(reply: bytes) -> None:
     async def handler(conn: Conn) -> None:
@@ -599,6 +602,7 @@ def test_two_replies_to_one_request_do_not_shift_later_answers() -> None:
         ("get S", b"0,3,5\r"),
         ("get I", b"0\r"),
     ],
+    ids=["P-got-I", "PUT-got-value", "I-got-S", "P-got-3", "V-got-4", "S-got-I", "I-got-none"],
 )
 def test_reply_that_cannot_belong_is_a_bad_reply(request_kind: str, reply: bytes) -> None:
     async def handler(conn: Conn) -> None:
@@ -630,12 +634,11 @@ def test_error_reply_to_a_get_is_not_a_bad_reply() -> None:
             await conn.send(b"0x80070057\r")
 
     async def main() -> None:
-        async with FaultServer(handler) as server:
-            async with server.session(timeout=1.0) as session:
-                reply = await session.get(KINDS["P"], 10)
-                assert not reply.response.ok
-                assert reply.response.name == "E_INVALIDARG"
-                assert server.connections == 1
+        async with FaultServer(handler) as server, server.session(timeout=1.0) as session:
+            reply = await session.get(KINDS["P"], 10)
+            assert not reply.response.ok
+            assert reply.response.name == "E_INVALIDARG"
+            assert server.connections == 1
 
     run(main())
 

@@ -29,6 +29,16 @@ def _positive_seconds(text: str) -> float:
     return value
 
 
+def _interval(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a number of seconds: {text!r}") from None
+    if not 0 <= value <= 3600:
+        raise argparse.ArgumentTypeError(f"interval must be from 0 to 3600 s, got {text}")
+    return value
+
+
 def _port(text: str) -> int:
     if not text.isdigit() or not 0 <= int(text) <= 65535:
         raise argparse.ArgumentTypeError(f"a port is a number from 0 to 65535, got {text!r}")
@@ -86,6 +96,18 @@ def build_parser() -> argparse.ArgumentParser:
     )
     parser.add_argument("--version", action="version", version=f"rac-console {__version__}")
     _global_options(parser, suppress=False)
+    console = parser.add_argument_group("console options (no COMMAND: the full-screen console)")
+    console.add_argument("--watch", metavar="FILE", help="load a TOML watch list at start")
+    console.add_argument(
+        "--history", metavar="FILE", help="history file (default: in your state directory)"
+    )
+    console.add_argument(
+        "--interval",
+        type=_interval,
+        default=0.5,
+        metavar="SECONDS",
+        help="time between poll cycles (default 0.5)",
+    )
     commands = parser.add_subparsers(dest="command", metavar="COMMAND")
 
     def command(name: str, help_text: str) -> argparse.ArgumentParser:
@@ -141,8 +163,9 @@ def _dispatch(args: argparse.Namespace) -> int:
         from .simulator import serve
 
         return asyncio.run(serve(args))
-    build_parser().print_help()
-    return 0
+    from ..tui.app import run_console
+
+    return run_console(args)
 
 
 def main(argv: Sequence[str] | None = None) -> int:

@@ -10,7 +10,7 @@ from collections.abc import AsyncIterator
 
 from rich.console import Console
 
-from ..commands.language import Exchange, parse_command, parse_exchange
+from ..commands.language import Get, Put, Raw, parse_command, parse_exchange
 from ..commands.outcome import ExitStatus, Outcome, refused, worst
 from ..execute import execute
 from ..protocol import InputError
@@ -87,13 +87,22 @@ async def run_script(args: argparse.Namespace) -> ExitStatus:
                 number += 1
                 line = raw_line.rstrip("\r\n")
                 try:
-                    command: Exchange | None = parse_command(line)
+                    command = parse_command(line)
                 except InputError as exc:
                     outcome = refused(line, str(exc))
                 else:
                     if command is None:
                         continue
-                    outcome = await execute(session, command, read_only=args.read_only, line=line)
+                    if not isinstance(command, Get | Put | Raw):
+                        outcome = refused(
+                            line,
+                            f"{line.split()[0]!r} works in the console and "
+                            "the REPL; run takes get, put, send and GET:/PUT: lines",
+                        )
+                    else:
+                        outcome = await execute(
+                            session, command, read_only=args.read_only, line=line
+                        )
                 output.show(outcome, {"line": number}, prefix=f"line {number}: ")
                 statuses.append(outcome.status)
     except OSError as exc:

@@ -13,6 +13,7 @@ from dataclasses import dataclass
 from ..protocol import InputError, Variant, VarKind, encode_request, kind_of, parse_index
 from ..protocol.messages import get_request, put_request
 from ..protocol.variables import encode_value
+from .table import COMMANDS
 
 
 @dataclass(frozen=True)
@@ -52,7 +53,52 @@ class Raw:
 
 
 Exchange = Get | Put | Raw
-Command = Exchange
+
+
+@dataclass(frozen=True)
+class Watch:
+    vars: tuple[VarRef, ...]
+    label: str = ""
+
+
+@dataclass(frozen=True)
+class Unwatch:
+    vars: tuple[VarRef, ...]  # empty: all
+
+
+@dataclass(frozen=True)
+class SetInterval:
+    seconds: float
+
+
+@dataclass(frozen=True)
+class Connect:
+    host: str
+    port: int
+
+
+@dataclass(frozen=True)
+class WatchFile:
+    action: str  # "save" or "load"
+    path: str
+
+
+@dataclass(frozen=True)
+class Help:
+    topic: str | None
+
+
+@dataclass(frozen=True)
+class Simple:
+    """A command with no argument: pause, resume, disconnect, clear, quit."""
+
+    name: str
+
+
+Command = Get | Put | Raw | Watch | Unwatch | SetInterval | Connect | WatchFile | Help | Simple
+
+MAX_RANGE = 256
+MIN_INTERVAL, MAX_INTERVAL = 0.0, 3600.0
 
 _VAR_RE = re.compile(r"\s*([A-Za-z]+)(?:\[\s*([^\]]*?)\s*\]|(\d+))?")
 _RAW_PREFIXES = ("GET:", "PUT:")
@@ -116,7 +162,88 @@ def parse_command(line: str) -> Command | None:
     if not stripped or stripped.startswith("#"):
         return None
     command = parse_exchange(line.rstrip("\r\n"))
-    if command is None:
-        word, _ = split_word(line)
-        raise InputError(f"unknown command {word!r}: try get, put, send or a raw GET:/PUT: line")
-    return command
+    if command is not None:
+        return command
+    word, rest = split_word(stripped)
+    rest = rest.strip()
+    if word not in COMMANDS:
+        raise InputError(
+            f"unknown command {word!r}: type help for the list, "
+            "or start a raw line with GET: or PUT:"
+        )
+    spec = COMMANDS[word]
+    if word == "watch":
+        return _parse_watch(rest)
+    if word == "unwatch":
+        if rest.lower() == "all":
+            return Unwatch(())
+        return Unwatch(_parse_vars(rest, spec.usage)[0])
+    if word == "interval":
+        return SetInterval(_parse_seconds(rest))
+    if word == "connect":
+        return _parse_connect(rest)
+    if word in ("save", "load"):
+        if not rest:
+            raise InputError(f"{word} needs a file name: {spec.example}")
+        return WatchFile(word, rest)
+    if word == "help":
+        return Help(rest.lower() or None)
+    if rest:
+        raise InputError(f"{word} takes no argument")
+    return Simple(word)
+
+
+def _parse_vars(text: str, usage: str) -> tuple[tuple[VarRef, ...], str]:
+    """One variable or a range ``TYPE FIRST-LAST``, and the text after it."""
+    match = re.match(r"\s*([A-Za-z]+)\s*(?:\[\s*(\d+)\s*-\s*(\d+)\s*\]|(\d+)\s*-\s*(\d+))", text)
+    if match is None or match.group(1).upper() not in (
+        "I",
+        "F",
+        "D",
+        "S",
+        "V",
+        "P",
+        "J",
+        "T",
+        "IO",
+    ):
+        var, rest = parse_var(text, usage)
+        return (var,), rest
+    kind = kind_of(match.group(1))
+    first_text, last_text = (
+        (match.group(2), match.group(3)) if match.group(2) else match.group(4, 5)
+    )
+    first, last = parse_index(first_text), parse_index(last_text)
+    if last < first:
+        raise InputError(f"a range runs upwards: {kind.code} {last}-{first}")
+    if last - first + 1 > MAX_RANGE:
+        raise InputError(f"a range holds at most {MAX_RANGE} variables")
+    return tuple(VarRef(kind, i) for i in range(first, last + 1)), text[match.end() :]
+
+
+def _parse_watch(text: str) -> Watch:
+    variables, label = _parse_vars(text, COMMANDS["watch"].usage + ", e.g. watch IO 128-135")
+    return Watch(variables, label.strip())
+
+
+def _parse_seconds(text: str) -> float:
+    try:
+        seconds = float(text)
+    except ValueError:
+        raise InputError(
+            f"interval needs a number of seconds, e.g. interval 0.5, got {text!r}"
+        ) from None
+    if not MIN_INTERVAL <= seconds <= MAX_INTERVAL:
+        raise InputError(f"interval must be from 0 to {MAX_INTERVAL:g} seconds, got {text}")
+    return seconds
+
+
+def _parse_connect(text: str) -> Connect:
+    if not text or " " in text:
+        raise InputError("connect needs one address: connect HOST or connect HOST:PORT")
+    host, sep, port_text = text.rpartition(":") if text.count(":") == 1 else (text, "", "")
+    if not sep:
+        return Connect(text.strip("[]"), 5006)
+    if not port_text.isdigit() or not 0 < int(port_text) < 65536:
+        raise InputError(f"port must be a number from 1 to 65535, got {port_text!r}")
+    return Connect(host, int(port_text))

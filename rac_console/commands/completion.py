@@ -1,0 +1,122 @@
+"""What fits at the cursor: completion candidates and argument hints.
+
+Pure functions of the text before the cursor, so the console and the REPL show
+the same candidates and hints, and tests need no terminal.
+"""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Iterable
+from dataclasses import dataclass
+
+from ..protocol import KINDS
+from .language import is_raw_line
+from .table import COMMANDS
+
+_VARIABLE_COMMANDS = ("get", "put", "watch", "unwatch")
+_TYPE_HELP = {code: kind.title for code, kind in KINDS.items()}
+
+
+@dataclass(frozen=True)
+class Candidate:
+    """A completion: ``text`` replaces the word being typed (``start`` chars back)."""
+
+    text: str
+    help: str
+    start: int
+
+
+def _tokens(text: str) -> tuple[list[str], str]:
+    """Finished words before the cursor, and the word being typed ('' after a space)."""
+    words = text.split()
+    if text and not text[-1].isspace() and words:
+        return words[:-1], words[-1]
+    return words, ""
+
+
+def _split_var(words: list[str]) -> list[str]:
+    """Treat ``P10`` and ``P[10]`` like ``P 10`` so the position counts stay simple."""
+    if len(words) >= 2:
+        match = re.fullmatch(r"([A-Za-z]+)\[?(\d+)\]?", words[1])
+        if match and match.group(1).upper() in KINDS:
+            return [words[0], match.group(1), match.group(2), *words[2:]]
+    return words
+
+
+def complete(text: str, seen: Iterable[tuple[str, int]] = ()) -> list[Candidate]:
+    """Candidates for the word at the end of ``text``.
+
+    ``seen`` holds (TYPE, index) pairs already used or watched, offered as indices.
+    """
+    if is_raw_line(text):
+        return []
+    done, partial = _tokens(text)
+    done = _split_var(done)
+    low = partial.lower()
+    start = len(partial)
+
+    def matching(options: Iterable[tuple[str, str]]) -> list[Candidate]:
+        return [Candidate(o, h, start) for o, h in options if o.lower().startswith(low)]
+
+    if not done:
+        return matching((name, spec.summary) for name, spec in COMMANDS.items())
+    command = done[0].lower()
+    if command == "help" and len(done) == 1:
+        return matching((name, spec.summary) for name, spec in COMMANDS.items())
+    if command not in _VARIABLE_COMMANDS:
+        return []
+    if len(done) == 1:
+        options = [(code, _TYPE_HELP[code]) for code in KINDS]
+        if command == "unwatch":
+            options.append(("all", "every watched variable"))
+        return matching(options)
+    kind = KINDS.get(done[1].upper())
+    if kind is None:
+        return []
+    if len(done) == 2:
+        indices = sorted({i for code, i in seen if code == kind.code})
+        return matching((str(i), f"{kind.code}{i}") for i in indices)
+    if command == "put" and len(done) == 3 and kind.code == "IO":
+        return matching([("on", "set the bit (sends 11,-1)"), ("off", "clear it (sends 11,0)")])
+    return []
+
+
+def hint(text: str) -> str:
+    """Grey text showing what the command still needs, redis-cli style; '' if nothing."""
+    if not text or is_raw_line(text):
+        return ""
+    done, partial = _tokens(text)
+    if partial or not done:
+        return ""
+    done = _split_var(done)
+    command = done[0].lower()
+    spec = COMMANDS.get(command)
+    if spec is None:
+        return ""
+    needs = spec.arguments.split()
+    if command in _VARIABLE_COMMANDS and len(done) >= 2:
+        kind = KINDS.get(done[1].upper())
+        if kind is None:
+            return ""
+        if command == "put":
+            needs = ["TYPE", "INDEX", *kind.value_hint.split()]
+            if kind.code == "S":
+                needs = ["TYPE", "INDEX", "TEXT"]
+    remaining = needs[len(done) - 1 :]
+    return " ".join(remaining)
+
+
+def common_prefix(candidates: list[Candidate]) -> str:
+    """The longest text every candidate starts with (case-insensitively)."""
+    if not candidates:
+        return ""
+    first = candidates[0].text
+    length = len(first)
+    for candidate in candidates[1:]:
+        length = min(length, len(candidate.text))
+        for i in range(length):
+            if candidate.text[i].lower() != first[i].lower():
+                length = i
+                break
+    return first[:length]

@@ -1,0 +1,336 @@
+"""The interactive console's engine, shared by the Textual app and the REPL.
+
+It owns the target (a controller or the in-process simulator), the one session,
+the watch list and its poller, and turns each typed line into feedback. It
+never draws anything: front ends read its state and listen to its log events.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+
+from .client import (
+    PRIORITY_POLL,
+    BadReply,
+    ConnectFailed,
+    Frame,
+    RacSession,
+    RequestTimeout,
+    State,
+    TransportError,
+)
+from .commands.language import (
+    Connect,
+    Get,
+    Help,
+    Put,
+    Raw,
+    SetInterval,
+    Simple,
+    Unwatch,
+    Watch,
+    WatchFile,
+    parse_command,
+)
+from .commands.outcome import Outcome
+from .commands.table import help_lines
+from .execute import execute
+from .protocol import InputError, describe_hresult, hresult_name
+from .recorder import FrameRecorder
+from .sim.server import SimulatorServer
+from .watch import WatchList, WatchRow
+
+DEFAULT_INTERVAL = 0.5
+MAX_BACKOFF = 5.0
+
+
+@dataclass(frozen=True)
+class Message:
+    """Feedback that is not an exchange: help text, a confirmation, an error."""
+
+    text: str
+    level: str = "info"  # info, error
+
+
+@dataclass(frozen=True)
+class Action:
+    """Something only the front end can do: ``clear`` its log, ``quit``."""
+
+    name: str
+
+
+Feedback = Outcome | Message | Action
+LogEvent = Frame | str  # a frame, or a note such as a connection gap
+LogListener = Callable[[LogEvent], None]
+
+
+class ConsoleCore:
+    def __init__(
+        self,
+        host: str | None = None,
+        port: int = 5006,
+        *,
+        timeout: float = 2.0,
+        read_only: bool = False,
+        record: str | None = None,
+        interval: float = DEFAULT_INTERVAL,
+    ) -> None:
+        self.host, self.port, self.timeout = host, port, timeout
+        self.read_only = read_only
+        self.interval = interval
+        self.watch = WatchList()
+        self.seen: set[tuple[str, int]] = set()
+        self.paused = False
+        self.session: RacSession | None = None
+        self.simulator: SimulatorServer | None = None
+        self.connection: State | str = "closed"
+        self.retry_at: float | None = None
+        self.cycle_seconds: float | None = None
+        self.polls_per_second: float | None = None
+        self.polls = 0
+        self._listeners: list[LogListener] = []
+        self._recorder = FrameRecorder(record) if record else None
+        self._wake = asyncio.Event()
+        self._poll_task: asyncio.Task[None] | None = None
+        self._lost = False
+
+    # ------------------------------------------------------------ lifecycle
+
+    async def start(self) -> None:
+        await self._open_target(self.host, self.port)
+        self._poll_task = asyncio.get_running_loop().create_task(self._poll_forever())
+
+    async def stop(self) -> None:
+        if self._poll_task is not None:
+            self._poll_task.cancel()
+            await asyncio.gather(self._poll_task, return_exceptions=True)
+            self._poll_task = None
+        await self._close_target()
+        if self._recorder is not None:
+            self._recorder.close()
+
+    async def _open_target(self, host: str | None, port: int) -> None:
+        if host is None:
+            self.simulator = await SimulatorServer().start()
+            host, port = self.simulator.host, self.simulator.port
+        self.host, self.port = host, port
+        session = RacSession(host, port, timeout=self.timeout)
+        session.add_frame_observer(self._on_frame)
+        session.add_state_observer(self._on_state)
+        self.session = session
+        self._wake.set()
+
+    async def _close_target(self) -> None:
+        if self.session is not None:
+            await self.session.close()
+            self.session = None
+        if self.simulator is not None:
+            await self.simulator.stop()
+            self.simulator = None
+        self.connection = "closed"
+
+    @property
+    def is_simulator(self) -> bool:
+        return self.simulator is not None
+
+    @property
+    def target(self) -> str:
+        if self.session is None:
+            return "NOT CONNECTED"
+        kind = "SIMULATOR" if self.is_simulator else "LIVE"
+        return f"{kind} {self.host}:{self.port}"
+
+    # -------------------------------------------------------------- events
+
+    def add_log_listener(self, listener: LogListener) -> None:
+        self._listeners.append(listener)
+
+    def _on_frame(self, frame: Frame) -> None:
+        if self._recorder is not None:
+            self._recorder(frame)
+        for listener in self._listeners:
+            listener(frame)
+
+    def note(self, text: str) -> None:
+        for listener in self._listeners:
+            listener(text)
+
+    def _on_state(self, state: State) -> None:
+        self.connection = state
+        if state == "connected":
+            self.retry_at = None
+            if self._lost:
+                self._lost = False
+                self.note(f"reconnected to {self.host}:{self.port}")
+
+    # ------------------------------------------------------------ commands
+
+    async def handle_line(self, line: str) -> list[Feedback]:
+        """Run one typed line; every problem becomes feedback, never an exception."""
+        try:
+            command = parse_command(line)
+        except InputError as exc:
+            return [Message(str(exc), "error")]
+        if command is None:
+            return []
+        if isinstance(command, Get | Put | Raw):
+            if self.session is None:
+                return [Message("not connected: connect HOST[:PORT] first", "error")]
+            if isinstance(command, Get | Put):
+                self.seen.add((command.var.kind.code, command.var.index))
+            return [await execute(self.session, command, read_only=self.read_only, line=line)]
+        if isinstance(command, Watch):
+            added = self.watch.add(command.vars, command.label)
+            self.seen.update((v.kind.code, v.index) for v in command.vars)
+            self._wake.set()
+            names = _names(command.vars)
+            return [Message(f"watching {names}" if added else f"{names} already watched")]
+        if isinstance(command, Unwatch):
+            removed = self.watch.remove(command.vars)
+            return [Message(f"stopped watching {removed} variable{'s' * (removed != 1)}")]
+        if isinstance(command, SetInterval):
+            self.interval = command.seconds
+            self._wake.set()
+            return [Message(f"poll interval {command.seconds:g} s")]
+        if isinstance(command, Connect):
+            return [await self.connect(command.host, command.port)]
+        if isinstance(command, WatchFile):
+            return [self._watch_file(command)]
+        if isinstance(command, Help):
+            return [Message("\n".join(help_lines(command.topic)))]
+        return [await self._simple(command)]
+
+    async def _simple(self, command: Simple) -> Feedback:
+        name = command.name
+        if name in ("pause", "resume"):
+            self.set_paused(name == "pause")
+            return Message("polling paused" if self.paused else "polling resumed")
+        if name == "disconnect":
+            await self._close_target()
+            self.watch.mark_all("DISCONNECTED")
+            self.note("disconnected")
+            return Message("disconnected: connect HOST[:PORT] to talk to a controller")
+        return Action(name)
+
+    def set_paused(self, paused: bool) -> None:
+        self.paused = paused
+        self._wake.set()
+
+    async def connect(self, host: str, port: int) -> Message:
+        await self._close_target()
+        await self._open_target(host, port)
+        assert self.session is not None
+        try:
+            await self.session.connect()
+        except ConnectFailed as exc:
+            return Message(f"{exc}; will keep retrying while variables are watched", "error")
+        self.note(f"connected to {host}:{port}")
+        return Message(f"connected to LIVE controller {host}:{port}")
+
+    def _watch_file(self, command: WatchFile) -> Message:
+        from . import watchlist
+
+        try:
+            if command.action == "save":
+                rows = [(row.var, row.label) for row in self.watch.rows.values()]
+                watchlist.save(command.path, rows)
+                return Message(f"saved {len(rows)} watched variables to {command.path}")
+            rows = watchlist.load(command.path)
+        except InputError as exc:
+            return Message(str(exc), "error")
+        except OSError as exc:
+            return Message(f"cannot write {command.path}: {exc.strerror}", "error")
+        for var, label in rows:
+            self.watch.add((var,), label)
+            self.seen.add((var.kind.code, var.index))
+        self._wake.set()
+        return Message(f"loaded {len(rows)} watched variables from {command.path}")
+
+    # -------------------------------------------------------------- polling
+
+    async def _poll_forever(self) -> None:
+        backoff = 0.5
+        while True:
+            if self.session is None or self.paused or not self.watch.rows:
+                await self._wake.wait()
+                self._wake.clear()
+                continue
+            started = time.perf_counter()
+            try:
+                count = await self._poll_cycle(self.session)
+            except ConnectFailed as exc:
+                if not self._lost:
+                    self._lost = True
+                    self.watch.mark_all("DISCONNECTED")
+                    self.note(f"connection lost: {exc}")
+                self.connection = "lost"
+                self.retry_at = time.monotonic() + backoff
+                await self._sleep(backoff)
+                backoff = min(backoff * 2, MAX_BACKOFF)
+                continue
+            backoff = 0.5
+            elapsed = time.perf_counter() - started
+            if count:
+                self.cycle_seconds = elapsed
+            await self._sleep(self.interval - elapsed)
+            period = time.perf_counter() - started
+            if count and period > 0:
+                self.polls_per_second = count / period
+
+    async def _sleep(self, seconds: float) -> None:
+        """Wait, but wake early when the watch list, interval or target changes."""
+        self._wake.clear()
+        if seconds <= 0:
+            await asyncio.sleep(0)
+            return
+        with contextlib.suppress(TimeoutError):
+            await asyncio.wait_for(self._wake.wait(), seconds)
+
+    async def _poll_cycle(self, session: RacSession) -> int:
+        count = 0
+        for row in list(self.watch.rows.values()):
+            if self.paused or session is not self.session:
+                break
+            if self.watch.rows.get(row.var) is not row:
+                continue  # unwatched during the cycle
+            await self._poll_row(session, row)
+            count += 1
+        return count
+
+    async def _poll_row(self, session: RacSession, row: WatchRow) -> None:
+        var = row.var
+        try:
+            reply = await session.get(var.kind, var.index, priority=PRIORITY_POLL)
+        except ConnectFailed:
+            raise
+        except RequestTimeout:
+            row.fail("TIMEOUT", time.monotonic())
+        except BadReply:
+            row.fail("BAD REPLY", time.monotonic())
+        except TransportError:
+            row.fail("DISCONNECTED", time.monotonic())
+        else:
+            response = reply.response
+            if response.ok and response.variant is not None:
+                row.update(response.variant, time.monotonic())
+            else:
+                row.fail(
+                    hresult_name(response.code) or describe_hresult(response.code)[:10],
+                    time.monotonic(),
+                )
+        self.polls += 1
+        self.watch.dirty.add(var)
+
+    @property
+    def interval_met(self) -> bool:
+        return self.cycle_seconds is None or self.cycle_seconds <= self.interval * 1.05 + 0.001
+
+
+def _names(variables: tuple) -> str:
+    if len(variables) == 1:
+        return str(variables[0])
+    return f"{variables[0]}..{variables[-1]} ({len(variables)} variables)"

@@ -1,0 +1,44 @@
+"""One line per frame for the console's log and the REPL's ``frames on``."""
+
+from __future__ import annotations
+
+import time
+
+from .client import Frame
+from .protocol import ProtocolError, decode_frame, parse_response, wire_text
+from .protocol.text import describe_response
+
+ARROWS = {"tx": "→", "rx": "←"}
+
+
+def clock_text(timestamp: float) -> str:
+    """``14:03:07.123``: local time with milliseconds."""
+    return (
+        time.strftime("%H:%M:%S", time.localtime(timestamp)) + f".{int(timestamp % 1 * 1000):03d}"
+    )
+
+
+def decoding(frame: Frame) -> str:
+    """A reply's short decoding: ``S_OK  VT_I4  123``, the HRESULT, or why it is garbled."""
+    body = frame.data[:-1] if frame.data.endswith(b"\r") else frame.data
+    try:
+        return describe_response(parse_response(decode_frame(body)))
+    except ProtocolError as exc:
+        return f"garbled: {exc}"
+
+
+def frame_line(frame: Frame) -> str:
+    """``14:03:07.123 ← 0,3,123␍   0.21 ms  S_OK  VT_I4  123``."""
+    line = f"{clock_text(frame.time)} {ARROWS[frame.direction]} {wire_text(frame.data)}"
+    if frame.direction == "tx":
+        return line
+    notes = []
+    if frame.rtt is not None:
+        notes.append(f"{frame.rtt * 1000:.2f} ms")
+    if frame.unsolicited:
+        notes.append("UNSOLICITED (connection reset)")
+    if not frame.data.endswith(b"\r"):
+        notes.append("INCOMPLETE (connection closed)")
+    else:
+        notes.append(decoding(frame))
+    return line + "   " + "  ".join(notes)

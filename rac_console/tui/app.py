@@ -1,0 +1,225 @@
+"""The Textual console: status line, watch table, frame log, results, command line."""
+
+from __future__ import annotations
+
+import argparse
+import time
+from collections import deque
+from typing import ClassVar
+
+from rich.text import Text
+from textual import on
+from textual.app import App, ComposeResult
+from textual.binding import Binding, BindingType
+from textual.widgets import Footer, RichLog, Static
+
+from .. import __version__
+from ..client import ConnectFailed
+from ..commands.outcome import Outcome
+from ..core import Action, ConsoleCore, Feedback, Message
+from ..history import History, default_history_path
+from ..render import error_text, outcome_text
+from .command_line import CommandLine
+from .frame_log import FrameLog
+from .status_bar import StatusBar, status_text
+from .watch_table import WatchTable
+
+LOG_FLUSH_HZ = 20
+TABLE_REFRESH_HZ = 10
+
+
+class RacConsoleApp(App[int]):
+    CSS_PATH = "app.tcss"
+    TITLE = "rac-console"
+    BINDINGS: ClassVar[list[BindingType]] = [
+        Binding("ctrl+q", "quit", "Quit", id="quit", priority=True),
+        Binding("f2", "toggle_polling", "Pause polls", id="toggle-polling"),
+        Binding("f3", "toggle_poll_frames", "Poll frames", id="toggle-poll-frames"),
+        Binding("f4", "toggle_scroll", "Freeze log", id="toggle-scroll"),
+        Binding("ctrl+l", "clear_log", "Clear log", id="clear-log"),
+    ]
+
+    def __init__(self, core: ConsoleCore, history: History, watch_file: str | None = None) -> None:
+        super().__init__()
+        self.core = core
+        self.history = history
+        self.watch_file = watch_file
+        self._flushes: deque[tuple[float, int]] = deque(maxlen=LOG_FLUSH_HZ * 2)
+
+    def compose(self) -> ComposeResult:
+        yield StatusBar(id="status")
+        yield WatchTable(id="watch")
+        yield FrameLog(id="log")
+        yield Static(id="completions")
+        yield RichLog(id="results", max_lines=500, wrap=True, markup=False, highlight=False)
+        yield CommandLine(
+            self.history,
+            self._completion_indices,
+            id="command",
+            placeholder="get P 1 · put IO 20 on · watch IO 0-7 · help",
+        )
+        yield Footer()
+
+    async def on_mount(self) -> None:
+        self.query_one(WatchTable).border_title = "Watch"
+        self.query_one(FrameLog).border_title = "Frames (→ sent, ← received)"
+        self.core.add_log_listener(self.query_one(FrameLog).add)
+        await self.core.start()
+        self.sub_title = self.core.target
+        self._welcome()
+        if self.watch_file:
+            await self.run_line(f"load {self.watch_file}", echo=False)
+        self.set_interval(1 / LOG_FLUSH_HZ, self.flush_log)
+        self.set_interval(1 / TABLE_REFRESH_HZ, self.refresh_table)
+        self.refresh_table()
+        self.query_one(CommandLine).focus()
+        if not self.core.is_simulator:
+            self.run_worker(self._first_connect(), group="connect")
+
+    async def on_unmount(self) -> None:
+        await self.core.stop()
+
+    def _welcome(self) -> None:
+        results = self.query_one("#results", RichLog)
+        if self.core.is_simulator:
+            results.write(
+                Text.assemble(
+                    ("SIMULATOR", "bold black on yellow"),
+                    f" no -H given: talking to the built-in RC8 simulator at "
+                    f"{self.core.host}:{self.core.port}, not a controller.",
+                )
+            )
+        else:
+            results.write(
+                Text.assemble(
+                    ("LIVE", "bold white on red"), f" controller {self.core.host}:{self.core.port}."
+                )
+            )
+        results.write(
+            Text(
+                f"rac-console {__version__}: type help, or try watch P 0, watch IO 0-7, get S 1",
+                style="dim",
+            )
+        )
+
+    async def _first_connect(self) -> None:
+        assert self.core.session is not None
+        try:
+            await self.core.session.connect()
+        except ConnectFailed as exc:
+            self.show(Message(f"{exc}: commands will retry", "error"))
+
+    def _completion_indices(self) -> set[tuple[str, int]]:
+        return self.core.seen | {(v.kind.code, v.index) for v in self.core.watch.rows}
+
+    # -------------------------------------------------------------- refresh
+
+    def flush_log(self) -> None:
+        count = self.query_one(FrameLog).flush()
+        self._flushes.append((time.monotonic(), count))
+
+    def frames_per_second(self) -> float:
+        if len(self._flushes) < 2:
+            return 0.0
+        span = self._flushes[-1][0] - self._flushes[0][0]
+        total = sum(count for _, count in list(self._flushes)[1:])
+        return total / span if span > 0 else 0.0
+
+    def refresh_table(self) -> None:
+        _, removed = self.core.watch.take_changes()
+        self.query_one(WatchTable).refresh_rows(self.core.watch.rows, removed, time.monotonic())
+        self.query_one(StatusBar).update(status_text(self.core, self.frames_per_second()))
+
+    # ------------------------------------------------------------- commands
+
+    @on(CommandLine.Submitted)
+    def submitted(self, event: CommandLine.Submitted) -> None:
+        line = event.value
+        command_line = self.query_one(CommandLine)
+        command_line.value = ""
+        self.query_one("#completions").remove_class("-visible")
+        if not line.strip():
+            return
+        command_line.remember(line)
+        self.run_worker(self.run_line(line), group="commands")
+
+    @on(CommandLine.Completions)
+    def list_completions(self, event: CommandLine.Completions) -> None:
+        width = max(len(c.text) for c in event.candidates)
+        text = Text()
+        for n, candidate in enumerate(event.candidates):
+            if n:
+                text.append("\n")
+            text.append(f"{candidate.text:<{width}}", style="bold")
+            text.append(f"  {candidate.help}", style="dim")
+        panel = self.query_one("#completions", Static)
+        panel.update(text)
+        panel.add_class("-visible")
+
+    @on(CommandLine.Changed)
+    def hide_completions(self) -> None:
+        self.query_one("#completions").remove_class("-visible")
+
+    async def run_line(self, line: str, echo: bool = True) -> None:
+        if echo:
+            self.query_one("#results", RichLog).write(Text(f"› {line}", style="bold cyan"))
+        for feedback in await self.core.handle_line(line):
+            self.show(feedback)
+        self.refresh_table()
+
+    def show(self, feedback: Feedback) -> None:
+        results = self.query_one("#results", RichLog)
+        if isinstance(feedback, Outcome):
+            if feedback.ok:
+                results.write(outcome_text(feedback))
+            else:
+                results.write(Text(error_text(feedback), style="red"))
+        elif isinstance(feedback, Message):
+            results.write(Text(feedback.text, style="red" if feedback.level == "error" else ""))
+        elif isinstance(feedback, Action):
+            if feedback.name == "clear":
+                self.action_clear_log()
+            elif feedback.name == "quit":
+                self.exit(0)
+
+    # -------------------------------------------------------------- actions
+
+    def action_toggle_polling(self) -> None:
+        self.core.set_paused(not self.core.paused)
+        self.show(Message("polling paused (F2 resumes)" if self.core.paused else "polling resumed"))
+        self.refresh_table()
+
+    def action_toggle_poll_frames(self) -> None:
+        log = self.query_one(FrameLog)
+        log.show_polls = not log.show_polls
+        self.show(
+            Message(
+                "poll frames shown"
+                if log.show_polls
+                else "poll frames hidden (typed commands only; F3 shows them)"
+            )
+        )
+
+    def action_toggle_scroll(self) -> None:
+        log = self.query_one(FrameLog)
+        log.auto_scroll = not log.auto_scroll
+        log.border_title = "Frames" + ("" if log.auto_scroll else " (FROZEN: F4 follows)")
+        if log.auto_scroll:
+            log.scroll_end(animate=False)
+
+    def action_clear_log(self) -> None:
+        self.query_one(FrameLog).clear()
+
+
+def run_console(args: argparse.Namespace) -> int:
+    core = ConsoleCore(
+        args.host,
+        args.port,
+        timeout=args.timeout,
+        read_only=args.read_only,
+        record=args.record,
+        interval=args.interval,
+    )
+    history = History(args.history or default_history_path())
+    app = RacConsoleApp(core, history, args.watch)
+    return app.run() or 0

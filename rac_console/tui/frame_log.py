@@ -1,0 +1,50 @@
+"""The raw frame log: one line per frame, written in batches, bounded in memory."""
+
+from __future__ import annotations
+
+from collections import deque
+
+from textual.widgets import Log
+
+from ..client import Frame
+from ..core import LogEvent
+from ..frames import clock_text, frame_line
+
+MAX_LINES = 5000
+MAX_PENDING = 50_000
+
+
+class FrameLog(Log):
+    """Frames are queued as they cross the wire and written by :meth:`flush` at ~20 Hz:
+    one ``write_lines`` per screen refresh instead of one per frame."""
+
+    def __init__(self, **kwargs: object) -> None:
+        super().__init__(max_lines=MAX_LINES, auto_scroll=True, **kwargs)  # type: ignore[arg-type]
+        self._pending: deque[LogEvent] = deque(maxlen=MAX_PENDING)
+        self.show_polls = True
+        self.frames_seen = 0
+
+    def add(self, event: LogEvent) -> None:
+        """Called for every frame; cheap, so the session never waits on the screen."""
+        self._pending.append(event)
+
+    def flush(self) -> int:
+        """Write what arrived since the last flush; returns the number of events."""
+        if not self._pending:
+            return 0
+        events = list(self._pending)
+        self._pending.clear()
+        self.frames_seen += len(events)
+        shown = [e for e in events if not isinstance(e, Frame) or self.show_polls or not e.poll]
+        lines = [_line(e) for e in shown[-MAX_LINES:]]
+        if lines:
+            self.write_lines(lines)
+        return len(events)
+
+
+def _line(event: LogEvent) -> str:
+    if isinstance(event, Frame):
+        return frame_line(event)
+    import time
+
+    return f"{clock_text(time.time())} ── {event} ──"

@@ -1,0 +1,50 @@
+"""The status line: target, connection, round trip, poll cycle, badges."""
+
+from __future__ import annotations
+
+import time
+
+from rich.text import Text
+from textual.widgets import Static
+
+from ..core import ConsoleCore
+
+
+def status_text(core: ConsoleCore, frames_per_second: float) -> Text:
+    text = Text()
+    if core.session is None:
+        text.append(" NOT CONNECTED ", style="bold white on grey35")
+    elif core.is_simulator:
+        text.append(f" SIMULATOR {core.host}:{core.port} ", style="bold black on yellow")
+    else:
+        text.append(f" LIVE {core.host}:{core.port} ", style="bold white on red")
+    text.append("  ")
+    state = core.connection
+    if state == "lost" and core.retry_at is not None:
+        wait = max(0.0, core.retry_at - time.monotonic())
+        text.append(f"lost, retrying in {wait:.0f} s", style="bold red")
+    elif state == "connected":
+        text.append("connected", style="green")
+    elif state == "connecting":
+        text.append("connecting…", style="yellow")
+    else:
+        text.append("idle" if core.session is not None else "disconnected", style="dim")
+    rtt = core.session.last_rtt if core.session is not None else None
+    text.append(f" · rtt {rtt * 1000:.2f} ms" if rtt is not None else " · rtt –")
+    if core.paused:
+        text.append("  POLLING PAUSED", style="bold yellow")
+    elif core.watch.rows and core.cycle_seconds is not None and core.polls_per_second:
+        text.append(f" · cycle {core.cycle_seconds * 1000:.0f} ms/{core.interval:g} s")
+        if not core.interval_met:
+            text.append(" NOT MET", style="bold yellow")
+        text.append(f" · {core.polls_per_second:.0f} polls/s")
+    if frames_per_second:
+        text.append(f" · {frames_per_second:.0f} frames/s", style="dim")
+    if core.read_only:
+        text.append("  ")
+        text.append(" READ-ONLY ", style="bold white on blue")
+    return text
+
+
+class StatusBar(Static):
+    pass

@@ -1,0 +1,64 @@
+"""The live watch table: keyed rows, updated in place, only the cells that changed."""
+
+from __future__ import annotations
+
+from rich.text import Text
+from textual.widgets import DataTable
+
+from ..commands.language import VarRef
+from ..watch import WatchRow
+from .values import age_text, status_cell, type_text, value_cell
+
+COLUMNS = (
+    ("var", "Variable"),
+    ("label", "Label"),
+    ("value", "Value"),
+    ("changed", "Changed"),
+    ("status", "Status"),
+    ("type", "VARTYPE"),
+)
+
+
+class WatchTable(DataTable):
+    """Rows are keyed by variable name (``P10``); the app calls :meth:`refresh_rows` at ~10 Hz."""
+
+    def __init__(self, **kwargs: object) -> None:
+        super().__init__(cursor_type="row", zebra_stripes=True, **kwargs)  # type: ignore[arg-type]
+        self._shown: dict[str, tuple[object, ...]] = {}
+
+    def on_mount(self) -> None:
+        for key, label in COLUMNS:
+            self.add_column(label, key=key)
+
+    def refresh_rows(self, rows: dict[VarRef, WatchRow], removed: set[VarRef], now: float) -> None:
+        """Bring the table in line with the rows; untouched cells are not redrawn."""
+        for var in removed:
+            key = str(var)
+            if key in self._shown:
+                self.remove_row(key)
+                del self._shown[key]
+        for var, row in rows.items():
+            key = str(var)
+            cells = (
+                key,
+                row.label,
+                value_cell(row, now),
+                age_text(row, now),
+                status_cell(row),
+                type_text(row),
+            )
+            shown = self._shown.get(key)
+            if shown is None:
+                self.add_row(*cells, key=key)
+            else:
+                for (column, _), old, new in zip(COLUMNS, shown, cells, strict=True):
+                    if _differs(old, new):
+                        wider = len(str(new)) > len(str(old))
+                        self.update_cell(key, column, new, update_width=wider)
+            self._shown[key] = cells
+
+
+def _differs(old: object, new: object) -> bool:
+    if isinstance(old, Text) and isinstance(new, Text):
+        return old.plain != new.plain or old.spans != new.spans
+    return old != new

@@ -1,0 +1,76 @@
+"""The watch list: which variables are polled, their last values and their health."""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+from .commands.language import VarRef
+from .protocol import Variant
+
+OK = "OK"
+WAITING = "…"
+
+
+@dataclass
+class WatchRow:
+    var: VarRef
+    label: str = ""
+    variant: Variant | None = None
+    status: str = WAITING
+    stale: bool = False
+    changed_at: float | None = None
+    polled_at: float | None = None
+
+    def update(self, variant: Variant, now: float) -> bool:
+        """A good value came; True when it differs from the last one."""
+        changed = self.variant is not None and variant != self.variant
+        if changed or self.variant is None:
+            self.changed_at = now
+        self.variant = variant
+        self.status, self.stale, self.polled_at = OK, False, now
+        return changed
+
+    def fail(self, status: str, now: float) -> None:
+        """The poll failed: keep the last good value, marked stale."""
+        self.status, self.stale, self.polled_at = status, True, now
+
+
+@dataclass
+class WatchList:
+    rows: dict[VarRef, WatchRow] = field(default_factory=dict)
+    dirty: set[VarRef] = field(default_factory=set)
+    removed: set[VarRef] = field(default_factory=set)
+
+    def add(self, variables: tuple[VarRef, ...] | list[VarRef], label: str = "") -> int:
+        added = 0
+        for var in variables:
+            row = self.rows.get(var)
+            if row is None:
+                self.rows[var] = WatchRow(var, label)
+                self.removed.discard(var)
+                added += 1
+            elif label:
+                row.label = label
+            self.dirty.add(var)
+        return added
+
+    def remove(self, variables: tuple[VarRef, ...] | list[VarRef]) -> int:
+        targets = list(self.rows) if not variables else [v for v in variables if v in self.rows]
+        for var in targets:
+            del self.rows[var]
+            self.dirty.discard(var)
+            self.removed.add(var)
+        return len(targets)
+
+    def mark_all(self, status: str) -> None:
+        now = time.monotonic()
+        for row in self.rows.values():
+            row.fail(status, now)
+            self.dirty.add(row.var)
+
+    def take_changes(self) -> tuple[set[VarRef], set[VarRef]]:
+        """Rows updated and rows removed since the last call (for a batched redraw)."""
+        dirty, removed = self.dirty, self.removed
+        self.dirty, self.removed = set(), set()
+        return dirty, removed

@@ -1,0 +1,58 @@
+"""A cell's watch list as TOML: one ``[[watch]]`` table per row (type, index, label)."""
+
+from __future__ import annotations
+
+import tomllib
+from collections.abc import Iterable
+from pathlib import Path
+
+from .commands.language import VarRef
+from .protocol import InputError, kind_of, parse_index
+
+
+def _toml_string(text: str) -> str:
+    escaped = text.replace("\\", "\\\\").replace('"', '\\"')
+    escaped = "".join(ch if ch >= " " and ch != "\x7f" else f"\\u{ord(ch):04x}" for ch in escaped)
+    return f'"{escaped}"'
+
+
+def dumps(rows: Iterable[tuple[VarRef, str]]) -> str:
+    parts = ["# rac-console watch list\n"]
+    for var, label in rows:
+        parts.append(f'\n[[watch]]\ntype = "{var.kind.code}"\nindex = {var.index}\n')
+        if label:
+            parts.append(f"label = {_toml_string(label)}\n")
+    return "".join(parts)
+
+
+def loads(text: str) -> list[tuple[VarRef, str]]:
+    """Rows of a watch list; InputError naming the first bad entry."""
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise InputError(f"not a TOML watch list: {exc}") from None
+    rows = []
+    for n, entry in enumerate(data.get("watch", []), 1):
+        if not isinstance(entry, dict):
+            raise InputError(f"watch entry {n} is not a table")
+        try:
+            kind = kind_of(str(entry["type"]))
+            index = parse_index(str(entry["index"]))
+        except KeyError as exc:
+            raise InputError(f"watch entry {n} has no {exc.args[0]!r}") from None
+        except InputError as exc:
+            raise InputError(f"watch entry {n}: {exc}") from None
+        rows.append((VarRef(kind, index), str(entry.get("label", ""))))
+    return rows
+
+
+def save(path: str | Path, rows: Iterable[tuple[VarRef, str]]) -> None:
+    Path(path).expanduser().write_text(dumps(rows), encoding="utf-8")
+
+
+def load(path: str | Path) -> list[tuple[VarRef, str]]:
+    try:
+        text = Path(path).expanduser().read_text(encoding="utf-8")
+    except OSError as exc:
+        raise InputError(f"cannot read {path}: {exc.strerror}") from None
+    return loads(text)
