@@ -141,8 +141,9 @@ class ConsoleCore:
     def target(self) -> str:
         if self.session is None:
             return "NOT CONNECTED"
-        kind = "SIMULATOR" if self.is_simulator else "LIVE"
-        return f"{kind} {self.host}:{self.port}"
+        if self.is_simulator:
+            return "SIMULATOR (built-in)"
+        return f"LIVE {self.host}:{self.port}"
 
     # -------------------------------------------------------------- events
 

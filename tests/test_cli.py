@@ -329,7 +329,7 @@ def test_version_and_help(env: dict[str, str]) -> None:
         (["get", "P", "10"], b"GET:RC8:10:P:\r"),
         (["get", "IO", "10"], b"GET:RC8:10:IO:\r"),
     ],
-    ids=lambda value: value.decode().strip() if isinstance(value, bytes) else None,
+    ids=lambda value: value.decode().strip() if isinstance(value, bytes) else " ".join(value),
 )
 def test_wire_bytes_of_typed_commands(
     env: dict[str, str], recording: Callable[..., RecordingServer], args: list[str], wire: bytes

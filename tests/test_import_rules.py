@@ -22,17 +22,26 @@ PURE_MODULES = [
 ]
 FORBIDDEN_IN_PURE = ["asyncio", "socket", "selectors", "textual", "prompt_toolkit", "rich"]
 SOCKET_OWNERS = {"client.py", "sim/server.py"}
-SOCKET_CALLS = {"create_connection", "create_server", "open_connection", "start_server",
-                "sock_connect", "socket"}
+SOCKET_CALLS = {
+    "create_connection",
+    "create_server",
+    "open_connection",
+    "start_server",
+    "sock_connect",
+    "socket",
+}
 
 
 @pytest.mark.parametrize("module", PURE_MODULES)
 def test_pure_modules_import_no_io_or_ui(module: str) -> None:
-    probe = (f"import sys, {module}\n"
-             f"bad = [m for m in {FORBIDDEN_IN_PURE!r} if m in sys.modules]\n"
-             "print(','.join(bad))")
-    result = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True,
-                            check=True)
+    probe = (
+        f"import sys, {module}\n"
+        f"bad = [m for m in {FORBIDDEN_IN_PURE!r} if m in sys.modules]\n"
+        "print(','.join(bad))"
+    )
+    result = subprocess.run(
+        [sys.executable, "-c", probe], capture_output=True, text=True, check=True
+    )
     assert result.stdout.strip() == "", f"{module} pulls in {result.stdout.strip()}"
 
 
@@ -59,9 +68,12 @@ def test_only_the_client_and_the_simulator_server_touch_sockets() -> None:
 
 
 def test_version_starts_without_importing_ui_toolkits() -> None:
-    probe = ("import sys\nfrom rac_console.cli.main import build_parser\n"
-             "print([m for m in ('textual', 'prompt_toolkit', 'rich', 'asyncio')"
-             " if m in sys.modules])")
-    result = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True,
-                            check=True)
+    probe = (
+        "import sys\nfrom rac_console.cli.main import build_parser\n"
+        "print([m for m in ('textual', 'prompt_toolkit', 'rich', 'asyncio')"
+        " if m in sys.modules])"
+    )
+    result = subprocess.run(
+        [sys.executable, "-c", probe], capture_output=True, text=True, check=True
+    )
     assert result.stdout.strip() == "[]"

@@ -93,9 +93,27 @@ def test_nested_variants_match_parentheses_by_depth() -> None:
 
 @pytest.mark.parametrize(
     "text",
-    ["", "x,1", "9,1", "3,", "3,1.5", "3,abc", "3,1,2", "2,40000", "17,-1", "4,1e39",
-     "5,nan", "11,maybe", "12,8,a", "12,(8,a", "8204,(8,a", "8204,8,a)", "0,x", "6,1.23456",
-     "3,1_000"],
+    [
+        "",
+        "x,1",
+        "9,1",
+        "3,",
+        "3,1.5",
+        "3,abc",
+        "3,1,2",
+        "2,40000",
+        "17,-1",
+        "4,1e39",
+        "5,nan",
+        "11,maybe",
+        "12,8,a",
+        "12,(8,a",
+        "8204,(8,a",
+        "8204,8,a)",
+        "0,x",
+        "6,1.23456",
+        "3,1_000",
+    ],
 )
 def test_malformed_variants_raise_protocol_error(text: str) -> None:
     with pytest.raises(ProtocolError):
@@ -126,9 +144,19 @@ def test_currency_and_error_codes() -> None:
 
 @pytest.mark.parametrize(
     "variant",
-    [Variant(8, "a\rb"), Variant(8, "a\nb"), Variant(8200, ["a,b"]), Variant(8200, [""]),
-     Variant(12, Variant(8, "a)")), Variant(3, 2**31), Variant(4, float("inf")),
-     Variant(4, 1e39), Variant(11, 1), Variant(9, 1), Variant(6, Decimal("0.00001"))],
+    [
+        Variant(8, "a\rb"),
+        Variant(8, "a\nb"),
+        Variant(8200, ["a,b"]),
+        Variant(8200, [""]),
+        Variant(12, Variant(8, "a)")),
+        Variant(3, 2**31),
+        Variant(4, float("inf")),
+        Variant(4, 1e39),
+        Variant(11, 1),
+        Variant(9, 1),
+        Variant(6, Decimal("0.00001")),
+    ],
     ids=repr,
 )
 def test_unencodable_values_are_refused(variant: Variant) -> None:
@@ -166,7 +194,14 @@ def test_typed_values_per_variable_type() -> None:
 
 def test_field_labels_for_display() -> None:
     assert [label for label, _ in kind_of("P").fields(Variant(8196, [0.0] * 7))] == [
-        "X", "Y", "Z", "Rx", "Ry", "Rz", "Fig"]
+        "X",
+        "Y",
+        "Z",
+        "Rx",
+        "Ry",
+        "Rz",
+        "Fig",
+    ]
     assert kind_of("T").labels[-1] == "Fig" and kind_of("T").count == 10
     assert kind_of("IO").fields(Variant(11, True)) == [("", "ON")]
 
@@ -181,7 +216,8 @@ def test_reply_that_cannot_belong_to_a_get_is_named() -> None:
 def test_describe_response_and_wire_text() -> None:
     assert describe_response(parse_response("0,3,123")) == "S_OK  VT_I4  123"
     assert describe_response(parse_response("0x80070057")) == (
-        "E_INVALIDARG 0x80070057: invalid argument")
+        "E_INVALIDARG 0x80070057: invalid argument"
+    )
     assert wire_text(b"0,3,1\r") == "0,3,1␍"
     assert wire_text(b"\xff\x00a\\") == "\\xff\\x00a\\\\"
 

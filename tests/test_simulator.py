@@ -47,12 +47,23 @@ def code(reply: str) -> int:
 def test_get_answers_each_type_with_its_vartype_and_size() -> None:
     async def scenario(sim: SimulatorServer) -> dict[str, str]:
         line = await connect(sim)
-        return {t: await line.ask(f"GET:RC8:10:{t}:\r".encode()) for t in
-                ("I", "F", "D", "S", "V", "P", "J", "T", "IO")}
+        return {
+            t: await line.ask(f"GET:RC8:10:{t}:\r".encode())
+            for t in ("I", "F", "D", "S", "V", "P", "J", "T", "IO")
+        }
 
     replies = run(scenario)
-    expected = {"I": (3, None), "F": (4, None), "D": (5, None), "S": (8, None),
-                "V": (8196, 3), "P": (8196, 7), "J": (8196, 8), "T": (8196, 10), "IO": (11, None)}
+    expected = {
+        "I": (3, None),
+        "F": (4, None),
+        "D": (5, None),
+        "S": (8, None),
+        "V": (8196, 3),
+        "P": (8196, 7),
+        "J": (8196, 8),
+        "T": (8196, 10),
+        "IO": (11, None),
+    }
     for kind, (vt, count) in expected.items():
         response = parse_response(replies[kind])
         assert response.ok and response.variant is not None, replies[kind]
@@ -64,13 +75,23 @@ def test_get_answers_each_type_with_its_vartype_and_size() -> None:
 def test_put_stores_converts_and_checks_values() -> None:
     async def scenario(sim: SimulatorServer) -> list[str]:
         line = await connect(sim)
-        asks = [b"PUT:RC8:10:I:2,100\r", b"GET:RC8:10:I:\r",
-                b"PUT:RC8:11:F:4,123.456789\r", b"GET:RC8:11:F:\r",
-                b"PUT:RC8:12:P:8194,1,2,3,4,5,6,-1\r", b"GET:RC8:12:P:\r",
-                b"PUT:RC8:13:S:8,Sample,Test\r", b"GET:RC8:13:S:\r",
-                b"PUT:RC8:14:IO:11,-1\r", b"GET:RC8:14:IO:\r",
-                b"PUT:RC8:10:I:8,abc\r", b"PUT:RC8:10:P:8196,1,2,3\r",
-                b"PUT:RC8:10:I:5,1e12\r", b"PUT:RC8:10:F:5,1e300\r", b"PUT:RC8:10:I:3,\r"]
+        asks = [
+            b"PUT:RC8:10:I:2,100\r",
+            b"GET:RC8:10:I:\r",
+            b"PUT:RC8:11:F:4,123.456789\r",
+            b"GET:RC8:11:F:\r",
+            b"PUT:RC8:12:P:8194,1,2,3,4,5,6,-1\r",
+            b"GET:RC8:12:P:\r",
+            b"PUT:RC8:13:S:8,Sample,Test\r",
+            b"GET:RC8:13:S:\r",
+            b"PUT:RC8:14:IO:11,-1\r",
+            b"GET:RC8:14:IO:\r",
+            b"PUT:RC8:10:I:8,abc\r",
+            b"PUT:RC8:10:P:8196,1,2,3\r",
+            b"PUT:RC8:10:I:5,1e12\r",
+            b"PUT:RC8:10:F:5,1e300\r",
+            b"PUT:RC8:10:I:3,\r",
+        ]
         return [await line.ask(a) for a in asks]
 
     r = run(scenario)
@@ -83,20 +104,23 @@ def test_put_stores_converts_and_checks_values() -> None:
     assert [code(x) for x in r[11:]] == [hresult.E_INVALIDARG] * 4
 
 
-@pytest.mark.parametrize("request_line, expected", [
-    (b"FOO:RC8:10:I:", hresult.E_INVALIDCOMMAND),
-    (b"", hresult.E_INVALIDCOMMAND),
-    (b"GET:RC8:10:I", hresult.E_INVALIDCOMMAND),
-    (b"PUT:RC8:10:11,0", hresult.E_INVALIDCOMMAND),
-    (b"GET:RC8:10:X:", hresult.E_INVALIDCOMMAND),
-    (b"GET:RC8:ten:I:", hresult.E_INVALIDCOMMAND),
-    (b"GET:RC9:10:I:", hresult.E_INVALIDCOMMAND),
-    (b"GET:RC8:100:I:", hresult.E_INVALIDARG),
-    (b"GET:RC8:512:IO:", hresult.E_INVALIDARG),
-    (b"GET:RC8:1:I:\xff\xfe", hresult.E_INVALIDCOMMAND),
-    (b"\x00\x01\x02", hresult.E_INVALIDCOMMAND),
-    (b"PUT:RC8:0:IO:11,-1", hresult.E_ACCESSDENIED),
-])
+@pytest.mark.parametrize(
+    "request_line, expected",
+    [
+        (b"FOO:RC8:10:I:", hresult.E_INVALIDCOMMAND),
+        (b"", hresult.E_INVALIDCOMMAND),
+        (b"GET:RC8:10:I", hresult.E_INVALIDCOMMAND),
+        (b"PUT:RC8:10:11,0", hresult.E_INVALIDCOMMAND),
+        (b"GET:RC8:10:X:", hresult.E_INVALIDCOMMAND),
+        (b"GET:RC8:ten:I:", hresult.E_INVALIDCOMMAND),
+        (b"GET:RC9:10:I:", hresult.E_INVALIDCOMMAND),
+        (b"GET:RC8:100:I:", hresult.E_INVALIDARG),
+        (b"GET:RC8:512:IO:", hresult.E_INVALIDARG),
+        (b"GET:RC8:1:I:\xff\xfe", hresult.E_INVALIDCOMMAND),
+        (b"\x00\x01\x02", hresult.E_INVALIDCOMMAND),
+        (b"PUT:RC8:0:IO:11,-1", hresult.E_ACCESSDENIED),
+    ],
+)
 def test_bad_requests_get_an_error_and_the_session_goes_on(request_line: bytes, expected: int):
     async def scenario(sim: SimulatorServer) -> tuple[str, str]:
         line = await connect(sim)

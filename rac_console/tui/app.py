@@ -12,6 +12,7 @@ from textual import on
 from textual.app import App, ComposeResult
 from textual.binding import Binding, BindingType
 from textual.widgets import Footer, RichLog, Static
+from textual.worker import Worker, WorkerState
 
 from .. import __version__
 from ..client import ConnectFailed
@@ -45,25 +46,34 @@ class RacConsoleApp(App[int]):
         self.history = history
         self.watch_file = watch_file
         self._flushes: deque[tuple[float, int]] = deque(maxlen=LOG_FLUSH_HZ * 2)
-
-    def compose(self) -> ComposeResult:
-        yield StatusBar(id="status")
-        yield WatchTable(id="watch")
-        yield FrameLog(id="log")
-        yield Static(id="completions")
-        yield RichLog(id="results", max_lines=500, wrap=True, markup=False, highlight=False)
-        yield CommandLine(
+        # Kept as attributes: timers and workers never query a DOM being torn down.
+        self.status_bar = StatusBar(id="status")
+        self.table = WatchTable(id="watch")
+        self.frame_log = FrameLog(id="log")
+        self.completions = Static(id="completions")
+        self.results = RichLog(
+            id="results", max_lines=500, wrap=True, markup=False, highlight=False
+        )
+        self.command_line = CommandLine(
             self.history,
             self._completion_indices,
             id="command",
             placeholder="get P 1 · put IO 20 on · watch IO 0-7 · help",
         )
+
+    def compose(self) -> ComposeResult:
+        yield self.status_bar
+        yield self.table
+        yield self.frame_log
+        yield self.completions
+        yield self.results
+        yield self.command_line
         yield Footer()
 
     async def on_mount(self) -> None:
-        self.query_one(WatchTable).border_title = "Watch"
-        self.query_one(FrameLog).border_title = "Frames (→ sent, ← received)"
-        self.core.add_log_listener(self.query_one(FrameLog).add)
+        self.table.border_title = "Watch"
+        self.frame_log.border_title = "Frames (→ sent, ← received)"
+        self.core.add_log_listener(self.frame_log.add)
         await self.core.start()
         self.sub_title = self.core.target
         self._welcome()
@@ -72,15 +82,15 @@ class RacConsoleApp(App[int]):
         self.set_interval(1 / LOG_FLUSH_HZ, self.flush_log)
         self.set_interval(1 / TABLE_REFRESH_HZ, self.refresh_table)
         self.refresh_table()
-        self.query_one(CommandLine).focus()
+        self.command_line.focus()
         if not self.core.is_simulator:
-            self.run_worker(self._first_connect(), group="connect")
+            self.run_worker(self._first_connect(), group="connect", exit_on_error=False)
 
     async def on_unmount(self) -> None:
         await self.core.stop()
 
     def _welcome(self) -> None:
-        results = self.query_one("#results", RichLog)
+        results = self.results
         if self.core.is_simulator:
             results.write(
                 Text.assemble(
@@ -115,7 +125,7 @@ class RacConsoleApp(App[int]):
     # -------------------------------------------------------------- refresh
 
     def flush_log(self) -> None:
-        count = self.query_one(FrameLog).flush()
+        count = self.frame_log.flush()
         self._flushes.append((time.monotonic(), count))
 
     def frames_per_second(self) -> float:
@@ -127,21 +137,20 @@ class RacConsoleApp(App[int]):
 
     def refresh_table(self) -> None:
         _, removed = self.core.watch.take_changes()
-        self.query_one(WatchTable).refresh_rows(self.core.watch.rows, removed, time.monotonic())
-        self.query_one(StatusBar).update(status_text(self.core, self.frames_per_second()))
+        self.table.refresh_rows(self.core.watch.rows, removed, time.monotonic())
+        self.status_bar.update(status_text(self.core, self.frames_per_second()))
 
     # ------------------------------------------------------------- commands
 
     @on(CommandLine.Submitted)
     def submitted(self, event: CommandLine.Submitted) -> None:
         line = event.value
-        command_line = self.query_one(CommandLine)
-        command_line.value = ""
-        self.query_one("#completions").remove_class("-visible")
+        self.command_line.value = ""
+        self.completions.remove_class("-visible")
         if not line.strip():
             return
-        command_line.remember(line)
-        self.run_worker(self.run_line(line), group="commands")
+        self.command_line.remember(line)
+        self.run_worker(self.run_line(line), group="commands", exit_on_error=False)
 
     @on(CommandLine.Completions)
     def list_completions(self, event: CommandLine.Completions) -> None:
@@ -152,23 +161,22 @@ class RacConsoleApp(App[int]):
                 text.append("\n")
             text.append(f"{candidate.text:<{width}}", style="bold")
             text.append(f"  {candidate.help}", style="dim")
-        panel = self.query_one("#completions", Static)
-        panel.update(text)
-        panel.add_class("-visible")
+        self.completions.update(text)
+        self.completions.add_class("-visible")
 
     @on(CommandLine.Changed)
     def hide_completions(self) -> None:
-        self.query_one("#completions").remove_class("-visible")
+        self.completions.remove_class("-visible")
 
     async def run_line(self, line: str, echo: bool = True) -> None:
         if echo:
-            self.query_one("#results", RichLog).write(Text(f"› {line}", style="bold cyan"))
+            self.results.write(Text(f"› {line}", style="bold cyan"))
         for feedback in await self.core.handle_line(line):
             self.show(feedback)
         self.refresh_table()
 
     def show(self, feedback: Feedback) -> None:
-        results = self.query_one("#results", RichLog)
+        results = self.results
         if isinstance(feedback, Outcome):
             if feedback.ok:
                 results.write(outcome_text(feedback))
@@ -182,6 +190,12 @@ class RacConsoleApp(App[int]):
             elif feedback.name == "quit":
                 self.exit(0)
 
+    @on(Worker.StateChanged)
+    def worker_failed(self, event: Worker.StateChanged) -> None:
+        """A bug must not end the session at the cell: say so and carry on."""
+        if event.state == WorkerState.ERROR and self.is_running:
+            self.show(Message(f"internal error: {event.worker.error!r}", "error"))
+
     # -------------------------------------------------------------- actions
 
     def action_toggle_polling(self) -> None:
@@ -190,7 +204,7 @@ class RacConsoleApp(App[int]):
         self.refresh_table()
 
     def action_toggle_poll_frames(self) -> None:
-        log = self.query_one(FrameLog)
+        log = self.frame_log
         log.show_polls = not log.show_polls
         self.show(
             Message(
@@ -201,14 +215,14 @@ class RacConsoleApp(App[int]):
         )
 
     def action_toggle_scroll(self) -> None:
-        log = self.query_one(FrameLog)
+        log = self.frame_log
         log.auto_scroll = not log.auto_scroll
         log.border_title = "Frames" + ("" if log.auto_scroll else " (FROZEN: F4 follows)")
         if log.auto_scroll:
             log.scroll_end(animate=False)
 
     def action_clear_log(self) -> None:
-        self.query_one(FrameLog).clear()
+        self.frame_log.clear()
 
 
 def run_console(args: argparse.Namespace) -> int:

@@ -84,14 +84,12 @@ class CommandLine(Input):
         if not candidates:
             return
         start = len(text) - candidates[0].start
-        if len(candidates) == 1:
-            insert = candidates[0].text + " "
-        else:
-            insert = common_prefix(candidates)
-            self.post_message(self.Completions(candidates))
+        insert = candidates[0].text + " " if len(candidates) == 1 else common_prefix(candidates)
         if len(insert.rstrip()) >= candidates[0].start:
             self.value = text[:start] + insert + self.value[self.cursor_position :]
             self.cursor_position = start + len(insert)
+        if len(candidates) > 1:
+            self.post_message(self.Completions(candidates))  # after the Changed it caused
 
     def remember(self, line: str) -> None:
         self.history.append(line)

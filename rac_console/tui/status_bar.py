@@ -13,11 +13,12 @@ from ..core import ConsoleCore
 def status_text(core: ConsoleCore, frames_per_second: float) -> Text:
     text = Text()
     if core.session is None:
-        text.append(" NOT CONNECTED ", style="bold white on grey35")
+        style = "bold white on grey35"
     elif core.is_simulator:
-        text.append(f" SIMULATOR {core.host}:{core.port} ", style="bold black on yellow")
+        style = "bold black on yellow"
     else:
-        text.append(f" LIVE {core.host}:{core.port} ", style="bold white on red")
+        style = "bold white on red"
+    text.append(f" {core.target} ", style=style)
     text.append("  ")
     state = core.connection
     if state == "lost" and core.retry_at is not None:

@@ -1,0 +1,78 @@
+"""Helpers for Pilot tests: build the app on a private history, wait on conditions."""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from pathlib import Path
+
+from textual.pilot import Pilot
+from textual.widgets import RichLog
+
+from rac_console.client import Frame
+from rac_console.core import ConsoleCore
+from rac_console.history import History
+from rac_console.tui.app import RacConsoleApp
+from rac_console.tui.frame_log import FrameLog
+
+
+def make_app(
+    tmp_path: Path,
+    host: str | None = None,
+    port: int = 5006,
+    *,
+    read_only: bool = False,
+    interval: float = 0.05,
+    timeout: float = 1.0,
+    watch_file: str | None = None,
+) -> RacConsoleApp:
+    core = ConsoleCore(host, port, timeout=timeout, read_only=read_only, interval=interval)
+    return RacConsoleApp(core, History(tmp_path / "history"), watch_file)
+
+
+async def until(
+    pilot: Pilot, predicate: Callable[[], bool], what: str, timeout: float = 5.0
+) -> None:
+    """Let the app run until ``predicate`` holds; fail naming ``what`` after ``timeout``."""
+    deadline = time.monotonic() + timeout
+    while not predicate():
+        if time.monotonic() > deadline:
+            raise AssertionError(f"timed out after {timeout} s waiting for {what}")
+        await pilot.pause(0.05)
+
+
+async def type_line(pilot: Pilot, line: str, enter: bool = True, keys: bool = False) -> None:
+    """Enter a line as if pasted (``keys=True`` types it key by key), then press Enter."""
+    if keys:
+        await pilot.press(*line)
+    else:
+        from rac_console.tui.command_line import CommandLine
+
+        command_line = pilot.app.query_one(CommandLine)
+        command_line.insert_text_at_cursor(line)
+    if enter:
+        await pilot.press("enter")
+
+
+def log_text(app: RacConsoleApp) -> str:
+    return "\n".join(app.query_one(FrameLog).lines)
+
+
+def results_text(app: RacConsoleApp) -> str:
+    return "\n".join(strip.text for strip in app.query_one("#results", RichLog).lines)
+
+
+class FrameTap:
+    """A frame observer on the core: what really went on the wire."""
+
+    def __init__(self, app: RacConsoleApp) -> None:
+        self.frames: list[Frame] = []
+        app.core.add_log_listener(self._add)
+
+    def _add(self, event: object) -> None:
+        if isinstance(event, Frame):
+            self.frames.append(event)
+
+    @property
+    def sent(self) -> list[bytes]:
+        return [f.data for f in self.frames if f.direction == "tx"]
