@@ -28,7 +28,7 @@ def decoding(frame: Frame) -> str:
 
 
 def frame_line(frame: Frame) -> str:
-    """``14:03:07.123 ← 0,3,123␍   0.21 ms  S_OK  VT_I4  123``."""
+    """``14:03:07.123 ← 0,3,123↵   0.21 ms  S_OK  VT_I4  123``."""
     line = f"{clock_text(frame.time)} {ARROWS[frame.direction]} {wire_text(frame.data)}"
     if frame.direction == "tx":
         return line

@@ -218,7 +218,7 @@ def test_describe_response_and_wire_text() -> None:
     assert describe_response(parse_response("0x80070057")) == (
         "E_INVALIDARG 0x80070057: invalid argument"
     )
-    assert wire_text(b"0,3,1\r") == "0,3,1␍"
+    assert wire_text(b"0,3,1\r") == "0,3,1↵"
     assert wire_text(b"\xff\x00a\\") == "\\xff\\x00a\\\\"
 
 

@@ -28,16 +28,16 @@ async def test_typed_get_put_raw_and_send_show_frames_and_decoding(tmp_path: Pat
     async with app.run_test(size=(120, 40)) as pilot:
         tap = FrameTap(app)
         await type_line(pilot, "put I 7 42")
-        await until(pilot, lambda: "← 0␍" in log_text(app), "the PUT reply in the log")
+        await until(pilot, lambda: "← 0↵" in log_text(app), "the PUT reply in the log")
         await type_line(pilot, "get I[7]")
         await until(pilot, lambda: "S_OK  VT_I4  42" in log_text(app), "the GET decoding")
         await type_line(pilot, "GET:RC8:7:I:")
         await type_line(pilot, "send hello")
         await until(pilot, lambda: "E_INVALIDCOMMAND" in log_text(app), "the send reply")
         log = log_text(app)
-        assert "→ PUT:RC8:7:I:3,42␍" in log
-        assert "→ GET:RC8:7:I:␍" in log
-        assert "→ hello␍" in log
+        assert "→ PUT:RC8:7:I:3,42↵" in log
+        assert "→ GET:RC8:7:I:↵" in log
+        assert "→ hello↵" in log
         assert tap.sent == [b"PUT:RC8:7:I:3,42\r", b"GET:RC8:7:I:\r", b"GET:RC8:7:I:\r", b"hello\r"]
         await until(pilot, lambda: "I7 = 42" in results_text(app), "the decoded result")
         assert "E_INVALIDCOMMAND" in results_text(app)

@@ -10,7 +10,7 @@ from .messages import Response
 from .variant import Variant, float_text
 from .vartypes import vt_name
 
-CR_MARK = "␍"
+CR_MARK = "↵"
 
 
 def escape_bytes(data: bytes) -> str:

@@ -83,8 +83,7 @@ class RacConsoleApp(App[int]):
         self.set_interval(1 / TABLE_REFRESH_HZ, self.refresh_table)
         self.refresh_table()
         self.command_line.focus()
-        if not self.core.is_simulator:
-            self.run_worker(self._first_connect(), group="connect", exit_on_error=False)
+        self.run_worker(self._first_connect(), group="connect", exit_on_error=False)
 
     async def on_unmount(self) -> None:
         await self.core.stop()
@@ -95,8 +94,7 @@ class RacConsoleApp(App[int]):
             results.write(
                 Text.assemble(
                     ("SIMULATOR", "bold black on yellow"),
-                    f" no -H given: talking to the built-in RC8 simulator at "
-                    f"{self.core.host}:{self.core.port}, not a controller.",
+                    " no -H given: talking to the built-in RC8 simulator, not a controller.",
                 )
             )
         else:

@@ -19,7 +19,7 @@ def status_text(core: ConsoleCore, frames_per_second: float) -> Text:
     else:
         style = "bold white on red"
     text.append(f" {core.target} ", style=style)
-    text.append("  ")
+    text.append(" ")
     state = core.connection
     if state == "lost" and core.retry_at is not None:
         wait = max(0.0, core.retry_at - time.monotonic())

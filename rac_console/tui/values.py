@@ -14,8 +14,8 @@ HIGHLIGHT_SECONDS = 1.0
 def number_text(value: object, label: str = "") -> str:
     """Numbers aligned: floats with 2 decimals in 8 columns; Fig as an integer."""
     if isinstance(value, float):
-        if label == "Fig" or (value.is_integer() and abs(value) < 1e7 and label == ""):
-            return f"{int(value):>4d}" if label == "Fig" else f"{int(value):>8d}"
+        if label == "Fig":
+            return f"{int(value):>2d}"
         return f"{value:>8.2f}"
     if isinstance(value, bool):
         return "ON" if value else "OFF"
@@ -29,12 +29,12 @@ def value_cell(row: WatchRow, now: float) -> Text:
     if variant is None:
         return Text("—", style="dim")
     kind = row.var.kind
-    text = Text()
+    text = Text(no_wrap=True, overflow="crop")
     if kind.labels and isinstance(variant.value, list) and len(variant.value) == kind.count:
         for n, (label, value) in enumerate(zip(kind.labels, variant.value, strict=True)):
             if n:
                 text.append(" ")
-            text.append(label, style="dim")
+            text.append(label + " ", style="dim")
             text.append(number_text(value, label))
     elif kind.code == "IO":
         on = bool(variant.value)
@@ -63,10 +63,10 @@ def age_text(row: WatchRow, now: float) -> str:
 
 def status_cell(row: WatchRow) -> Text:
     if row.status == OK:
-        return Text("OK", style="green")
+        return Text("OK", style="green", no_wrap=True)
     if row.stale:
-        return Text(f"{row.status} (stale)", style="bold red")
-    return Text(row.status, style="dim")
+        return Text(f"{row.status} (stale)", style="bold red", no_wrap=True)
+    return Text(row.status, style="dim", no_wrap=True)
 
 
 def type_text(row: WatchRow) -> str:

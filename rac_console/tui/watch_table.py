@@ -9,12 +9,14 @@ from ..commands.language import VarRef
 from ..watch import WatchRow
 from .values import age_text, status_cell, type_text, value_cell
 
+#: Status and age before the value, so they stay in view when a long P or J value is
+#: cut off on a narrow terminal.
 COLUMNS = (
     ("var", "Variable"),
     ("label", "Label"),
-    ("value", "Value"),
-    ("changed", "Changed"),
     ("status", "Status"),
+    ("changed", "Changed"),
+    ("value", "Value"),
     ("type", "VARTYPE"),
 )
 
@@ -42,9 +44,9 @@ class WatchTable(DataTable):
             cells = (
                 key,
                 row.label,
-                value_cell(row, now),
-                age_text(row, now),
                 status_cell(row),
+                age_text(row, now),
+                value_cell(row, now),
                 type_text(row),
             )
             shown = self._shown.get(key)
