@@ -12,6 +12,7 @@ from __future__ import annotations
 import asyncio
 import heapq
 import itertools
+import logging
 import os
 import time
 from collections.abc import Callable
@@ -34,6 +35,8 @@ from .protocol import (
     parse_response,
     put_request,
 )
+
+logger = logging.getLogger(__name__)
 
 DEFAULT_PORT = 5006
 DEFAULT_TIMEOUT = 2.0
@@ -196,7 +199,10 @@ class RacSession:
 
     def _publish(self, frame: Frame) -> None:
         for observer in self._frame_observers:
-            observer(frame)
+            try:
+                observer(frame)
+            except Exception:  # an observer (a log, a recorder) must never break the session
+                logger.exception("frame observer failed")
 
     def _set_state(self, state: State) -> None:
         if state != self._state:
@@ -244,11 +250,17 @@ class RacSession:
         loop = asyncio.get_running_loop()
         pending = self._pending = loop.create_future()
         expiry = loop.call_later(self.timeout, self._expire, pending)
-        self._sent_at = time.perf_counter()
-        transport.write(data)
-        self._publish(Frame(time.time(), "tx", data, poll=self._polling))
         try:
+            self._sent_at = time.perf_counter()
+            transport.write(data)
+            self._publish(Frame(time.time(), "tx", data, poll=self._polling))
             frame, rtt = await pending
+        except BaseException:
+            # Sent but no reply taken (cancelled, or failed): whatever this connection
+            # carries next may be that reply, so it must not serve another request.
+            if not pending.done() or pending.cancelled():
+                self._drop_connection()
+            raise
         finally:
             expiry.cancel()
             self._pending = None
@@ -272,7 +284,11 @@ class RacSession:
 
     async def connect(self) -> None:
         """Open the connection now rather than at the first request."""
-        await self._connected_transport()
+        await self._turn.acquire(PRIORITY_COMMAND)
+        try:
+            await self._connected_transport()
+        finally:
+            self._turn.release()
 
     async def _connected_transport(self) -> asyncio.Transport:
         if self._transport is not None and not self._transport.is_closing():
@@ -284,12 +300,9 @@ class RacSession:
                 loop.create_connection(lambda: _SessionProtocol(self), self.host, self.port),
                 self.connect_timeout,
             )
-        except (TimeoutError, OSError) as exc:
+        except (OSError, UnicodeError, ValueError) as exc:  # TimeoutError is an OSError
             self._set_state("closed")
-            reason = "timed out"
-            if isinstance(exc, OSError) and not isinstance(exc, asyncio.TimeoutError):
-                reason = os.strerror(exc.errno) if exc.errno else str(exc)
-            raise ConnectFailed(f"cannot connect to {self.address}: {reason}") from None
+            raise ConnectFailed(f"cannot connect to {self.address}: {_reason(exc)}") from None
         self._transport = transport  # type: ignore[assignment]
         self._protocol = protocol
         self._decoder.clear()
@@ -299,6 +312,9 @@ class RacSession:
 
     def _drop_connection(self) -> None:
         """Abort the connection so nothing more it carries can be read."""
+        pending = self._pending
+        if pending is not None and not pending.done():
+            pending.set_exception(Disconnected("the session was closed"))
         if self._transport is not None:
             self._transport.abort()
             self._transport = None
@@ -325,14 +341,11 @@ class RacSession:
             return
         self._after_cr = data.endswith(b"\r")
         pending = self._pending
+        overflow: FrameTooLong | None = None
         try:
             frames = self._decoder.feed(data)
         except FrameTooLong as exc:
-            self._publish(Frame(time.time(), "rx", data[:256], unsolicited=pending is None))
-            if pending is not None and not pending.done():
-                pending.set_exception(BadReply(f"reply too long: {exc}", data[:256]))
-            self._drop_connection()
-            return
+            frames, overflow = exc.lines, exc
         waiting = pending is not None and not pending.done()
         for frame in frames:
             if waiting:
@@ -343,6 +356,14 @@ class RacSession:
             else:
                 self._publish(Frame(time.time(), "rx", frame + b"\r", unsolicited=True))
                 self._drop_connection()
+        if overflow is not None:
+            self._publish(Frame(time.time(), "rx", data[-256:], unsolicited=not waiting))
+            if waiting:
+                pending.set_exception(  # type: ignore[union-attr]
+                    BadReply(f"reply too long: {overflow}", data[-256:])
+                )
+            self._drop_connection()
+            return
         if not waiting and self._decoder.pending not in (b"", b"\n") and self._transport:
             # Bytes of a line nobody asked for: never let them prefix the next reply.
             self._publish(Frame(time.time(), "rx", self._decoder.pending, unsolicited=True))
@@ -381,3 +402,17 @@ def _put_check(response: Response) -> str | None:
     if response.variant is not None:
         return "a PUT reply carries no value"
     return None
+
+
+def _reason(exc: BaseException) -> str:
+    """Why a connection failed, in words: never 'Unknown error -2'."""
+    if isinstance(exc, TimeoutError):
+        return "timed out"
+    if isinstance(exc, OSError):
+        if exc.strerror:
+            return exc.strerror
+        if exc.errno and exc.errno > 0:
+            return os.strerror(exc.errno)
+    if isinstance(exc, UnicodeError | ValueError):
+        return "not a valid host name"
+    return str(exc) or type(exc).__name__

@@ -217,6 +217,16 @@ class ConsoleCore:
             return Message("disconnected: connect HOST[:PORT] to talk to a controller")
         return Action(name)
 
+    async def connect_now(self) -> Message | None:
+        """Open the connection at start, so the status line tells the truth at once."""
+        if self.session is None:
+            return None
+        try:
+            await self.session.connect()
+        except ConnectFailed as exc:
+            return Message(f"{exc}: commands will retry", "error")
+        return None
+
     def set_paused(self, paused: bool) -> None:
         self.paused = paused
         self._wake.set()
@@ -243,8 +253,6 @@ class ConsoleCore:
             rows = watchlist.load(command.path)
         except InputError as exc:
             return Message(str(exc), "error")
-        except OSError as exc:
-            return Message(f"cannot write {command.path}: {exc.strerror}", "error")
         for var, label in rows:
             self.watch.add((var,), label)
             self.seen.add((var.kind.code, var.index))
@@ -273,6 +281,10 @@ class ConsoleCore:
                 await self._sleep(backoff)
                 backoff = min(backoff * 2, MAX_BACKOFF)
                 continue
+            except Exception as exc:  # a bug must not silently stop the live table
+                self.note(f"polling error: {exc!r}")
+                await self._sleep(1.0)
+                continue
             backoff = 0.5
             elapsed = time.perf_counter() - started
             if count:
@@ -283,13 +295,14 @@ class ConsoleCore:
                 self.polls_per_second = count / period
 
     async def _sleep(self, seconds: float) -> None:
-        """Wait, but wake early when the watch list, interval or target changes."""
-        self._wake.clear()
-        if seconds <= 0:
+        """Wait, but wake early when the watch list, interval or target changes
+        (also when that happened during the cycle that just ended)."""
+        if seconds > 0:
+            with contextlib.suppress(TimeoutError):
+                await asyncio.wait_for(self._wake.wait(), seconds)
+        else:
             await asyncio.sleep(0)
-            return
-        with contextlib.suppress(TimeoutError):
-            await asyncio.wait_for(self._wake.wait(), seconds)
+        self._wake.clear()
 
     async def _poll_cycle(self, session: RacSession) -> int:
         count = 0

@@ -25,6 +25,8 @@ def decoding(frame: Frame) -> str:
         return describe_response(parse_response(decode_frame(body)))
     except ProtocolError as exc:
         return f"garbled: {exc}"
+    except Exception as exc:  # the log must show every frame, whatever it holds
+        return f"undecodable: {exc!r}"
 
 
 def frame_line(frame: Frame) -> str:

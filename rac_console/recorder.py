@@ -12,12 +12,13 @@ import os
 from typing import TextIO
 
 from .client import Frame
-from .protocol import escape_bytes
+from .protocol import InputError, escape_bytes
 
 
 def open_private(path: str, mode: str = "a") -> TextIO:
-    """Open a text file for appending, creating it readable by its owner only."""
-    fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_APPEND, 0o600)
+    """Open a text file to append (``"a"``) or rewrite (``"w"``), created owner-only."""
+    flags = os.O_WRONLY | os.O_CREAT | (os.O_TRUNC if mode == "w" else os.O_APPEND)
+    fd = os.open(path, flags, 0o600)
     return os.fdopen(fd, mode, encoding="utf-8")
 
 
@@ -25,8 +26,12 @@ class FrameRecorder:
     """A frame observer appending JSON lines: ``t``, ``dir``, ``text``, ``rtt_ms``."""
 
     def __init__(self, path: str) -> None:
+        """Raises InputError when the file cannot be opened for appending."""
         self.path = path
-        self._file = open_private(path)
+        try:
+            self._file = open_private(path)
+        except OSError as exc:
+            raise InputError(f"cannot write the record file {path}: {exc.strerror}") from None
 
     def __call__(self, frame: Frame) -> None:
         data = frame.data[:-1] if frame.data.endswith(b"\r") else frame.data

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import threading
 import time
 from dataclasses import dataclass, field
 
@@ -38,17 +39,21 @@ class WatchRow:
 
 @dataclass
 class WatchList:
+    """Changed by the session's thread, read by the screen's: ``removed`` is guarded."""
+
     rows: dict[VarRef, WatchRow] = field(default_factory=dict)
     dirty: set[VarRef] = field(default_factory=set)
     removed: set[VarRef] = field(default_factory=set)
+    _lock: threading.Lock = field(default_factory=threading.Lock, repr=False)
 
     def add(self, variables: tuple[VarRef, ...] | list[VarRef], label: str = "") -> int:
         added = 0
         for var in variables:
             row = self.rows.get(var)
             if row is None:
-                self.rows[var] = WatchRow(var, label)
-                self.removed.discard(var)
+                with self._lock:
+                    self.rows[var] = WatchRow(var, label)
+                    self.removed.discard(var)
                 added += 1
             elif label:
                 row.label = label
@@ -57,10 +62,11 @@ class WatchList:
 
     def remove(self, variables: tuple[VarRef, ...] | list[VarRef]) -> int:
         targets = list(self.rows) if not variables else [v for v in variables if v in self.rows]
-        for var in targets:
-            del self.rows[var]
-            self.dirty.discard(var)
-            self.removed.add(var)
+        with self._lock:
+            for var in targets:
+                del self.rows[var]
+                self.dirty.discard(var)
+                self.removed.add(var)
         return len(targets)
 
     def mark_all(self, status: str) -> None:
@@ -71,6 +77,7 @@ class WatchList:
 
     def take_changes(self) -> tuple[set[VarRef], set[VarRef]]:
         """Rows updated and rows removed since the last call (for a batched redraw)."""
-        dirty, removed = self.dirty, self.removed
-        self.dirty, self.removed = set(), set()
+        with self._lock:
+            dirty, removed = self.dirty, self.removed
+            self.dirty, self.removed = set(), set()
         return dirty, removed

@@ -31,8 +31,13 @@ def loads(text: str) -> list[tuple[VarRef, str]]:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise InputError(f"not a TOML watch list: {exc}") from None
+    entries = data.get("watch", [])
+    if isinstance(entries, dict):
+        entries = [entries]
+    if not isinstance(entries, list):
+        raise InputError("a watch list holds [[watch]] tables with type, index and label")
     rows = []
-    for n, entry in enumerate(data.get("watch", []), 1):
+    for n, entry in enumerate(entries, 1):
         if not isinstance(entry, dict):
             raise InputError(f"watch entry {n} is not a table")
         try:
@@ -47,12 +52,17 @@ def loads(text: str) -> list[tuple[VarRef, str]]:
 
 
 def save(path: str | Path, rows: Iterable[tuple[VarRef, str]]) -> None:
-    Path(path).expanduser().write_text(dumps(rows), encoding="utf-8")
+    try:
+        Path(path).expanduser().write_text(dumps(rows), encoding="utf-8")
+    except (OSError, RuntimeError) as exc:
+        raise InputError(f"cannot write {path}: {getattr(exc, 'strerror', None) or exc}") from None
 
 
 def load(path: str | Path) -> list[tuple[VarRef, str]]:
     try:
         text = Path(path).expanduser().read_text(encoding="utf-8")
-    except OSError as exc:
-        raise InputError(f"cannot read {path}: {exc.strerror}") from None
+    except (OSError, RuntimeError) as exc:
+        raise InputError(f"cannot read {path}: {getattr(exc, 'strerror', None) or exc}") from None
+    except UnicodeDecodeError:
+        raise InputError(f"{path} is not a UTF-8 text file") from None
     return loads(text)

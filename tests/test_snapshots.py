@@ -52,9 +52,14 @@ def test_main_screen(snap_compare, tmp_path: Path, utc: None) -> None:
     app = make_app(tmp_path)
 
     async def run_before(pilot) -> None:
-        app.core.set_paused(True)
-        for line in ("watch P 1 pick", "watch J 1 home", "watch I 4 parts", "watch IO 128-131",
-                     "watch S 1"):
+        app.core_thread.call(app.core.set_paused, True)
+        for line in (
+            "watch P 1 pick",
+            "watch J 1 home",
+            "watch I 4 parts",
+            "watch IO 128-131",
+            "watch S 1",
+        ):
             await type_line(pilot, line)
         await pilot.pause(0.2)
         stage(app)
@@ -70,7 +75,7 @@ def test_main_screen_small_terminal(snap_compare, tmp_path: Path, utc: None) -> 
     app = make_app(tmp_path, read_only=True)
 
     async def run_before(pilot) -> None:
-        app.core.set_paused(True)
+        app.core_thread.call(app.core.set_paused, True)
         await type_line(pilot, "watch IO 128-131")
         await type_line(pilot, "put I 1 5")
         await pilot.pause(0.2)

@@ -3,13 +3,14 @@
 from __future__ import annotations
 
 import argparse
-import asyncio
+import itertools
 import json
 import sys
-from collections.abc import AsyncIterator
+from collections.abc import Iterator
 
 from rich.console import Console
 
+from ..client import RacSession
 from ..commands.language import Get, Put, Raw, parse_command, parse_exchange
 from ..commands.outcome import ExitStatus, Outcome, refused, worst
 from ..execute import execute
@@ -54,26 +55,23 @@ async def one_command(args: argparse.Namespace) -> ExitStatus:
     line = _exchange_line(args)
     try:
         command = parse_exchange(line)
+        assert command is not None
+        async with open_session(args) as session:
+            outcome = await execute(session, command, read_only=args.read_only, line=line)
     except InputError as exc:
         outcome = refused(line, str(exc))
-        output.show(outcome)
-        return outcome.status
-    assert command is not None
-    async with open_session(args) as session:
-        outcome = await execute(session, command, read_only=args.read_only, line=line)
     output.show(outcome)
     return outcome.status
 
 
-async def _lines(source: str) -> AsyncIterator[str]:
+def _script_lines(source: str) -> Iterator[str]:
+    """Lines of FILE, or of stdin read as they come (``run`` is sequential, so a
+    blocking read holds nothing up, and Ctrl-C ends it at once)."""
     if source == "-":
-        loop = asyncio.get_running_loop()
-        while line := await loop.run_in_executor(None, sys.stdin.readline):
-            yield line
+        yield from iter(sys.stdin.readline, "")
         return
-    with open(source, encoding="utf-8") as handle:
-        for line in handle:
-            yield line
+    with open(source, encoding="utf-8", errors="surrogateescape") as handle:
+        yield from handle
 
 
 async def run_script(args: argparse.Namespace) -> ExitStatus:
@@ -81,31 +79,36 @@ async def run_script(args: argparse.Namespace) -> ExitStatus:
     output = Output(args.json)
     statuses: list[ExitStatus] = []
     try:
-        async with open_session(args) as session:
-            number = 0
-            async for raw_line in _lines(args.file):
-                number += 1
-                line = raw_line.rstrip("\r\n")
-                try:
-                    command = parse_command(line)
-                except InputError as exc:
-                    outcome = refused(line, str(exc))
-                else:
-                    if command is None:
-                        continue
-                    if not isinstance(command, Get | Put | Raw):
-                        outcome = refused(
-                            line,
-                            f"{line.split()[0]!r} works in the console and "
-                            "the REPL; run takes get, put, send and GET:/PUT: lines",
-                        )
-                    else:
-                        outcome = await execute(
-                            session, command, read_only=args.read_only, line=line
-                        )
-                output.show(outcome, {"line": number}, prefix=f"line {number}: ")
-                statuses.append(outcome.status)
+        lines = _script_lines(args.file)
+        first = next(lines, None)  # opens the file: a missing one is said before connecting
     except OSError as exc:
         output.err.print(f"rac-console: cannot read {args.file}: {exc.strerror}", markup=False)
         return ExitStatus.REFUSED
+    try:
+        async with open_session(args) as session:
+            for number, raw_line in enumerate(itertools.chain([first] if first else [], lines), 1):
+                line = raw_line.rstrip("\r\n")
+                outcome = await _run_line(session, line, args.read_only)
+                if outcome is not None:
+                    output.show(outcome, {"line": number}, prefix=f"line {number}: ")
+                    statuses.append(outcome.status)
+    except InputError as exc:
+        output.err.print(f"rac-console: {exc}", markup=False)
+        return ExitStatus.REFUSED
     return worst(statuses)
+
+
+async def _run_line(session: RacSession, line: str, read_only: bool) -> Outcome | None:
+    try:
+        command = parse_command(line)
+    except InputError as exc:
+        return refused(line, str(exc))
+    if command is None:
+        return None
+    if not isinstance(command, Get | Put | Raw):
+        return refused(
+            line,
+            f"{line.split()[0]!r} works in the console and the REPL; "
+            "run takes get, put, send and GET:/PUT: lines",
+        )
+    return await execute(session, command, read_only=read_only, line=line)

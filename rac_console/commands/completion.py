@@ -38,7 +38,7 @@ def _tokens(text: str) -> tuple[list[str], str]:
 def _split_var(words: list[str]) -> list[str]:
     """Treat ``P10`` and ``P[10]`` like ``P 10`` so the position counts stay simple."""
     if len(words) >= 2:
-        match = re.fullmatch(r"([A-Za-z]+)\[?(\d+)\]?", words[1])
+        match = re.fullmatch(r"([A-Za-z]+)\[?(\d+)\]?", words[1], re.ASCII)
         if match and match.group(1).upper() in KINDS:
             return [words[0], match.group(1), match.group(2), *words[2:]]
     return words

@@ -100,7 +100,7 @@ Command = Get | Put | Raw | Watch | Unwatch | SetInterval | Connect | WatchFile 
 MAX_RANGE = 256
 MIN_INTERVAL, MAX_INTERVAL = 0.0, 3600.0
 
-_VAR_RE = re.compile(r"\s*([A-Za-z]+)(?:\[\s*([^\]]*?)\s*\]|(\d+))?")
+_VAR_RE = re.compile(r"\s*([A-Za-z]+)(?:\[\s*([^\]]*?)\s*\]|(\d+))?", re.ASCII)
 _RAW_PREFIXES = ("GET:", "PUT:")
 
 
@@ -110,9 +110,10 @@ def is_raw_line(line: str) -> bool:
 
 def split_word(line: str) -> tuple[str, str]:
     """The first word (lower-cased) and the rest, leading blanks removed."""
-    stripped = line.lstrip()
-    word, _, rest = stripped.partition(" ")
-    return word.lower(), rest
+    parts = line.strip().split(None, 1)
+    if not parts:
+        return "", ""
+    return parts[0].lower(), parts[1] if len(parts) > 1 else ""
 
 
 def parse_var(text: str, usage: str) -> tuple[VarRef, str]:
@@ -124,7 +125,7 @@ def parse_var(text: str, usage: str) -> tuple[VarRef, str]:
     rest = text[match.end() :]
     index_text = match.group(2) if match.group(2) is not None else match.group(3)
     if index_text is None:
-        index_match = re.match(r"\s+(\S+)", rest)
+        index_match = re.match(r"\s+(\S+)", rest, re.ASCII)
         if not index_match:
             raise InputError(f"{kind.code} needs an index: {usage}")
         index_text, rest = index_match.group(1), rest[index_match.end() :]
@@ -195,7 +196,9 @@ def parse_command(line: str) -> Command | None:
 
 def _parse_vars(text: str, usage: str) -> tuple[tuple[VarRef, ...], str]:
     """One variable or a range ``TYPE FIRST-LAST``, and the text after it."""
-    match = re.match(r"\s*([A-Za-z]+)\s*(?:\[\s*(\d+)\s*-\s*(\d+)\s*\]|(\d+)\s*-\s*(\d+))", text)
+    match = re.match(
+        r"\s*([A-Za-z]+)\s*(?:\[\s*(\d+)\s*-\s*(\d+)\s*\]|(\d+)\s*-\s*(\d+))", text, re.ASCII
+    )
     if match is None or match.group(1).upper() not in (
         "I",
         "F",
@@ -241,9 +244,17 @@ def _parse_seconds(text: str) -> float:
 def _parse_connect(text: str) -> Connect:
     if not text or " " in text:
         raise InputError("connect needs one address: connect HOST or connect HOST:PORT")
-    host, sep, port_text = text.rpartition(":") if text.count(":") == 1 else (text, "", "")
+    if text.startswith("["):  # [IPv6]:PORT
+        host, _, port_part = text[1:].partition("]")
+        sep, port_text = (":", port_part[1:]) if port_part.startswith(":") else ("", "")
+    elif text.count(":") == 1:
+        host, sep, port_text = text.partition(":")
+    else:
+        host, sep, port_text = text, "", ""
+    if not host:
+        raise InputError("connect needs a host: connect HOST or connect HOST:PORT")
     if not sep:
-        return Connect(text.strip("[]"), 5006)
-    if not port_text.isdigit() or not 0 < int(port_text) < 65536:
+        return Connect(host, 5006)
+    if not (port_text.isascii() and port_text.isdigit()) or not 0 < int(port_text) < 65536:
         raise InputError(f"port must be a number from 1 to 65535, got {port_text!r}")
     return Connect(host, int(port_text))

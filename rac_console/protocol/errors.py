@@ -27,4 +27,11 @@ class EncodeError(InputError):
 
 
 class FrameTooLong(ProtocolError):
-    """A line grew past the decoder's bound without a CR."""
+    """A line grew past the decoder's bound without a CR.
+
+    ``lines`` holds the complete lines that came before it in the same chunk.
+    """
+
+    def __init__(self, message: str) -> None:
+        super().__init__(message)
+        self.lines: list[bytes] = []

@@ -33,8 +33,13 @@ class LineDecoder:
             self._hold(buffer)
             return []
         *lines, rest = buffer.split(CR)
-        self._hold(rest)
-        return [line[1:] if line[:1] == b"\n" else line for line in lines]
+        lines = [line[1:] if line[:1] == b"\n" else line for line in lines]
+        try:
+            self._hold(rest)
+        except FrameTooLong as exc:
+            exc.lines = lines
+            raise
+        return lines
 
     def clear(self) -> None:
         self._buffer = b""

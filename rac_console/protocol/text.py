@@ -26,6 +26,13 @@ def escape_bytes(data: bytes) -> str:
     return "".join(out)
 
 
+def printable(text: str) -> str:
+    """Text safe to put on a terminal: control characters as ``\\xNN``."""
+    if text.isprintable():
+        return text
+    return "".join(ch if ch.isprintable() else f"\\x{ord(ch):02x}" for ch in text)
+
+
 def wire_text(data: bytes) -> str:
     """A frame as shown in logs: escaped, with its CR made visible."""
     if data.endswith(b"\r"):
@@ -45,7 +52,7 @@ def scalar_text(value: Any) -> str:
     if value is None:
         return "(empty)"
     if isinstance(value, str):
-        return value
+        return printable(value)
     return str(value)
 
 

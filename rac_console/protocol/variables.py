@@ -18,8 +18,8 @@ from .vartypes import INTEGER_RANGES, NUMERIC_TYPES, VT, VT_ARRAY, element_type,
 R4_ARRAY = VT.R4 | VT_ARRAY
 MAX_INDEX = 32767
 
-_NUMBER_RE = re.compile(r"[+-]?(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][+-]?\d+)?")
-_INTEGER_RE = re.compile(r"[+-]?(?:\d+|0[xX][0-9a-fA-F]+)")
+_NUMBER_RE = re.compile(r"[+-]?(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][+-]?\d+)?", re.ASCII)
+_INTEGER_RE = re.compile(r"[+-]?(?:\d+|0[xX][0-9a-fA-F]+)", re.ASCII)
 _TRUE_WORDS = ("on", "1", "true", "-1")
 _FALSE_WORDS = ("off", "0", "false")
 _INTEGER_VTS = frozenset(INTEGER_RANGES) | {VT.BOOL}
@@ -142,7 +142,7 @@ def kind_of(code: str) -> VarKind:
 
 
 def parse_index(text: str) -> int:
-    if not text.isascii() or not text.isdigit():
+    if not text.isascii() or not text.isdigit() or len(text) > 6:
         raise InputError(f"index must be a whole number from 0 to {MAX_INDEX}, got {text!r}")
     index = int(text)
     if index > MAX_INDEX:
@@ -166,7 +166,7 @@ def _unquote(text: str) -> str:
 
 
 def _integer(text: str) -> int:
-    if not _INTEGER_RE.fullmatch(text):
+    if len(text) > 40 or not _INTEGER_RE.fullmatch(text):
         raise InputError(f"I needs a whole number such as 123 or -5, got {text!r}")
     value = int(text, 0) if "x" in text.lower() else int(text)
     low, high = INTEGER_RANGES[VT.I4]

@@ -25,11 +25,13 @@ from .errors import EncodeError, ProtocolError
 from .vartypes import INTEGER_RANGES, VT, element_type, is_array, is_known, vt_name
 
 _BLANKS = " \t"
-_INT_RE = re.compile(r"[+-]?\d+")
-_HEX_RE = re.compile(r"0[xX][0-9a-fA-F]+")
-_FLOAT_RE = re.compile(r"[+-]?(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][+-]?\d+)?")
-_CY_RE = re.compile(r"[+-]?(?:\d+(?:\.\d{0,4})?|\.\d{1,4})")
+_INT_RE = re.compile(r"[+-]?\d+", re.ASCII)
+_HEX_RE = re.compile(r"0[xX][0-9a-fA-F]+", re.ASCII)
+_FLOAT_RE = re.compile(r"[+-]?(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][+-]?\d+)?", re.ASCII)
+_CY_RE = re.compile(r"[+-]?(?:\d+(?:\.\d{0,4})?|\.\d{1,4})", re.ASCII)
 _CY_LIMIT = Decimal(2**63) / 10000
+_MAX_DIGITS = 40  # longer integers are refused before int() is asked to convert them
+MAX_NESTING = 16  # VT_VARIANT inside VT_VARIANT, at most this deep
 
 
 @dataclass(frozen=True, slots=True)
@@ -61,22 +63,35 @@ def _to_float32(x: float) -> float:
     return struct.unpack("<f", struct.pack("<f", x))[0]
 
 
-@lru_cache(maxsize=8192)
 def canonical_r4(x: float) -> float:
     """The double nearest to the shortest decimal that rounds to float32(x).
 
     Raises OverflowError when x is outside float32's range.
     """
+    if x == 0:
+        return x  # keeps the sign of -0.0, which the cache below would confuse with 0.0
+    return _canonical_r4(x)
+
+
+@lru_cache(maxsize=8192)
+def _canonical_r4(x: float) -> float:
     if not math.isfinite(x):
         raise OverflowError("not finite")
     f32 = _to_float32(x)
     for digits in range(1, 10):
-        candidate = float(f"{f32:.{digits}g}")
-        try:
-            if _to_float32(candidate) == f32:
-                return candidate
-        except OverflowError:
-            continue
+        mantissa, _, exponent = f"{f32:.{digits - 1}e}".partition("e")
+        sign = "-" if mantissa.startswith("-") else ""
+        integer = int(mantissa.lstrip("-").replace(".", ""))
+        scale = int(exponent) - (digits - 1)
+        # The nearest n-digit decimal, and its neighbours: at a power of two the
+        # neighbour can round-trip where the nearest does not.
+        for candidate_digits in (integer, integer - 1, integer + 1):
+            candidate = float(f"{sign}{candidate_digits}e{scale}")
+            try:
+                if _to_float32(candidate) == f32:
+                    return candidate
+            except OverflowError:
+                continue
     return f32  # pragma: no cover - 9 significant digits always round-trip
 
 
@@ -89,18 +104,22 @@ def float_text(x: float) -> str:
 # ------------------------------------------------------------------- parsing
 
 
-def parse_variant(text: str) -> Variant:
+def parse_variant(text: str, _depth: int = 0) -> Variant:
     """Decode ``<VARTYPE>,<data>``; raise :class:`ProtocolError` on anything else."""
+    if _depth > MAX_NESTING:
+        raise ProtocolError(f"VT_VARIANT nested more than {MAX_NESTING} deep")
     vt_text, _, data = text.partition(",")
     vt_field = vt_text.strip(_BLANKS)
-    if not _INT_RE.fullmatch(vt_field):
+    if len(vt_field) > 6 or not _INT_RE.fullmatch(vt_field):
         raise ProtocolError(f"VARTYPE must be a number, got {vt_field!r}")
     vt = int(vt_field)
     if not is_known(vt):
         raise ProtocolError(f"unsupported VARTYPE {vt}")
     if is_array(vt):
-        return Variant(vt, [_parse_scalar(element_type(vt), e) for e in split_elements(data)])
-    return Variant(vt, _parse_scalar(vt, data))
+        return Variant(
+            vt, [_parse_scalar(element_type(vt), e, _depth) for e in split_elements(data)]
+        )
+    return Variant(vt, _parse_scalar(vt, data, _depth))
 
 
 def split_elements(data: str) -> list[str]:
@@ -127,7 +146,7 @@ def split_elements(data: str) -> list[str]:
 
 
 def _parse_int(field: str, vt: int) -> int:
-    if not _INT_RE.fullmatch(field):
+    if len(field) > _MAX_DIGITS or not _INT_RE.fullmatch(field):
         raise ProtocolError(f"{vt_name(vt)} needs an integer, got {field!r}")
     value = int(field)
     low, high = INTEGER_RANGES[VT(vt)]
@@ -152,6 +171,8 @@ def _parse_float(field: str, vt: int) -> float:
 
 def parse_hresult_number(field: str) -> int:
     """Signed decimal, unsigned decimal or hex (any case) to an unsigned 32-bit code."""
+    if len(field) > _MAX_DIGITS:
+        raise ProtocolError(f"a result code must fit 32 bits, got {field[:20]!r}...")
     if _HEX_RE.fullmatch(field):
         value = int(field, 16)
     elif _INT_RE.fullmatch(field):
@@ -163,7 +184,7 @@ def parse_hresult_number(field: str) -> int:
     return value & 0xFFFFFFFF
 
 
-def _parse_scalar(vt: int, data: str) -> Any:
+def _parse_scalar(vt: int, data: str, depth: int = 0) -> Any:
     field = data.strip(_BLANKS)
     if vt in (VT.EMPTY, VT.NULL):
         if field:
@@ -177,7 +198,7 @@ def _parse_scalar(vt: int, data: str) -> Any:
         lowered = field.lower()
         if lowered in ("true", "false"):
             return lowered == "true"
-        if not _INT_RE.fullmatch(field):
+        if len(field) > _MAX_DIGITS or not _INT_RE.fullmatch(field):
             raise ProtocolError(f"VT_BOOL needs 0, -1, True or False, got {field!r}")
         return int(field) != 0
     if vt == VT.CY:
@@ -201,7 +222,7 @@ def _parse_scalar(vt: int, data: str) -> Any:
             raise ProtocolError(f"VT_VARIANT data must be '(vt,data)', got {data!r}")
         inner = field[1:-1]
         split_elements(inner)  # rejects unbalanced parentheses inside
-        return parse_variant(inner)
+        return parse_variant(inner, depth + 1)
     raise ProtocolError(f"unsupported VARTYPE {vt}")  # pragma: no cover - is_known guards
 
 

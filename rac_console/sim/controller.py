@@ -17,6 +17,7 @@ from ..protocol.hresult import (
     E_INVALIDARGTYPE,
     E_INVALIDCOMMAND,
     E_INVALIDRCVPACKET,
+    E_UNEXPECTED,
     S_OK,
 )
 from ..protocol.variant import canonical_r4
@@ -131,7 +132,10 @@ class SimulatedController:
             text = line.decode("ascii")
         except UnicodeDecodeError:
             return _reply(E_INVALIDCOMMAND), False
-        return self._answer(text.lstrip(" \t")).encode("ascii") + b"\r", False
+        try:
+            return self._answer(text.lstrip(" \t")).encode("ascii") + b"\r", False
+        except Exception:  # a bug here must cost one answer, never the session
+            return _reply(E_UNEXPECTED), False
 
     def _answer(self, text: str) -> str:
         fields = text.split(":", 4)
@@ -210,6 +214,8 @@ def _convert(kind: VarKind, variant: Variant) -> Any:
     if kind.code == "S":
         if vt != VT.BSTR:
             raise TypeError(vt)
+        if not value.isprintable():
+            raise ValueError("control characters cannot be stored")
         return value
     number = _number(vt, value)
     if kind.code == "IO":

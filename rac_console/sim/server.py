@@ -42,12 +42,11 @@ class _SimSession(asyncio.Protocol):
         transport = self._transport
         if transport is None or transport.is_closing():
             return
+        too_long = False
         try:
             lines = self._decoder.feed(data)
-        except FrameTooLong:
-            transport.write(_reply(E_INVALIDRCVPACKET))
-            transport.close()
-            return
+        except FrameTooLong as exc:
+            lines, too_long = exc.lines, True
         controller = self._server.controller
         for line in lines:
             reply, close = controller.handle(line)
@@ -55,6 +54,9 @@ class _SimSession(asyncio.Protocol):
             if close:
                 transport.close()
                 return
+        if too_long:
+            transport.write(_reply(E_INVALIDRCVPACKET))
+            transport.close()
 
     def pause_writing(self) -> None:
         if self._transport is not None:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import sys
 import time
 from collections import deque
 from typing import ClassVar
@@ -15,10 +16,11 @@ from textual.widgets import Footer, RichLog, Static
 from textual.worker import Worker, WorkerState
 
 from .. import __version__
-from ..client import ConnectFailed
 from ..commands.outcome import Outcome
 from ..core import Action, ConsoleCore, Feedback, Message
+from ..core_thread import CoreThread
 from ..history import History, default_history_path
+from ..protocol import InputError
 from ..render import error_text, outcome_text
 from .command_line import CommandLine
 from .frame_log import FrameLog
@@ -43,6 +45,7 @@ class RacConsoleApp(App[int]):
     def __init__(self, core: ConsoleCore, history: History, watch_file: str | None = None) -> None:
         super().__init__()
         self.core = core
+        self.core_thread = CoreThread(core)
         self.history = history
         self.watch_file = watch_file
         self._flushes: deque[tuple[float, int]] = deque(maxlen=LOG_FLUSH_HZ * 2)
@@ -74,7 +77,7 @@ class RacConsoleApp(App[int]):
         self.table.border_title = "Watch"
         self.frame_log.border_title = "Frames (→ sent, ← received)"
         self.core.add_log_listener(self.frame_log.add)
-        await self.core.start()
+        await self.core_thread.start()
         self.sub_title = self.core.target
         self._welcome()
         if self.watch_file:
@@ -86,7 +89,7 @@ class RacConsoleApp(App[int]):
         self.run_worker(self._first_connect(), group="connect", exit_on_error=False)
 
     async def on_unmount(self) -> None:
-        await self.core.stop()
+        await self.core_thread.stop()
 
     def _welcome(self) -> None:
         results = self.results
@@ -111,11 +114,9 @@ class RacConsoleApp(App[int]):
         )
 
     async def _first_connect(self) -> None:
-        assert self.core.session is not None
-        try:
-            await self.core.session.connect()
-        except ConnectFailed as exc:
-            self.show(Message(f"{exc}: commands will retry", "error"))
+        problem = await self.core_thread.submit(self.core.connect_now())
+        if problem is not None:
+            self.show(problem)
 
     def _completion_indices(self) -> set[tuple[str, int]]:
         return self.core.seen | {(v.kind.code, v.index) for v in self.core.watch.rows}
@@ -169,7 +170,7 @@ class RacConsoleApp(App[int]):
     async def run_line(self, line: str, echo: bool = True) -> None:
         if echo:
             self.results.write(Text(f"› {line}", style="bold cyan"))
-        for feedback in await self.core.handle_line(line):
+        for feedback in await self.core_thread.submit(self.core.handle_line(line)):
             self.show(feedback)
         self.refresh_table()
 
@@ -197,8 +198,9 @@ class RacConsoleApp(App[int]):
     # -------------------------------------------------------------- actions
 
     def action_toggle_polling(self) -> None:
-        self.core.set_paused(not self.core.paused)
-        self.show(Message("polling paused (F2 resumes)" if self.core.paused else "polling resumed"))
+        paused = not self.core.paused
+        self.core_thread.call(self.core.set_paused, paused)
+        self.show(Message("polling paused (F2 resumes)" if paused else "polling resumed"))
         self.refresh_table()
 
     def action_toggle_poll_frames(self) -> None:
@@ -224,14 +226,18 @@ class RacConsoleApp(App[int]):
 
 
 def run_console(args: argparse.Namespace) -> int:
-    core = ConsoleCore(
-        args.host,
-        args.port,
-        timeout=args.timeout,
-        read_only=args.read_only,
-        record=args.record,
-        interval=args.interval,
-    )
+    try:
+        core = ConsoleCore(
+            args.host,
+            args.port,
+            timeout=args.timeout,
+            read_only=args.read_only,
+            record=args.record,
+            interval=args.interval,
+        )
+    except InputError as exc:
+        print(f"rac-console: {exc}", file=sys.stderr)
+        return 2
     history = History(args.history or default_history_path())
     app = RacConsoleApp(core, history, args.watch)
     return app.run() or 0

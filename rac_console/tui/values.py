@@ -44,7 +44,7 @@ def value_cell(row: WatchRow, now: float) -> Text:
     if row.stale:
         text.stylize("dim italic")
     elif row.changed_at is not None and now - row.changed_at < HIGHLIGHT_SECONDS:
-        text.stylize("reverse")
+        text.stylize("bold on #4a4a10")
     return text
 
 

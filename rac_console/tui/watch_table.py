@@ -6,6 +6,7 @@ from rich.text import Text
 from textual.widgets import DataTable
 
 from ..commands.language import VarRef
+from ..protocol.text import printable
 from ..watch import WatchRow
 from .values import age_text, status_cell, type_text, value_cell
 
@@ -39,11 +40,11 @@ class WatchTable(DataTable):
             if key in self._shown:
                 self.remove_row(key)
                 del self._shown[key]
-        for var, row in rows.items():
+        for var, row in list(rows.items()):  # a snapshot: the session thread adds rows
             key = str(var)
             cells = (
                 key,
-                row.label,
+                Text(printable(row.label), no_wrap=True),  # never read as markup
                 status_cell(row),
                 age_text(row, now),
                 value_cell(row, now),

@@ -1,0 +1,60 @@
+"""Regenerate screenshots/ from the real console running against the built-in simulator.
+
+    python scripts/screenshots.py
+
+Each screenshot is taken after typing real commands and letting polling run.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import sys
+import tempfile
+from pathlib import Path
+
+from rac_console.core import ConsoleCore
+from rac_console.history import History
+from rac_console.tui.app import RacConsoleApp
+
+OUT = Path(__file__).resolve().parent.parent / "screenshots"
+
+SCENES = {
+    "console-120x40": ((120, 40), ["watch P 0 current pose", "watch J 0", "watch I 0 cycle",
+                                   "watch IO 0-7", "watch IO 128-131", "get P 1",
+                                   "put IO 20 on", "PUT:RC8:10:11,0", "send hello"], ""),
+    "console-80x24": ((80, 24), ["watch IO 0-3", "watch I 0 cycle", "get S 1"], "put P 10 "),
+    "console-200x50": ((200, 50), ["watch P 0 current pose", "watch J 0", "watch T 1 tool",
+                                   "watch F 0 motor temp", "watch IO 0-7", "watch S 2",
+                                   "get P 1", "put P 10 1 2 3", "put I 10 123", "get I 10"], ""),
+    "completion": ((100, 30), ["watch P 1"], "get "),
+}
+
+
+async def take(name: str, size: tuple[int, int], lines: list[str], typed: str) -> None:
+    with tempfile.TemporaryDirectory() as home:
+        core = ConsoleCore(None, interval=0.2)
+        app = RacConsoleApp(core, History(Path(home) / "history"))
+        async with app.run_test(size=size) as pilot:
+            for line in lines:
+                app.command_line.insert_text_at_cursor(line)
+                await pilot.press("enter")
+                await pilot.pause(0.15)
+            await pilot.pause(1.2)
+            if typed:
+                await pilot.press(*typed)
+                if name == "completion":
+                    await pilot.press("tab")
+                await pilot.pause(0.3)
+            app.command_line.cursor_blink = False
+            app.save_screenshot(f"{name}.svg", str(OUT))
+    print(f"wrote screenshots/{name}.svg", file=sys.stderr)
+
+
+async def main() -> None:
+    OUT.mkdir(exist_ok=True)
+    for name, (size, lines, typed) in SCENES.items():
+        await take(name, size, lines, typed)
+
+
+if __name__ == "__main__":
+    asyncio.run(main())
