@@ -20,7 +20,7 @@ from .core import ConsoleCore
 T = TypeVar("T")
 
 #: Let the session thread take the GIL back quickly when a reply arrives.
-SWITCH_INTERVAL = 0.0005
+SWITCH_INTERVAL = 0.0001
 
 
 class CoreThread:

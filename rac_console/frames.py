@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import time
+from functools import lru_cache
 
 from .client import Frame
 from .protocol import ProtocolError, decode_frame, parse_response, wire_text
@@ -11,16 +12,24 @@ from .protocol.text import describe_response
 ARROWS = {"tx": "→", "rx": "←"}
 
 
+@lru_cache(maxsize=4)
+def _seconds_text(second: int) -> str:
+    return time.strftime("%H:%M:%S", time.localtime(second))
+
+
 def clock_text(timestamp: float) -> str:
     """``14:03:07.123``: local time with milliseconds."""
-    return (
-        time.strftime("%H:%M:%S", time.localtime(timestamp)) + f".{int(timestamp % 1 * 1000):03d}"
-    )
+    return f"{_seconds_text(int(timestamp))}.{int(timestamp % 1 * 1000):03d}"
 
 
 def decoding(frame: Frame) -> str:
     """A reply's short decoding: ``S_OK  VT_I4  123``, the HRESULT, or why it is garbled."""
-    body = frame.data[:-1] if frame.data.endswith(b"\r") else frame.data
+    return _decode(frame.data[:-1] if frame.data.endswith(b"\r") else frame.data)
+
+
+@lru_cache(maxsize=4096)
+def _decode(body: bytes) -> str:
+    """Cached: polled replies repeat, and the log decodes thousands a second."""
     try:
         return describe_response(parse_response(decode_frame(body)))
     except ProtocolError as exc:

@@ -19,13 +19,38 @@ from rac_console.tui.app import RacConsoleApp
 OUT = Path(__file__).resolve().parent.parent / "screenshots"
 
 SCENES = {
-    "console-120x40": ((120, 40), ["watch P 0 current pose", "watch J 0", "watch I 0 cycle",
-                                   "watch IO 0-7", "watch IO 128-131", "get P 1",
-                                   "put IO 20 on", "PUT:RC8:10:11,0", "send hello"], ""),
+    "console-120x40": (
+        (120, 40),
+        [
+            "watch P 0 current pose",
+            "watch J 0",
+            "watch I 0 cycle",
+            "watch IO 0-7",
+            "watch IO 128-131",
+            "get P 1",
+            "put IO 20 on",
+            "PUT:RC8:10:11,0",
+            "send hello",
+        ],
+        "",
+    ),
     "console-80x24": ((80, 24), ["watch IO 0-3", "watch I 0 cycle", "get S 1"], "put P 10 "),
-    "console-200x50": ((200, 50), ["watch P 0 current pose", "watch J 0", "watch T 1 tool",
-                                   "watch F 0 motor temp", "watch IO 0-7", "watch S 2",
-                                   "get P 1", "put P 10 1 2 3", "put I 10 123", "get I 10"], ""),
+    "console-200x50": (
+        (200, 50),
+        [
+            "watch P 0 current pose",
+            "watch J 0",
+            "watch T 1 tool",
+            "watch F 0 motor temp",
+            "watch IO 0-7",
+            "watch S 2",
+            "get P 1",
+            "put P 10 1 2 3",
+            "put I 10 123",
+            "get I 10",
+        ],
+        "",
+    ),
     "completion": ((100, 30), ["watch P 1"], "get "),
 }
 

@@ -27,8 +27,8 @@ from .frame_log import FrameLog
 from .status_bar import StatusBar, status_text
 from .watch_table import WatchTable
 
-LOG_FLUSH_HZ = 20
-TABLE_REFRESH_HZ = 10
+LOG_FLUSH_HZ = 10
+TABLE_REFRESH_HZ = 5
 
 
 class RacConsoleApp(App[int]):
@@ -49,6 +49,7 @@ class RacConsoleApp(App[int]):
         self.history = history
         self.watch_file = watch_file
         self._flushes: deque[tuple[float, int]] = deque(maxlen=LOG_FLUSH_HZ * 2)
+        self._status = Text()
         # Kept as attributes: timers and workers never query a DOM being torn down.
         self.status_bar = StatusBar(id="status")
         self.table = WatchTable(id="watch")
@@ -137,7 +138,10 @@ class RacConsoleApp(App[int]):
     def refresh_table(self) -> None:
         _, removed = self.core.watch.take_changes()
         self.table.refresh_rows(self.core.watch.rows, removed, time.monotonic())
-        self.status_bar.update(status_text(self.core, self.frames_per_second()))
+        status = status_text(self.core, self.frames_per_second())
+        if status != self._status:  # an unchanged line costs no repaint
+            self._status = status
+            self.status_bar.update(status)
 
     # ------------------------------------------------------------- commands
 

@@ -28,6 +28,7 @@ class WatchTable(DataTable):
     def __init__(self, **kwargs: object) -> None:
         super().__init__(cursor_type="row", zebra_stripes=True, **kwargs)  # type: ignore[arg-type]
         self._shown: dict[str, tuple[object, ...]] = {}
+        self._widths: dict[str, int] = {}
 
     def on_mount(self) -> None:
         for key, label in COLUMNS:
@@ -56,7 +57,11 @@ class WatchTable(DataTable):
             else:
                 for (column, _), old, new in zip(COLUMNS, shown, cells, strict=True):
                     if _differs(old, new):
-                        wider = len(str(new)) > len(str(old))
+                        # Widening costs a pass over every row: only when a column grows.
+                        width = len(str(new))
+                        wider = width > self._widths.get(column, 0)
+                        if wider:
+                            self._widths[column] = width
                         self.update_cell(key, column, new, update_width=wider)
             self._shown[key] = cells
 
