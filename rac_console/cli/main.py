@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import argparse
 import sys
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 
 from .. import __version__
 
@@ -19,24 +19,21 @@ Exit status: 0 success, 1 the controller answered an error, 2 refused before
 sending (bad input, read-only), 3 connection failure, timeout or bad reply."""
 
 
-def _positive_seconds(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not a number of seconds: {text!r}") from None
-    if not 0 < value <= 3600:
-        raise argparse.ArgumentTypeError(f"timeout must be between 0 and 3600 s, got {text}")
-    return value
+def _seconds(allow_zero: bool) -> Callable[[str], float]:
+    """An argparse type for a number of seconds up to an hour (0 allowed or not)."""
 
+    def parse(text: str) -> float:
+        try:
+            value = float(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"not a number of seconds: {text!r}") from None
+        low = "0" if allow_zero else "more than 0"
+        in_range = (value >= 0 if allow_zero else value > 0) and value <= 3600
+        if not in_range:
+            raise argparse.ArgumentTypeError(f"give {low} to 3600 seconds, got {text}")
+        return value
 
-def _interval(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not a number of seconds: {text!r}") from None
-    if not 0 <= value <= 3600:
-        raise argparse.ArgumentTypeError(f"interval must be from 0 to 3600 s, got {text}")
-    return value
+    return parse
 
 
 def _port(text: str) -> int:
@@ -62,7 +59,7 @@ def _global_options(parser: argparse.ArgumentParser, suppress: bool) -> None:
     )
     parser.add_argument(
         "--timeout",
-        type=_positive_seconds,
+        type=_seconds(allow_zero=False),
         default=default(2.0),
         metavar="SECONDS",
         help="per-request timeout (default 2)",
@@ -103,7 +100,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     console.add_argument(
         "--interval",
-        type=_interval,
+        type=_seconds(allow_zero=True),
         default=0.5,
         metavar="SECONDS",
         help="time between poll cycles (default 0.5)",
