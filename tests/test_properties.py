@@ -19,7 +19,7 @@ from rac_console.protocol import (
     parse_variant,
 )
 from rac_console.protocol.variant import canonical_r4
-from rac_console.protocol.vartypes import INTEGER_RANGES, VT, VT_ARRAY
+from rac_console.protocol.vartypes import ARRAY_ELEMENT_TYPES, INTEGER_RANGES, VT, VT_ARRAY
 from rac_console.sim.controller import SimulatedController
 
 TEXT_CHARS = st.characters(min_codepoint=0x20, max_codepoint=0x7E)
@@ -67,20 +67,7 @@ def scalar_values(vt: int, where: str) -> st.SearchStrategy:
     return text
 
 
-SCALAR_TYPES = [
-    VT.I2,
-    VT.I4,
-    VT.R4,
-    VT.R8,
-    VT.CY,
-    VT.DATE,
-    VT.BSTR,
-    VT.ERROR,
-    VT.BOOL,
-    VT.UI1,
-    VT.UI2,
-    VT.UI4,
-]
+SCALAR_TYPES = sorted(ARRAY_ELEMENT_TYPES - {VT.VARIANT})
 
 
 def variants(depth: int = 2, where: str = "top") -> st.SearchStrategy[Variant]:
