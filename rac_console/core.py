@@ -25,6 +25,7 @@ from .client import (
 )
 from .commands.language import (
     Connect,
+    Frames,
     Get,
     Help,
     Put,
@@ -58,9 +59,10 @@ class Message:
 
 @dataclass(frozen=True)
 class Action:
-    """Something only the front end can do: ``clear`` its log, ``quit``."""
+    """Something only the front end can do: ``clear`` its log, ``quit``, ``frames``."""
 
     name: str
+    on: bool = True
 
 
 Feedback = Outcome | Message | Action
@@ -184,7 +186,11 @@ class ConsoleCore:
             if isinstance(command, Get | Put):
                 self.seen.add((command.var.kind.code, command.var.index))
             return [await execute(self.session, command, read_only=self.read_only, line=line)]
+        if isinstance(command, Frames):
+            return [Action("frames", command.on)]
         if isinstance(command, Watch):
+            if command.interval is not None:
+                self.interval = command.interval
             added = self.watch.add(command.vars, command.label)
             self.seen.update((v.kind.code, v.index) for v in command.vars)
             self._wake.set()

@@ -37,6 +37,19 @@ class WatchRow:
         self.status, self.stale, self.polled_at = status, True, now
 
 
+def age_text(row: WatchRow, now: float) -> str:
+    if row.changed_at is None:
+        return ""
+    age = max(0.0, now - row.changed_at)
+    if age < 1:
+        return "<1s"
+    if age < 60:
+        return f"{int(age)}s"
+    if age < 3600:
+        return f"{int(age // 60)}m{int(age % 60):02d}s"
+    return f"{int(age // 3600)}h{int(age % 3600 // 60):02d}m"
+
+
 @dataclass
 class WatchList:
     """Changed by the session's thread, read by the screen's: ``removed`` is guarded."""

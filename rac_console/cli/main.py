@@ -128,6 +128,20 @@ def build_parser() -> argparse.ArgumentParser:
     send.add_argument("text", metavar="TEXT", help="e.g. 'GET:RC8:10:I:' (CR is added)")
     run = command("run", "run console commands from FILE (or - for stdin) over one session")
     run.add_argument("file", metavar="FILE|-")
+    repl = command("repl", "a line-oriented console for plain terminals, ssh and serial")
+    repl.add_argument(
+        "--history",
+        metavar="FILE",
+        default=argparse.SUPPRESS,
+        help="history file (shared with the full-screen console)",
+    )
+    repl.add_argument(
+        "--interval",
+        type=_seconds(allow_zero=True),
+        default=argparse.SUPPRESS,
+        metavar="SECONDS",
+        help="time between polls of watch (default 0.5)",
+    )
     sim = commands.add_parser(
         "sim",
         help="run the RC8 simulator as a server",
@@ -156,6 +170,10 @@ def _dispatch(args: argparse.Namespace) -> int:
         from .oneshot import run_script
 
         return asyncio.run(run_script(args))
+    if args.command == "repl":
+        from ..repl.repl import run_repl
+
+        return run_repl(args)
     if args.command == "sim":
         from .simulator import serve
 

@@ -64,6 +64,8 @@ def complete(text: str, seen: Iterable[tuple[str, int]] = ()) -> list[Candidate]
     command = done[0].lower()
     if command == "help" and len(done) == 1:
         return matching((name, spec.summary) for name, spec in COMMANDS.items())
+    if command == "frames" and len(done) == 1:
+        return matching([("on", "echo every frame"), ("off", "stop echoing frames")])
     if command not in _VARIABLE_COMMANDS:
         return []
     if len(done) == 1:

@@ -59,6 +59,7 @@ Exchange = Get | Put | Raw
 class Watch:
     vars: tuple[VarRef, ...]
     label: str = ""
+    interval: float | None = None  # ``watch ... every 0.2``
 
 
 @dataclass(frozen=True)
@@ -89,13 +90,20 @@ class Help:
 
 
 @dataclass(frozen=True)
+class Frames:
+    on: bool
+
+
+@dataclass(frozen=True)
 class Simple:
     """A command with no argument: pause, resume, disconnect, clear, quit."""
 
     name: str
 
 
-Command = Get | Put | Raw | Watch | Unwatch | SetInterval | Connect | WatchFile | Help | Simple
+Command = (
+    Get | Put | Raw | Watch | Unwatch | SetInterval | Connect | WatchFile | Help | Frames | Simple
+)
 
 MAX_RANGE = 256
 MIN_INTERVAL, MAX_INTERVAL = 0.0, 3600.0
@@ -189,6 +197,10 @@ def parse_command(line: str) -> Command | None:
         return WatchFile(word, rest)
     if word == "help":
         return Help(rest.lower() or None)
+    if word == "frames":
+        if rest.lower() not in ("on", "off"):
+            raise InputError("frames needs on or off: frames on")
+        return Frames(rest.lower() == "on")
     if rest:
         raise InputError(f"{word} takes no argument")
     return Simple(word)
@@ -226,6 +238,9 @@ def _parse_vars(text: str, usage: str) -> tuple[tuple[VarRef, ...], str]:
 
 def _parse_watch(text: str) -> Watch:
     variables, label = _parse_vars(text, COMMANDS["watch"].usage + ", e.g. watch IO 128-135")
+    every = re.fullmatch(r"(.*?)\s*\bevery\s+(\S+?)s?", label.strip(), re.ASCII | re.DOTALL)
+    if every:
+        return Watch(variables, every.group(1).strip(), _parse_seconds(every.group(2)))
     return Watch(variables, label.strip())
 
 

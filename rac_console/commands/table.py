@@ -36,7 +36,10 @@ COMMANDS: dict[str, CommandSpec] = {
             console_only=False,
         ),
         CommandSpec(
-            "watch", "TYPE INDEX [LABEL]", "add variables to the live table", "watch IO 128-135"
+            "watch",
+            "TYPE INDEX [LABEL] [every SECONDS]",
+            "add variables to the live table",
+            "watch IO 128-135",
         ),
         CommandSpec(
             "unwatch", "TYPE INDEX | all", "remove variables from the live table", "unwatch P 10"
@@ -53,6 +56,7 @@ COMMANDS: dict[str, CommandSpec] = {
         CommandSpec("disconnect", "", "close the session and stop polling"),
         CommandSpec("save", "FILE", "save the watch list as TOML", "save cell3.toml"),
         CommandSpec("load", "FILE", "add the watch list saved in FILE", "load cell3.toml"),
+        CommandSpec("frames", "on|off", "echo every frame sent and received (REPL)", "frames on"),
         CommandSpec("clear", "", "clear the frame log"),
         CommandSpec("help", "[COMMAND]", "list commands, or explain one", "help put"),
         CommandSpec("quit", "", "leave the console"),

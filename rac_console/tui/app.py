@@ -192,6 +192,9 @@ class RacConsoleApp(App[int]):
                 self.action_clear_log()
             elif feedback.name == "quit":
                 self.exit(0)
+            elif feedback.name == "frames":
+                self.frame_log.show_polls = feedback.on
+                self.show(Message("poll frames shown" if feedback.on else "poll frames hidden"))
 
     @on(Worker.StateChanged)
     def worker_failed(self, event: Worker.StateChanged) -> None:

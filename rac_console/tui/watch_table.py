@@ -7,8 +7,8 @@ from textual.widgets import DataTable
 
 from ..commands.language import VarRef
 from ..protocol.text import printable
-from ..watch import WatchRow
-from .values import age_text, status_cell, type_text, value_cell
+from ..watch import WatchRow, age_text
+from ..watch_cells import status_cell, type_text, value_cell
 
 #: Status and age before the value, so they stay in view when a long P or J value is
 #: cut off on a narrow terminal.

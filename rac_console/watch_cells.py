@@ -1,12 +1,12 @@
-"""Cell texts for the watch table: values per type, ages, statuses."""
+"""Cells of a watch table (values per type, statuses), for the console and the REPL."""
 
 from __future__ import annotations
 
 from rich.text import Text
 
-from ..protocol import Variant, vt_name
-from ..protocol.text import scalar_text
-from ..watch import OK, WatchRow
+from .protocol import Variant, vt_name
+from .protocol.text import scalar_text
+from .watch import OK, WatchRow
 
 HIGHLIGHT_SECONDS = 1.0
 
@@ -46,19 +46,6 @@ def value_cell(row: WatchRow, now: float) -> Text:
     elif row.changed_at is not None and now - row.changed_at < HIGHLIGHT_SECONDS:
         text.stylize("bold on #4a4a10")
     return text
-
-
-def age_text(row: WatchRow, now: float) -> str:
-    if row.changed_at is None:
-        return ""
-    age = max(0.0, now - row.changed_at)
-    if age < 1:
-        return "<1s"
-    if age < 60:
-        return f"{int(age)}s"
-    if age < 3600:
-        return f"{int(age // 60)}m{int(age % 60):02d}s"
-    return f"{int(age // 3600)}h{int(age % 3600 // 60):02d}m"
 
 
 def status_cell(row: WatchRow) -> Text:

@@ -1,0 +1,1 @@
+"""The prompt-toolkit line REPL for plain terminals, ssh and serial consoles."""
