@@ -18,6 +18,9 @@ PURE_MODULES = [
     "rac_console.protocol.framing",
     "rac_console.commands.language",
     "rac_console.commands.outcome",
+    "rac_console.commands.completion",
+    "rac_console.commands.table",
+    "rac_console.commands.tokens",
     "rac_console.sim.controller",
 ]
 FORBIDDEN_IN_PURE = ["asyncio", "socket", "selectors", "textual", "prompt_toolkit", "rich"]
@@ -77,3 +80,19 @@ def test_version_starts_without_importing_ui_toolkits() -> None:
         [sys.executable, "-c", probe], capture_output=True, text=True, check=True
     )
     assert result.stdout.strip() == "[]"
+
+
+@pytest.mark.parametrize(
+    "module, toolkit",
+    [
+        ("rac_console.repl.repl", "textual"),
+        ("rac_console.tui.app", "prompt_toolkit"),
+        ("rac_console.cli.oneshot", "textual"),
+    ],
+)
+def test_each_front_end_loads_only_its_own_toolkit(module: str, toolkit: str) -> None:
+    probe = f"import sys, {module}\nprint({toolkit!r} in sys.modules)"
+    result = subprocess.run(
+        [sys.executable, "-c", probe], capture_output=True, text=True, check=True
+    )
+    assert result.stdout.strip() == "False"
