@@ -170,17 +170,44 @@ def _dispatch(args: argparse.Namespace) -> int:
         from .oneshot import run_script
 
         return asyncio.run(run_script(args))
-    if args.command == "repl":
-        from ..repl.repl import run_repl
+    if args.command == "repl" and not sys.stdin.isatty():
+        from .oneshot import run_script
 
-        return run_repl(args)
+        args.file = "-"  # no terminal: the REPL reads a script, like run -
+        return asyncio.run(run_script(args))
     if args.command == "sim":
         from .simulator import serve
 
         return asyncio.run(serve(args))
+    return _interactive(args)
+
+
+def _interactive(args: argparse.Namespace) -> int:
+    """The full-screen console, or the REPL: one engine and history file for both."""
+    from ..core import ConsoleCore
+    from ..history import History, default_history_path
+    from ..protocol import InputError
+
+    try:
+        core = ConsoleCore(
+            args.host,
+            args.port,
+            timeout=args.timeout,
+            read_only=args.read_only,
+            record=args.record,
+            interval=args.interval,
+        )
+    except InputError as exc:
+        print(f"rac-console: {exc}", file=sys.stderr)
+        return 2
+    history = History(args.history or default_history_path())
+    if args.command == "repl":
+        from ..repl.repl import run_repl
+
+        return run_repl(core, history)
     from ..tui.app import run_console
 
-    return run_console(args)
+    return run_console(core, history, args.watch)
 
 
 def main(argv: Sequence[str] | None = None) -> int:

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import argparse
 import asyncio
 import contextlib
 import time
@@ -229,28 +228,6 @@ class Repl:
         return table
 
 
-def run_repl(args: argparse.Namespace) -> int:
-    """``rac-console repl``; with stdin not a terminal it behaves like ``run -``."""
-    import sys
-
-    if not sys.stdin.isatty():
-        from ..cli.oneshot import run_script
-
-        args.file = "-"
-        return asyncio.run(run_script(args))
-    from ..history import default_history_path
-
-    try:
-        core = ConsoleCore(
-            args.host,
-            args.port,
-            timeout=args.timeout,
-            read_only=args.read_only,
-            record=args.record,
-            interval=args.interval,
-        )
-    except InputError as exc:
-        print(f"rac-console: {exc}", file=sys.stderr)
-        return 2
-    history = History(args.history or default_history_path())
+def run_repl(core: ConsoleCore, history: History) -> int:
+    """``rac-console repl`` on a terminal."""
     return asyncio.run(Repl(core, history, Console(highlight=False)).run())

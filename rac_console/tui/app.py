@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import argparse
-import sys
 import time
 from collections import deque
 from typing import ClassVar
@@ -19,8 +17,7 @@ from .. import __version__
 from ..commands.outcome import Outcome
 from ..core import Action, ConsoleCore, Feedback, Message
 from ..core_thread import CoreThread
-from ..history import History, default_history_path
-from ..protocol import InputError
+from ..history import History
 from ..render import error_text, outcome_text
 from .command_line import CommandLine
 from .frame_log import FrameLog
@@ -232,19 +229,5 @@ class RacConsoleApp(App[int]):
         self.frame_log.clear()
 
 
-def run_console(args: argparse.Namespace) -> int:
-    try:
-        core = ConsoleCore(
-            args.host,
-            args.port,
-            timeout=args.timeout,
-            read_only=args.read_only,
-            record=args.record,
-            interval=args.interval,
-        )
-    except InputError as exc:
-        print(f"rac-console: {exc}", file=sys.stderr)
-        return 2
-    history = History(args.history or default_history_path())
-    app = RacConsoleApp(core, history, args.watch)
-    return app.run() or 0
+def run_console(core: ConsoleCore, history: History, watch_file: str | None) -> int:
+    return RacConsoleApp(core, history, watch_file).run() or 0
