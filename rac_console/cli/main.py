@@ -36,6 +36,21 @@ def _seconds(allow_zero: bool) -> Callable[[str], float]:
     return parse
 
 
+def _count(kind: type) -> Callable[[str], float]:
+    """An argparse type for a number that cannot be negative."""
+
+    def parse(text: str) -> float:
+        try:
+            value = kind(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
+        if value < 0 or value != value:
+            raise argparse.ArgumentTypeError(f"cannot be negative: {text}")
+        return value
+
+    return parse
+
+
 def _port(text: str) -> int:
     if not text.isdigit() or not 0 <= int(text) <= 65535:
         raise argparse.ArgumentTypeError(f"a port is a number from 0 to 65535, got {text!r}")
@@ -154,7 +169,71 @@ def build_parser() -> argparse.ArgumentParser:
         help="address to listen on (default 127.0.0.1, loopback only)",
     )
     sim.add_argument(
-        "--port", dest="sim_port", type=_port, default=5006, help="port to listen on (default 5006)"
+        "--port",
+        metavar="N",
+        dest="sim_port",
+        type=_port,
+        default=5006,
+        help="port to listen on (default 5006)",
+    )
+    faults = sim.add_argument_group(
+        "faults (each reproducible with --seed; change them while it runs with a line "
+        "SIM:SET:delay_ms=50,drop_every=7 on any connection, read them with SIM:GET:)"
+    )
+    faults.add_argument(
+        "--delay",
+        dest="delay_ms",
+        type=_count(float),
+        default=0,
+        metavar="MS",
+        help="delay every reply by MS milliseconds",
+    )
+    faults.add_argument(
+        "--jitter",
+        dest="jitter_ms",
+        type=_count(float),
+        default=0,
+        metavar="MS",
+        help="vary each delay by up to ±MS milliseconds",
+    )
+    for name, text in (
+        ("slow", "answer every Nth reply 3 s late (past a 2 s client timeout)"),
+        ("drop", "close the connection instead of every Nth reply"),
+        ("stall", "never send every Nth reply"),
+        ("garble", "send bytes that are not a RAC reply instead of every Nth"),
+        ("extra", "send an unsolicited extra line after every Nth reply"),
+    ):
+        faults.add_argument(
+            f"--{name}-every",
+            dest=f"{name}_every",
+            type=_count(int),
+            default=0,
+            metavar="N",
+            help=text,
+        )
+    faults.add_argument(
+        "--split", action="store_true", help="send replies in 2-byte pieces with pauses"
+    )
+    faults.add_argument(
+        "--error-rate",
+        type=_count(float),
+        default=0,
+        metavar="P",
+        help="answer an error HRESULT from the spec's table with probability P",
+    )
+    faults.add_argument(
+        "--max-sessions",
+        type=_count(int),
+        default=0,
+        metavar="N",
+        help="refuse connections beyond N at once",
+    )
+    faults.add_argument(
+        "--seed",
+        type=_count(int),
+        default=0,
+        metavar="N",
+        help="seed of the jitter and error choices (default 0)",
     )
     return parser
 

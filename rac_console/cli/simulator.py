@@ -4,7 +4,9 @@ from __future__ import annotations
 
 import argparse
 import sys
+from dataclasses import fields
 
+from ..sim.faults import FaultSettings
 from ..sim.server import SimulatorServer, is_loopback
 
 
@@ -16,7 +18,13 @@ async def serve(args: argparse.Namespace) -> int:
             file=sys.stderr,
         )
     try:
-        server = await SimulatorServer(args.bind, args.sim_port).start()
+        faults = FaultSettings(**{f.name: getattr(args, f.name) for f in fields(FaultSettings)})
+        faults.check()
+    except ValueError as exc:
+        print(f"rac-console: {exc}", file=sys.stderr)
+        return 2
+    try:
+        server = await SimulatorServer(args.bind, args.sim_port, faults=faults).start()
     except OSError as exc:
         print(
             f"rac-console: cannot listen on {args.bind}:{args.sim_port}: {exc.strerror}",
@@ -24,6 +32,8 @@ async def serve(args: argparse.Namespace) -> int:
         )
         return 3
     print(f"RC8 simulator listening on {server.host}:{server.port} (Ctrl-C to stop)", flush=True)
+    if faults.active or faults.max_sessions:
+        print(f"faults: {faults.describe()}", flush=True)
     try:
         await server.serve_forever()
     finally:

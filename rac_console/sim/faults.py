@@ -1,0 +1,112 @@
+"""Faults the simulator can inject on purpose: pure settings and a seeded plan.
+
+Every reply draws its fault from :class:`FaultPlan`; the same seed and the same
+sequence of requests give the same faults, so a failure seen once can be replayed.
+"""
+
+from __future__ import annotations
+
+import random
+from dataclasses import dataclass, fields, replace
+
+from ..protocol.hresult import E_INVALIDRCVPACKET, HRESULTS, S_OK
+
+SLOW_SECONDS = 3.0  # "late by more than a typical client timeout" (the default is 2 s)
+GARBAGE = b"\xff\xfe#garbled\x00reply"
+EXTRA_LINE = b"0,3,424242\r"
+ERROR_CODES = sorted(code for code in HRESULTS if code not in (S_OK, E_INVALIDRCVPACKET))
+
+
+@dataclass(frozen=True)
+class FaultSettings:
+    delay_ms: float = 0.0
+    jitter_ms: float = 0.0
+    slow_every: int = 0
+    drop_every: int = 0
+    stall_every: int = 0
+    garble_every: int = 0
+    split: bool = False
+    extra_every: int = 0
+    error_rate: float = 0.0
+    max_sessions: int = 0
+    seed: int = 0
+
+    @property
+    def active(self) -> bool:
+        """True when any reply may be altered (max_sessions and seed alter none)."""
+        return any(
+            getattr(self, f.name) for f in fields(self) if f.name not in ("max_sessions", "seed")
+        )
+
+    def describe(self) -> str:
+        return " ".join(f"{f.name}={getattr(self, f.name)}" for f in fields(self))
+
+    def updated(self, assignments: str) -> FaultSettings:
+        """``delay_ms=50,drop_every=7``: a copy with those settings; ValueError if bad."""
+        changes: dict[str, object] = {}
+        kinds = {f.name: f.type for f in fields(self)}
+        for assignment in filter(None, (a.strip() for a in assignments.split(","))):
+            name, sep, text = assignment.partition("=")
+            name = name.strip().replace("-", "_")
+            if not sep or name not in kinds:
+                raise ValueError(f"unknown setting {name!r}")
+            kind = kinds[name]
+            if kind in (bool, "bool"):
+                changes[name] = text.strip().lower() in ("1", "true", "on", "yes")
+            elif kind in (int, "int"):
+                changes[name] = int(text)
+            else:
+                changes[name] = float(text)
+        updated = replace(self, **changes)  # type: ignore[arg-type]
+        updated.check()
+        return updated
+
+    def check(self) -> None:
+        for f in fields(self):
+            value = getattr(self, f.name)
+            if isinstance(value, (int, float)) and not isinstance(value, bool) and value < 0:
+                raise ValueError(f"{f.name} cannot be negative")
+        if self.error_rate > 1:
+            raise ValueError("error_rate is a probability from 0 to 1")
+
+
+@dataclass(frozen=True)
+class ReplyFault:
+    """What happens to one reply."""
+
+    delay: float = 0.0  # seconds before it is sent
+    action: str = "send"  # send, drop, stall, garble, error
+    error_code: int = 0
+    split: bool = False
+    extra: bool = False
+
+
+class FaultPlan:
+    def __init__(self, settings: FaultSettings) -> None:
+        self.settings = settings
+        self._random = random.Random(settings.seed)
+        self.replies = 0
+
+    def next(self) -> ReplyFault:
+        s = self.settings
+        self.replies += 1
+        n = self.replies
+        delay = s.delay_ms / 1000
+        if s.jitter_ms:
+            delay = max(0.0, delay + self._random.uniform(-s.jitter_ms, s.jitter_ms) / 1000)
+        if _every(n, s.slow_every):
+            delay += SLOW_SECONDS
+        action, code = "send", 0
+        if _every(n, s.drop_every):
+            action = "drop"
+        elif _every(n, s.stall_every):
+            action = "stall"
+        elif _every(n, s.garble_every):
+            action = "garble"
+        elif s.error_rate and self._random.random() < s.error_rate:
+            action, code = "error", self._random.choice(ERROR_CODES)
+        return ReplyFault(delay, action, code, s.split, _every(n, s.extra_every))
+
+
+def _every(n: int, every: int) -> bool:
+    return every > 0 and n % every == 0
