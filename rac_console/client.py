@@ -409,10 +409,10 @@ def _reason(exc: BaseException) -> str:
     if isinstance(exc, TimeoutError):
         return "timed out"
     if isinstance(exc, OSError):
-        if exc.strerror:
-            return exc.strerror
         if exc.errno and exc.errno > 0:
-            return os.strerror(exc.errno)
+            return os.strerror(exc.errno)  # asyncio's strerror repeats the address
+        if exc.strerror:
+            return exc.strerror  # getaddrinfo: "Name or service not known"
     if isinstance(exc, UnicodeError | ValueError):
         return "not a valid host name"
     return str(exc) or type(exc).__name__

@@ -28,6 +28,7 @@ from .commands.language import (
     Frames,
     Get,
     Help,
+    Latency,
     Put,
     Raw,
     SetInterval,
@@ -39,7 +40,7 @@ from .commands.language import (
 )
 from .commands.outcome import Outcome
 from .commands.table import help_lines
-from .execute import execute
+from .execute import execute, measure_latency
 from .protocol import InputError, describe_hresult, hresult_name
 from .recorder import FrameRecorder
 from .sim.server import SimulatorServer
@@ -188,6 +189,16 @@ class ConsoleCore:
             return [await execute(self.session, command, read_only=self.read_only, line=line)]
         if isinstance(command, Frames):
             return [Action("frames", command.on)]
+        if isinstance(command, Latency):
+            if self.session is None:
+                return [Message("not connected: connect HOST[:PORT] first", "error")]
+            try:
+                summary = await measure_latency(
+                    self.session, command.var, command.count, command.interval
+                )
+            except ConnectFailed as exc:
+                return [Message(str(exc), "error")]
+            return [Message(summary.text(f"GET {command.var}"))]
         if isinstance(command, Watch):
             if command.interval is not None:
                 self.interval = command.interval

@@ -6,8 +6,19 @@ the REPL and the console.
 
 from __future__ import annotations
 
-from .client import PRIORITY_COMMAND, BadReply, RacSession, RequestTimeout, TransportError
-from .commands.language import Exchange, Get, Put, Raw
+import asyncio
+import time
+
+from .client import (
+    PRIORITY_COMMAND,
+    BadReply,
+    ConnectFailed,
+    RacSession,
+    RequestTimeout,
+    TransportError,
+)
+from .commands.language import Exchange, Get, Put, Raw, VarRef
+from .commands.latency import LatencySummary, summarize
 from .commands.outcome import ExitStatus, Outcome, refused
 from .protocol import InputError, describe_hresult, escape_bytes
 
@@ -64,3 +75,30 @@ async def execute(
         input_line=line,
         written=command.value if isinstance(command, Put) else None,
     )
+
+
+async def measure_latency(
+    session: RacSession, var: VarRef, count: int, interval: float
+) -> LatencySummary:
+    """GET one variable ``count`` times, ``interval`` seconds apart (0: back to back).
+
+    Raises ConnectFailed when the controller cannot be reached at all.
+    """
+    samples: list[float] = []
+    errors = 0
+    started = time.perf_counter()
+    for n in range(count):
+        if n and interval:
+            await asyncio.sleep(interval)
+        try:
+            reply = await session.get(var.kind, var.index)
+        except ConnectFailed:
+            raise
+        except TransportError:
+            errors += 1
+            continue
+        if reply.response.ok:
+            samples.append(reply.rtt)
+        else:
+            errors += 1
+    return summarize(samples, errors, time.perf_counter() - started)

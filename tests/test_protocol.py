@@ -254,3 +254,13 @@ def test_line_decoder_bounds_a_line_without_cr() -> None:
         decoder.feed(b"x")
     assert decoder.pending == b""
     assert decoder.feed(b"ok\r") == [b"ok"]
+
+
+def test_latency_summary_uses_nearest_rank_percentiles() -> None:
+    from rac_console.commands.latency import summarize
+
+    summary = summarize([n / 1000 for n in range(1, 101)], errors=2, elapsed_s=1.0)
+    assert (summary.min_ms, summary.p50_ms, summary.p95_ms, summary.max_ms) == (1, 50, 95, 100)
+    assert summary.avg_ms == pytest.approx(50.5)
+    assert summary.requests_per_s == 102
+    assert summarize([], 3, 1.0).count == 0

@@ -216,3 +216,15 @@ async def test_a_lost_connection_is_one_line_and_the_next_command_reconnects(
     lost_lines = [line for line in out.splitlines() if "reconnects" in line]
     assert len(lost_lines) == 1 and "127.0.0.1" in lost_lines[0]
     assert prompts == ["not connected> ", f"127.0.0.1:{port}> "]
+
+
+async def test_latency_inside_the_repl(tmp_path: Path) -> None:
+    driver = Driver(tmp_path)
+
+    async def steps(d: Driver) -> None:
+        d.type("latency 50 P 1\r")
+        await d.until(lambda out: "latency of GET P1, 50 samples" in out, "the summary")
+
+    out = await driver.run(steps)
+    assert "p95" in out and "0 errors" in out
+    assert sum(1 for f in driver.frames if f.direction == "tx") == 50

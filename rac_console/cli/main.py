@@ -143,6 +143,21 @@ def build_parser() -> argparse.ArgumentParser:
     send.add_argument("text", metavar="TEXT", help="e.g. 'GET:RC8:10:I:' (CR is added)")
     run = command("run", "run console commands from FILE (or - for stdin) over one session")
     run.add_argument("file", metavar="FILE|-")
+    latency = command("latency", "measure round trips of repeated GETs (like redis-cli --latency)")
+    latency.add_argument(
+        "--count", type=_count(int), default=100, metavar="N", help="how many GETs (default 100)"
+    )
+    latency.add_argument(
+        "--interval",
+        dest="latency_interval",
+        type=_seconds(allow_zero=True),
+        default=0.0,
+        metavar="S",
+        help="pause between GETs (default 0)",
+    )
+    latency.add_argument(
+        "--var", default="I 0", metavar="'TYPE INDEX'", help="the variable to read (default 'I 0')"
+    )
     repl = command("repl", "a line-oriented console for plain terminals, ssh and serial")
     repl.add_argument(
         "--history",
@@ -245,6 +260,10 @@ def _dispatch(args: argparse.Namespace) -> int:
         from .oneshot import one_command
 
         return asyncio.run(one_command(args))
+    if args.command == "latency":
+        from .oneshot import latency
+
+        return asyncio.run(latency(args))
     if args.command == "run":
         from .oneshot import run_script
 

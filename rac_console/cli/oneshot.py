@@ -10,10 +10,10 @@ from collections.abc import Iterator
 
 from rich.console import Console
 
-from ..client import RacSession
-from ..commands.language import Get, Put, Raw, parse_command, parse_exchange
+from ..client import ConnectFailed, RacSession
+from ..commands.language import Get, Latency, Put, Raw, parse_command, parse_exchange
 from ..commands.outcome import ExitStatus, Outcome, refused, worst
-from ..execute import execute
+from ..execute import execute, measure_latency
 from ..protocol import InputError
 from ..render import print_outcome
 from .target import open_session
@@ -112,3 +112,26 @@ async def _run_line(session: RacSession, line: str, read_only: bool) -> Outcome 
             "run takes get, put, send and GET:/PUT: lines",
         )
     return await execute(session, command, read_only=read_only, line=line)
+
+
+async def latency(args: argparse.Namespace) -> ExitStatus:
+    """``latency``: one summary line (or JSON object); exit 3 when nothing answered."""
+    output = Output(args.json)
+    try:
+        command = parse_command(f"latency {max(1, int(args.count))} {args.var}")
+        assert isinstance(command, Latency)
+        async with open_session(args) as session:
+            summary = await measure_latency(
+                session, command.var, command.count, args.latency_interval
+            )
+    except InputError as exc:
+        output.err.print(f"rac-console: {exc}", markup=False)
+        return ExitStatus.REFUSED
+    except ConnectFailed as exc:
+        output.err.print(f"rac-console: {exc}", markup=False)
+        return ExitStatus.TRANSPORT
+    if args.json:
+        sys.stdout.write(json.dumps(summary.to_json()) + "\n")
+    else:
+        output.out.print(summary.text(f"GET {command.var}"), markup=False)
+    return ExitStatus.OK if summary.count else ExitStatus.TRANSPORT

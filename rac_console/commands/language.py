@@ -90,6 +90,15 @@ class Help:
 
 
 @dataclass(frozen=True)
+class Latency:
+    """``latency [COUNT] [TYPE INDEX]``: round trips of repeated GETs."""
+
+    var: VarRef
+    count: int = 100
+    interval: float = 0.0
+
+
+@dataclass(frozen=True)
 class Frames:
     on: bool
 
@@ -102,8 +111,21 @@ class Simple:
 
 
 Command = (
-    Get | Put | Raw | Watch | Unwatch | SetInterval | Connect | WatchFile | Help | Frames | Simple
+    Get
+    | Put
+    | Raw
+    | Watch
+    | Unwatch
+    | SetInterval
+    | Connect
+    | WatchFile
+    | Help
+    | Frames
+    | Latency
+    | Simple
 )
+
+MAX_LATENCY_COUNT = 100_000
 
 MAX_RANGE = 256
 MIN_INTERVAL, MAX_INTERVAL = 0.0, 3600.0
@@ -197,6 +219,8 @@ def parse_command(line: str) -> Command | None:
         return WatchFile(word, rest)
     if word == "help":
         return Help(rest.lower() or None)
+    if word == "latency":
+        return _parse_latency(rest)
     if word == "frames":
         if rest.lower() not in ("on", "off"):
             raise InputError("frames needs on or off: frames on")
@@ -242,6 +266,21 @@ def _parse_watch(text: str) -> Watch:
     if every:
         return Watch(variables, every.group(1).strip(), _parse_seconds(every.group(2)))
     return Watch(variables, label.strip())
+
+
+def _parse_latency(text: str) -> Latency:
+    count_text, _, var_text = text.partition(" ")
+    if count_text and not count_text.isdigit():
+        count_text, var_text = "", text
+    count = int(count_text) if count_text else 100
+    if not 1 <= count <= MAX_LATENCY_COUNT:
+        raise InputError(f"latency takes 1 to {MAX_LATENCY_COUNT} samples, got {count}")
+    var = VarRef(kind_of("I"), 0)
+    if var_text.strip():
+        var, extra = parse_var(var_text, "latency [COUNT] [TYPE INDEX], e.g. latency 1000 I 0")
+        if extra.strip():
+            raise InputError(f"latency takes a count and a variable, not {extra.strip()!r}")
+    return Latency(var, count)
 
 
 def _parse_seconds(text: str) -> float:

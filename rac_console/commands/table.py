@@ -57,6 +57,12 @@ COMMANDS: dict[str, CommandSpec] = {
         CommandSpec("save", "FILE", "save the watch list as TOML", "save cell3.toml"),
         CommandSpec("load", "FILE", "add the watch list saved in FILE", "load cell3.toml"),
         CommandSpec("frames", "on|off", "echo every frame sent and received (REPL)", "frames on"),
+        CommandSpec(
+            "latency",
+            "[COUNT] [TYPE INDEX]",
+            "measure round trips: COUNT GETs back to back (default 100 of I 0)",
+            "latency 1000",
+        ),
         CommandSpec("clear", "", "clear the frame log"),
         CommandSpec("help", "[COMMAND]", "list commands, or explain one", "help put"),
         CommandSpec("quit", "", "leave the console"),
