@@ -92,7 +92,8 @@ async def console_run(
                 app.command_line.insert_text_at_cursor(f"watch {code} 0-9")
                 await pilot.press("enter")
             await pilot.pause(1.0)  # warm up
-            bare, console, latencies = [], [], []
+            bare, console, latencies, cpu_per_1000, frames_per_s = [], [], [], [], []
+            memory_10k = None
             command_line = app.command_line
             for _ in range(rounds):
                 app.core_thread.call(core.set_paused, True)
@@ -101,6 +102,7 @@ async def console_run(
                 app.core_thread.call(core.set_paused, False)
                 await pilot.pause(0.2)
                 polls_before, started = core.polls, time.perf_counter()
+                cpu_before, frames_before = time.process_time(), app.frame_log.frames_seen
                 while time.perf_counter() - started < seconds:
                     # A key event goes through the app's queue like a typed key; the time
                     # until the command line holds it is the key handling delay under load.
@@ -113,9 +115,17 @@ async def console_run(
                     command_line.value = ""
                     await asyncio.sleep(0.1)
                 console.append((core.polls - polls_before) / (time.perf_counter() - started))
+                frames_in_round = app.frame_log.frames_seen - frames_before
+                frames_per_s.append(frames_in_round / (time.perf_counter() - started))
+                if frames_in_round:
+                    cpu_per_1000.append(
+                        (time.process_time() - cpu_before) / frames_in_round * 1000 * 1000
+                    )
             memory_polling = rss_mb()
             while app.frame_log.frames_seen < frames_target:
-                await pilot.pause(0.5)
+                if memory_10k is None and app.frame_log.frames_seen >= 10_000:
+                    memory_10k = rss_mb()
+                await pilot.pause(0.2)
             memory_after = rss_mb()
             frames = app.frame_log.frames_seen
     latencies.sort()
@@ -131,6 +141,9 @@ async def console_run(
         "key_samples": len(latencies),
         "memory_start_mb": memory_start,
         "memory_polling_mb": memory_polling,
+        "memory_10k_frames_mb": memory_10k if memory_10k is not None else memory_polling,
+        "cpu_ms_per_1000_frames": statistics.median(cpu_per_1000) if cpu_per_1000 else None,
+        "console_frames_per_s": statistics.median(frames_per_s),
         "memory_after_mb": memory_after,
         "frames": frames,
     }

@@ -17,6 +17,7 @@ import os
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
+from functools import cache
 from typing import Literal
 
 from .protocol import (
@@ -175,6 +176,8 @@ class RacSession:
         self._decoder = LineDecoder(max_line)
         self._pending: asyncio.Future[tuple[bytes, float]] | None = None
         self._sent_at = 0.0
+        self._deadline = 0.0
+        self._watchdog: asyncio.TimerHandle | None = None
         self._after_cr = False
         self._polling = False
 
@@ -249,11 +252,14 @@ class RacSession:
         transport = await self._connected_transport()
         loop = asyncio.get_running_loop()
         pending = self._pending = loop.create_future()
-        expiry = loop.call_later(self.timeout, self._expire, pending)
+        self._deadline = loop.time() + self.timeout
+        if self._watchdog is None:
+            self._watchdog = loop.call_at(self._deadline, self._check_deadline)
         try:
             self._sent_at = time.perf_counter()
             transport.write(data)
-            self._publish(Frame(time.time(), "tx", data, poll=self._polling))
+            if self._frame_observers:
+                self._publish(Frame(time.time(), "tx", data, poll=self._polling))
             frame, rtt = await pending
         except BaseException:
             # Sent but no reply taken (cancelled, or failed): whatever this connection
@@ -262,7 +268,6 @@ class RacSession:
                 self._drop_connection()
             raise
         finally:
-            expiry.cancel()
             self._pending = None
         try:
             response = parse_response(decode_frame(frame))
@@ -275,10 +280,18 @@ class RacSession:
         self.last_rtt = rtt
         return Reply(text, frame, response, rtt)
 
-    def _expire(self, pending: asyncio.Future[tuple[bytes, float]]) -> None:
-        if not pending.done():
-            pending.set_exception(RequestTimeout(f"no reply within {self.timeout:g} s"))
-            self._drop_connection()
+    def _check_deadline(self) -> None:
+        """One timer watches every request: rescheduled, not made anew per request."""
+        self._watchdog = None
+        pending = self._pending
+        if pending is None or pending.done():
+            return
+        loop = asyncio.get_running_loop()
+        if loop.time() < self._deadline:
+            self._watchdog = loop.call_at(self._deadline, self._check_deadline)
+            return
+        pending.set_exception(RequestTimeout(f"no reply within {self.timeout:g} s"))
+        self._drop_connection()
 
     # ---------------------------------------------------------- connection
 
@@ -315,6 +328,9 @@ class RacSession:
         pending = self._pending
         if pending is not None and not pending.done():
             pending.set_exception(Disconnected("the session was closed"))
+        if self._watchdog is not None:
+            self._watchdog.cancel()
+            self._watchdog = None
         if self._transport is not None:
             self._transport.abort()
             self._transport = None
@@ -350,7 +366,8 @@ class RacSession:
         for frame in frames:
             if waiting:
                 rtt = now - self._sent_at
-                self._publish(Frame(time.time(), "rx", frame + b"\r", rtt, poll=self._polling))
+                if self._frame_observers:
+                    self._publish(Frame(time.time(), "rx", frame + b"\r", rtt, poll=self._polling))
                 pending.set_result((frame, rtt))  # type: ignore[union-attr]
                 waiting = False
             else:
@@ -387,7 +404,10 @@ class RacSession:
             )
 
 
+@cache
 def _get_check(kind: VarKind) -> Callable[[Response], str | None]:
+    """One check per variable type, made once (this is on every poll's path)."""
+
     def check(response: Response) -> str | None:
         if not response.ok:
             return None

@@ -7,6 +7,7 @@ so ``--version``, ``get`` and ``sim`` start fast.
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 from collections.abc import Callable, Sequence
 
@@ -253,8 +254,25 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def use_uvloop() -> bool:
+    """Run on uvloop when the optional extra is installed (``pip install .[fast]``);
+    RAC_CONSOLE_NO_UVLOOP=1 turns it off."""
+    if os.environ.get("RAC_CONSOLE_NO_UVLOOP"):
+        return False
+    try:
+        import uvloop
+    except ImportError:
+        return False
+    import asyncio
+
+    asyncio.set_event_loop_policy(uvloop.EventLoopPolicy())
+    return True
+
+
 def _dispatch(args: argparse.Namespace) -> int:
     import asyncio
+
+    use_uvloop()
 
     if args.command in ("get", "put", "send"):
         from .oneshot import one_command
