@@ -25,10 +25,10 @@ async def serve(args: argparse.Namespace) -> int:
         return 2
     try:
         server = await SimulatorServer(args.bind, args.sim_port, faults=faults).start()
-    except OSError as exc:
+    except (OSError, UnicodeError, ValueError) as exc:
+        reason = getattr(exc, "strerror", None) or "not an address this machine has"
         print(
-            f"rac-console: cannot listen on {args.bind}:{args.sim_port}: {exc.strerror}",
-            file=sys.stderr,
+            f"rac-console: cannot listen on {args.bind}:{args.sim_port}: {reason}", file=sys.stderr
         )
         return 3
     print(f"RC8 simulator listening on {server.host}:{server.port} (Ctrl-C to stop)", flush=True)
