@@ -47,6 +47,7 @@ from .sim.server import SimulatorServer
 from .watch import WatchList, WatchRow
 
 DEFAULT_INTERVAL = 0.5
+SIMULATOR_NOTICE = "no -H given: talking to the built-in RC8 simulator, not a controller"
 MAX_BACKOFF = 5.0
 
 

@@ -11,12 +11,8 @@ from .protocol import Variant, vt_name
 from .protocol.text import describe_response
 
 
-def value_text(var: VarRef | None, variant: Variant) -> Text:
+def value_text(var: VarRef, variant: Variant) -> Text:
     """``X 350  Y 0  Z 450 ...`` with dim labels; IO as a coloured ON/OFF."""
-    if var is None:
-        from .protocol import value_text as plain
-
-        return Text(plain(variant))
     out = Text()
     for n, (label, text) in enumerate(var.kind.fields(variant)):
         if n:

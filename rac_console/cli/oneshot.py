@@ -15,7 +15,7 @@ from ..commands.language import Get, Latency, Put, Raw, parse_command, parse_exc
 from ..commands.outcome import ExitStatus, Outcome, refused, worst
 from ..execute import execute, measure_latency
 from ..protocol import InputError
-from ..render import print_outcome
+from ..render import error_text, print_outcome
 from .target import open_session
 
 
@@ -36,7 +36,7 @@ class Output:
             sys.stdout.flush()
             if not outcome.ok:
                 self.err.print(
-                    "rac-console: " + prefix + outcome.summary(), soft_wrap=True, markup=False
+                    "rac-console: " + error_text(outcome, prefix), soft_wrap=True, markup=False
                 )
         else:
             print_outcome(self.out, self.err, outcome, prefix)

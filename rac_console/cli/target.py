@@ -8,13 +8,14 @@ from collections.abc import AsyncIterator
 from contextlib import AsyncExitStack, asynccontextmanager
 
 from ..client import RacSession
+from ..core import SIMULATOR_NOTICE
 from ..recorder import FrameRecorder
 from ..sim.server import SimulatorServer
 
 
 @asynccontextmanager
 async def open_session(
-    args: argparse.Namespace, *, announce: bool = True
+    args: argparse.Namespace,
 ) -> AsyncIterator[RacSession]:
     """A session to ``args.host``, or to an in-process simulator when no host was given."""
     async with AsyncExitStack() as stack:
@@ -22,12 +23,7 @@ async def open_session(
             session = RacSession(args.host, args.port, timeout=args.timeout)
         else:
             sim = await stack.enter_async_context(SimulatorServer())
-            if announce:
-                print(
-                    f"rac-console: no -H given: talking to the built-in RC8 simulator "
-                    f"at {sim.host}:{sim.port}, not a controller",
-                    file=sys.stderr,
-                )
+            print(f"rac-console: {SIMULATOR_NOTICE} (at {sim.host}:{sim.port})", file=sys.stderr)
             session = RacSession(sim.host, sim.port, timeout=args.timeout)
         if args.record:
             recorder = FrameRecorder(args.record)

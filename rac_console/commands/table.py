@@ -14,7 +14,6 @@ class CommandSpec:
     arguments: str
     summary: str
     example: str = ""
-    console_only: bool = True
 
     @property
     def usage(self) -> str:
@@ -24,16 +23,13 @@ class CommandSpec:
 COMMANDS: dict[str, CommandSpec] = {
     spec.name: spec
     for spec in (
-        CommandSpec("get", "TYPE INDEX", "read a variable", "get P 10", console_only=False),
-        CommandSpec(
-            "put", "TYPE INDEX VALUE...", "write a variable", "put I 10 123", console_only=False
-        ),
+        CommandSpec("get", "TYPE INDEX", "read a variable", "get P 10"),
+        CommandSpec("put", "TYPE INDEX VALUE...", "write a variable", "put I 10 123"),
         CommandSpec(
             "send",
             "TEXT",
             "send TEXT exactly as typed, even malformed",
             "send GET:RC8:10:I:",
-            console_only=False,
         ),
         CommandSpec(
             "watch",

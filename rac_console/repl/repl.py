@@ -20,7 +20,7 @@ from rich.text import Text
 from ..client import Frame
 from ..commands.language import Watch, parse_command
 from ..commands.outcome import ExitStatus, Outcome
-from ..core import Action, ConsoleCore, LogEvent, Message
+from ..core import SIMULATOR_NOTICE, Action, ConsoleCore, LogEvent, Message
 from ..frames import frame_line
 from ..history import History
 from ..protocol import InputError
@@ -103,8 +103,7 @@ class Repl:
             self.console.print(
                 Text.assemble(
                     ("sim", "bold yellow"),
-                    ": no -H given, talking to the built-in RC8 simulator, not a controller. "
-                    "help lists the commands; Ctrl-D leaves.",
+                    f": {SIMULATOR_NOTICE}. help lists the commands; Ctrl-D leaves.",
                 )
             )
         try:

@@ -15,7 +15,7 @@ from textual.worker import Worker, WorkerState
 
 from .. import __version__
 from ..commands.outcome import Outcome
-from ..core import Action, ConsoleCore, Feedback, Message
+from ..core import SIMULATOR_NOTICE, Action, ConsoleCore, Feedback, Message
 from ..core_thread import CoreThread
 from ..history import History
 from ..render import error_text, outcome_text
@@ -95,7 +95,7 @@ class RacConsoleApp(App[int]):
             results.write(
                 Text.assemble(
                     ("SIMULATOR", "bold black on yellow"),
-                    " no -H given: talking to the built-in RC8 simulator, not a controller.",
+                    f" {SIMULATOR_NOTICE}.",
                 )
             )
         else:
