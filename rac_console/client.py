@@ -4,7 +4,9 @@ The protocol has no request ids, so a reply is only ever matched to the one
 request waiting for it. After a timeout, a reply that cannot belong to its
 request, or bytes that arrive while nothing waits, the connection is dropped and
 a fresh one is opened for the next request: a late reply can never be taken for
-the answer to a later request.
+the answer to a later request. Before each request the socket itself is asked
+whether anything is waiting (the loop may not have read it yet), for the same
+reason. What arrives after a request left cannot be told from its answer.
 """
 
 from __future__ import annotations
@@ -14,11 +16,13 @@ import heapq
 import itertools
 import logging
 import os
+import select
+import socket
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
 from functools import cache
-from typing import Literal
+from typing import Any, Literal
 
 from .protocol import (
     FrameTooLong,
@@ -45,6 +49,7 @@ MAX_REPLY_LINE = 64 * 1024
 
 PRIORITY_COMMAND = 0
 PRIORITY_POLL = 1
+_POLL = getattr(select, "poll", None)  # POSIX; select.select serves where it is missing
 
 Direction = Literal["tx", "rx"]
 State = Literal["closed", "connecting", "connected"]
@@ -180,6 +185,10 @@ class RacSession:
         self._watchdog: asyncio.TimerHandle | None = None
         self._after_cr = False
         self._polling = False
+        self._sock: Any = None  # this connection's socket, asked before each request
+        self._poll: Any = None
+        self._fd = -1
+        self._loop_reads_ahead = False
 
     # ------------------------------------------------------------ observers
 
@@ -190,6 +199,12 @@ class RacSession:
     @property
     def state(self) -> State:
         return self._state
+
+    @property
+    def waiting_since(self) -> float | None:
+        """When (``time.perf_counter()``) the request in flight was sent; None when none is."""
+        pending = self._pending
+        return self._sent_at if pending is not None and not pending.done() else None
 
     def add_frame_observer(self, observer: FrameObserver) -> None:
         self._frame_observers.append(observer)
@@ -250,6 +265,8 @@ class RacSession:
         self, text: str, data: bytes, check: Callable[[Response], str | None] | None
     ) -> Reply:
         transport = await self._connected_transport()
+        if self._loop_reads_ahead or self._peer_spoke():
+            transport = await self._after_stray(transport)
         loop = asyncio.get_running_loop()
         pending = self._pending = loop.create_future()
         self._deadline = loop.time() + self.timeout
@@ -293,6 +310,59 @@ class RacSession:
         pending.set_exception(RequestTimeout(f"no reply within {self.timeout:g} s"))
         self._drop_connection()
 
+    # ---------------------------------------------------------- stray bytes
+
+    def _peer_spoke(self) -> bool:
+        """True when bytes, EOF or an error wait on the connection: one syscall, no wait.
+
+        On every request's path, so it is kept to a poll object registered per connection.
+        """
+        pending = self._decoder.pending
+        if pending and pending != b"\n":  # an LF is the rest of a CRLF reply: harmless
+            return True
+        try:
+            if self._poll is not None:
+                return bool(self._poll.poll(0))
+            if self._fd >= 0:
+                return bool(select.select((self._fd,), (), (), 0)[0])
+        except (OSError, ValueError):
+            return True  # a socket that cannot be asked cannot be trusted
+        return False
+
+    async def _after_stray(self, transport: asyncio.Transport) -> asyncio.Transport:
+        """The connection to send on once what the peer sent unasked is dealt with.
+
+        A line waiting when a request goes out would be read as its answer (no request
+        ids), so what waits (a stray line, a late duplicate, EOF, a reset) is logged as
+        unsolicited and the connection replaced. At most once per request: the fresh
+        connection is not asked again.
+        """
+        if self._loop_reads_ahead:
+            # The loop, not the socket, holds what arrived (Windows' proactor keeps a read
+            # posted): two turns let it hand that to _on_data, which drops the connection.
+            await asyncio.sleep(0)
+            await asyncio.sleep(0)
+            if self._transport is not transport:
+                return await self._connected_transport()
+            if not self._peer_spoke():
+                return transport
+        if self._discard_waiting():
+            return await self._connected_transport()
+        return transport
+
+    def _discard_waiting(self) -> bool:
+        """Log what waits as unsolicited and drop the connection; False when it was only
+        the LF of a CRLF peer's last reply, consumed here, and the connection is kept."""
+        data, still_open = _read_waiting(self._sock, self.max_line)
+        waiting = self._decoder.pending + data
+        if waiting == b"\n" and still_open:
+            self._after_cr = False
+            return False
+        for line in _as_lines(waiting):
+            self._publish(Frame(time.time(), "rx", line, unsolicited=True))
+        self._drop_connection()
+        return True
+
     # ---------------------------------------------------------- connection
 
     async def connect(self) -> None:
@@ -320,8 +390,28 @@ class RacSession:
         self._protocol = protocol
         self._decoder.clear()
         self._after_cr = False
+        self._watch_socket(transport, loop)
         self._set_state("connected")
         return self._transport  # type: ignore[return-value]
+
+    def _watch_socket(self, transport: asyncio.BaseTransport, loop: Any) -> None:
+        """Set up the per-request check of this connection's socket (a poll object is
+        registered once: asking it then costs one syscall)."""
+        self._sock = sock = _pollable_socket(transport, loop)
+        self._loop_reads_ahead = sock is None
+        self._poll, self._fd = None, -1
+        if sock is None:
+            return
+        try:
+            self._fd = sock.fileno()
+            if _POLL is not None:
+                self._poll = _POLL()
+                self._poll.register(self._fd, select.POLLIN)
+        except (OSError, ValueError):
+            self._sock, self._poll, self._fd, self._loop_reads_ahead = None, None, -1, True
+
+    def _forget_socket(self) -> None:
+        self._sock, self._poll, self._fd = None, None, -1
 
     def _drop_connection(self) -> None:
         """Abort the connection so nothing more it carries can be read."""
@@ -335,6 +425,7 @@ class RacSession:
             self._transport.abort()
             self._transport = None
             self._protocol = None
+        self._forget_socket()
         self._decoder.clear()
         self._set_state("closed")
 
@@ -393,6 +484,7 @@ class RacSession:
         pending = self._pending
         self._transport = None
         self._protocol = None
+        self._forget_socket()
         self._decoder.clear()
         self._set_state("closed")
         if fragment:
@@ -402,6 +494,56 @@ class RacSession:
             pending.set_exception(
                 Disconnected(f"the controller closed the connection{detail}", fragment or None)
             )
+
+
+def _pollable_socket(transport: asyncio.BaseTransport, loop: Any) -> Any:
+    """The transport's socket when asking it tells what the loop has not read yet.
+
+    Selector loops and uvloop read only when they poll, so anything unread is still in
+    the kernel. A proactor loop (Windows' default) keeps a read posted that takes bytes
+    out of the socket as they come: there the socket shows nothing, so None.
+    """
+    proactor = getattr(asyncio, "ProactorEventLoop", None)  # only on Windows
+    if proactor is not None and isinstance(loop, proactor):
+        return None
+    return transport.get_extra_info("socket")
+
+
+def _read_waiting(sock: Any, limit: int) -> tuple[bytes, bool]:
+    """What waits on ``sock``, read without blocking for the log, and whether the
+    connection is still open (the read stopped for want of bytes, not at EOF or error).
+
+    It goes through a duplicate, as asyncio's transport socket cannot be read from;
+    the connection is dropped (unless it held only an LF) right after.
+    """
+    chunks: list[bytes] = []
+    still_open = False
+    if sock is None:
+        return b"", still_open
+    try:
+        with socket.fromfd(sock.fileno(), sock.family, sock.type) as dup:
+            dup.setblocking(False)
+            size = 0
+            while size < limit:
+                chunk = dup.recv(min(65536, limit - size))
+                if not chunk:
+                    break  # EOF
+                chunks.append(chunk)
+                size += len(chunk)
+    except BlockingIOError:
+        still_open = True  # all read
+    except (OSError, ValueError, AttributeError):
+        pass  # reset, or no way to duplicate the socket here: drop it all the same
+    return b"".join(chunks), still_open
+
+
+def _as_lines(data: bytes) -> list[bytes]:
+    r"""``a\rb\rc`` -> ``[a\r, b\r, c]``: waiting bytes as frames, as the log shows lines."""
+    *lines, rest = data.split(b"\r")
+    frames = [line[1:] + b"\r" if line[:1] == b"\n" else line + b"\r" for line in lines]
+    if rest and rest != b"\n":
+        frames.append(rest)
+    return frames
 
 
 @cache

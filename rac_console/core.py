@@ -17,6 +17,7 @@ from .client import (
     PRIORITY_POLL,
     BadReply,
     ConnectFailed,
+    Disconnected,
     Frame,
     RacSession,
     RequestTimeout,
@@ -166,11 +167,29 @@ class ConsoleCore:
 
     def _on_state(self, state: State) -> None:
         self.connection = state
+        if state != "connected":
+            self._forget_figures()
         if state == "connected":
             self.retry_at = None
             if self._lost:
                 self._lost = False
                 self.note(f"reconnected to {self.host}:{self.port}")
+
+    def _forget_figures(self) -> None:
+        """Round trips and poll rates measured on a connection that is gone say nothing now."""
+        self.cycle_seconds = None
+        self.polls_per_second = None
+        if self.session is not None:
+            self.session.last_rtt = None
+
+    def mark_failure(self, error: TransportError) -> None:
+        """One line in the log for each request that got no trustworthy reply."""
+        if isinstance(error, ConnectFailed):
+            return  # an outage is marked once, by the poller or the command's own result
+        if isinstance(error, Disconnected):
+            self.note(f"{error}: the next request reconnects")
+        else:
+            self.note(f"{error}: session reset")
 
     # ------------------------------------------------------------ commands
 
@@ -187,7 +206,10 @@ class ConsoleCore:
                 return [Message("not connected: connect HOST[:PORT] first", "error")]
             if isinstance(command, Get | Put):
                 self.seen.add((command.var.kind.code, command.var.index))
-            return [await execute(self.session, command, read_only=self.read_only, line=line)]
+            outcome = await execute(self.session, command, read_only=self.read_only, line=line)
+            if isinstance(outcome.failure, TransportError):
+                self.mark_failure(outcome.failure)
+            return [outcome]
         if isinstance(command, Frames):
             return [Action("frames", command.on)]
         if isinstance(command, Latency):
@@ -201,16 +223,18 @@ class ConsoleCore:
                 return [Message(str(exc), "error")]
             return [Message(summary.text(f"GET {command.var}"))]
         if isinstance(command, Watch):
-            if command.interval is not None:
-                self.interval = command.interval
-            added = self.watch.add(command.vars, command.label)
+            added = self.watch.add(command.vars, command.label, command.every)
             self.seen.update((v.kind.code, v.index) for v in command.vars)
             self._wake.set()
             names = _names(command.vars)
-            return [Message(f"watching {names}" if added else f"{names} already watched")]
+            text = f"watching {names}" if added else f"{names} already watched"
+            if command.every is not None:
+                text += (
+                    f", polled every {command.every:g} s (other rows: interval {self.interval:g} s)"
+                )
+            return [Message(text)]
         if isinstance(command, Unwatch):
-            removed = self.watch.remove(command.vars)
-            return [Message(f"stopped watching {removed} variable{'s' * (removed != 1)}")]
+            return [self._unwatch(command)]
         if isinstance(command, SetInterval):
             self.interval = command.seconds
             self._wake.set()
@@ -222,6 +246,18 @@ class ConsoleCore:
         if isinstance(command, Help):
             return [Message("\n".join(help_lines(command.topic)))]
         return [await self._simple(command)]
+
+    def _unwatch(self, command: Unwatch) -> Message:
+        absent = [v for v in command.vars if v not in self.watch.rows]
+        if command.vars and len(absent) == len(command.vars):
+            return Message(f"{_names(command.vars)} not watched: nothing to stop", "error")
+        removed = self.watch.remove(command.vars)
+        text = f"stopped watching {removed} variable{'s' * (removed != 1)}"
+        if absent:
+            text += (
+                f" ({_names(tuple(absent))} {'was' if len(absent) == 1 else 'were'} not watched)"
+            )
+        return Message(text)
 
     async def _simple(self, command: Simple) -> Feedback:
         name = command.name
@@ -247,6 +283,8 @@ class ConsoleCore:
 
     def set_paused(self, paused: bool) -> None:
         self.paused = paused
+        if paused:
+            self.cycle_seconds = self.polls_per_second = None
         self._wake.set()
 
     async def connect(self, host: str, port: int) -> Message:
@@ -307,7 +345,7 @@ class ConsoleCore:
             elapsed = time.perf_counter() - started
             if count:
                 self.cycle_seconds = elapsed
-            await self._sleep(self.interval - elapsed)
+            await self._sleep(self.period - elapsed)
             period = time.perf_counter() - started
             if count and period > 0:
                 self.polls_per_second = count / period
@@ -324,11 +362,14 @@ class ConsoleCore:
 
     async def _poll_cycle(self, session: RacSession) -> int:
         count = 0
+        now = time.monotonic()
         for row in list(self.watch.rows.values()):
             if self.paused or session is not self.session:
                 break
             if self.watch.rows.get(row.var) is not row:
                 continue  # unwatched during the cycle
+            if not row.due(now, self.interval):
+                continue  # a row with its own, longer period
             await self._poll_row(session, row)
             count += 1
         return count
@@ -339,12 +380,10 @@ class ConsoleCore:
             reply = await session.get(var.kind, var.index, priority=PRIORITY_POLL)
         except ConnectFailed:
             raise
-        except RequestTimeout:
-            row.fail("TIMEOUT", time.monotonic())
-        except BadReply:
-            row.fail("BAD REPLY", time.monotonic())
-        except TransportError:
-            row.fail("DISCONNECTED", time.monotonic())
+        except TransportError as exc:
+            self.mark_failure(exc)
+            status = {RequestTimeout: "TIMEOUT", BadReply: "BAD REPLY"}.get(type(exc))
+            row.fail(status or "DISCONNECTED", time.monotonic())
         else:
             response = reply.response
             if response.ok and response.variant is not None:
@@ -358,11 +397,26 @@ class ConsoleCore:
         self.watch.dirty.add(var)
 
     @property
+    def period(self) -> float:
+        """Seconds between poll cycles: the interval, or a row's shorter ``every``."""
+        return self.watch.period(self.interval)
+
+    @property
     def interval_met(self) -> bool:
-        return self.cycle_seconds is None or self.cycle_seconds <= self.interval * 1.05 + 0.001
+        """Period 0 asks for polls back to back: met by definition."""
+        period = self.period
+        if self.cycle_seconds is None or period == 0:
+            return True
+        return self.cycle_seconds <= period * 1.05 + 0.001
 
 
 def _names(variables: tuple) -> str:
+    """``IO4``, ``IO4..IO7 (4 variables)`` for a range, else ``P0, J0``."""
     if len(variables) == 1:
         return str(variables[0])
-    return f"{variables[0]}..{variables[-1]} ({len(variables)} variables)"
+    first = variables[0]
+    if all(v.kind == first.kind and v.index == first.index + n for n, v in enumerate(variables)):
+        return f"{first}..{variables[-1]} ({len(variables)} variables)"
+    if len(variables) <= 6:
+        return ", ".join(str(v) for v in variables)
+    return f"{', '.join(str(v) for v in variables[:5])} and {len(variables) - 5} more"

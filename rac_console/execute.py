@@ -21,13 +21,27 @@ from .commands.language import Exchange, Get, Put, Raw, VarRef
 from .commands.latency import LatencySummary, summarize
 from .commands.outcome import ExitStatus, Outcome, refused
 from .protocol import InputError, describe_hresult, escape_bytes
+from .protocol.messages import is_well_formed_get
 
 
 def is_write(command: Exchange) -> bool:
-    """True for anything that would write to the controller (typed or raw PUT)."""
+    """True for a typed or raw PUT: a timeout then leaves its outcome unknown."""
     if isinstance(command, Put):
         return True
     return isinstance(command, Raw) and command.wire.lstrip(" \t")[:3].upper() == "PUT"
+
+
+def read_only_refusal(command: Exchange) -> str | None:
+    """Why read-only keeps this off the wire; None for a well-formed GET, the only
+    thing read-only lets out (in every front end, and for raw lines alike)."""
+    if is_well_formed_get(command.wire):
+        return None
+    if is_write(command):
+        return "PUT refused: read-only mode is on (nothing was sent)"
+    return (
+        "refused: read-only mode sends only well-formed GET requests "
+        "(GET:RC8:<index>:<type>:, e.g. GET:RC8:10:I:); nothing was sent"
+    )
 
 
 async def execute(
@@ -41,8 +55,8 @@ async def execute(
     """Send one command and describe what came of it; never raises for I/O."""
     wire = command.wire
     var = command.var if isinstance(command, (Get, Put)) else None
-    if read_only and is_write(command):
-        return refused(line, "PUT refused: read-only mode is on (nothing was sent)", wire)
+    if read_only and (refusal := read_only_refusal(command)) is not None:
+        return refused(line, refusal, wire)
     try:
         if isinstance(command, Get):
             reply = await session.get(command.var.kind, command.var.index, priority=priority)
@@ -56,11 +70,17 @@ async def execute(
         message = str(exc)
         if is_write(command):
             message += ": outcome unknown, the PUT may have been applied"
-        return Outcome(wire, ExitStatus.TRANSPORT, var, error=message, input_line=line)
+        return Outcome(wire, ExitStatus.TRANSPORT, var, error=message, input_line=line, failure=exc)
     except TransportError as exc:
         text = escape_bytes(exc.raw) if isinstance(exc, BadReply) and exc.raw is not None else None
         return Outcome(
-            wire, ExitStatus.TRANSPORT, var, response_text=text, error=str(exc), input_line=line
+            wire,
+            ExitStatus.TRANSPORT,
+            var,
+            response_text=text,
+            error=str(exc),
+            input_line=line,
+            failure=exc,
         )
     response = reply.response
     status = ExitStatus.OK if response.ok else ExitStatus.CONTROLLER_ERROR

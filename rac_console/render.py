@@ -1,6 +1,13 @@
-"""Rich renderings of outcomes, shared by the one-shot CLI, ``run`` and the REPL."""
+"""Rich renderings of outcomes, shared by the one-shot CLI, ``run``, the REPL and the console.
+
+Text from outside (the wire, a file, a typed line) reaches a terminal only through
+here: every piece passes :func:`terminal_safe` and is put in a ``Text``, which Rich
+never reads as markup, and the consoles made here never expand emoji codes.
+"""
 
 from __future__ import annotations
+
+from typing import Any
 
 from rich.console import Console
 from rich.text import Text
@@ -8,7 +15,22 @@ from rich.text import Text
 from .commands.language import VarRef
 from .commands.outcome import Outcome
 from .protocol import Variant, vt_name
-from .protocol.text import describe_response
+from .protocol.text import describe_response, terminal_safe, terminal_safe_lines
+
+
+def make_console(*, stderr: bool = False, **options: Any) -> Console:
+    """A console that prints text as given: no markup, no emoji codes, no highlighting."""
+    return Console(stderr=stderr, highlight=False, markup=False, emoji=False, **options)
+
+
+def notice_text(text: str, *, error: bool = False, style: str = "") -> Text:
+    """Our own message (which may quote a file, a host or a reply), made safe."""
+    return Text(terminal_safe_lines(text), style="red" if error else style)
+
+
+def print_error(console: Console, text: str) -> None:
+    """``rac-console: ...`` on one line, escaped."""
+    console.print(Text("rac-console: " + terminal_safe(text)), soft_wrap=True)
 
 
 def value_text(var: VarRef, variant: Variant) -> Text:
@@ -40,7 +62,7 @@ def outcome_text(outcome: Outcome) -> Text:
         line.append_text(value_text(var, outcome.written))
         line.append("  S_OK", style="green")
     else:
-        line.append(outcome.response_text or "")
+        line.append(terminal_safe(outcome.response_text or ""))
     detail = [vt_name(variant.vt)] if variant is not None and var is not None else []
     if var is None and response is not None:
         detail = [describe_response(response)]
@@ -56,13 +78,11 @@ def error_text(outcome: Outcome, prefix: str = "") -> str:
         parts.append(f"(request {outcome.request})")
     elif outcome.request:
         parts.append(f"(request {outcome.request}, reply {outcome.response_text})")
-    return " ".join(parts)
+    return terminal_safe(" ".join(parts))
 
 
 def print_outcome(out: Console, err: Console, outcome: Outcome, prefix: str = "") -> None:
     if outcome.ok:
         out.print(outcome_text(outcome), soft_wrap=True, highlight=False)
     else:
-        err.print(
-            Text("rac-console: " + error_text(outcome, prefix)), soft_wrap=True, highlight=False
-        )
+        print_error(err, error_text(outcome, prefix))

@@ -22,6 +22,13 @@ class WatchRow:
     stale: bool = False
     changed_at: float | None = None
     polled_at: float | None = None
+    every: float | None = None  # this row's own poll period; None: the console's interval
+
+    def due(self, now: float, interval: float) -> bool:
+        """True when this row should be polled in the cycle starting ``now``."""
+        period = self.every if self.every is not None else interval
+        # A cycle may start a little early: a row is due within 5 % of its period.
+        return self.polled_at is None or now - self.polled_at >= period * 0.95
 
     def update(self, variant: Variant, now: float) -> bool:
         """A good value came; True when it differs from the last one."""
@@ -59,19 +66,30 @@ class WatchList:
     removed: set[VarRef] = field(default_factory=set)
     _lock: threading.Lock = field(default_factory=threading.Lock, repr=False)
 
-    def add(self, variables: tuple[VarRef, ...] | list[VarRef], label: str = "") -> int:
+    def add(
+        self,
+        variables: tuple[VarRef, ...] | list[VarRef],
+        label: str = "",
+        every: float | None = None,
+    ) -> int:
         added = 0
         for var in variables:
             row = self.rows.get(var)
             if row is None:
                 with self._lock:
-                    self.rows[var] = WatchRow(var, label)
+                    self.rows[var] = WatchRow(var, label, every=every)
                     self.removed.discard(var)
                 added += 1
-            elif label:
-                row.label = label
+            else:
+                row.label = label or row.label
+                row.every = every if every is not None else row.every
             self.dirty.add(var)
         return added
+
+    def period(self, interval: float) -> float:
+        """How often a poll cycle starts: the shortest period any row asks for."""
+        own = [row.every for row in self.rows.values() if row.every is not None]
+        return min([interval, *own]) if len(own) < len(self.rows) else min(own, default=interval)
 
     def remove(self, variables: tuple[VarRef, ...] | list[VarRef]) -> int:
         targets = list(self.rows) if not variables else [v for v in variables if v in self.rows]

@@ -11,17 +11,16 @@ from .watch import OK, WatchRow
 HIGHLIGHT_SECONDS = 1.0
 
 
-def number_text(value: object, label: str = "") -> str:
-    """Numbers aligned: floats with 2 decimals in 8 columns; Fig as an integer."""
-    if isinstance(value, float):
-        if label == "Fig":
-            return f"{int(value):>2d}"
-        return f"{value:>8.2f}"
+#: Numbers are right-aligned in at least this many columns; a longer one widens its cell.
+NUMBER_WIDTH = 8
+
+
+def number_text(value: object, width: int = NUMBER_WIDTH) -> str:
+    """The value exactly as ``get`` shows it (shortest round-trip text, an exponent
+    when long: 0.000123, 1e+300, -3.3e+38), right-aligned so fields line up."""
     if isinstance(value, bool):
         return "ON" if value else "OFF"
-    if isinstance(value, int):
-        return f"{value:>8d}"
-    return scalar_text(value)
+    return f"{scalar_text(value):>{width}}"
 
 
 def value_cell(row: WatchRow, now: float) -> Text:
@@ -35,7 +34,7 @@ def value_cell(row: WatchRow, now: float) -> Text:
             if n:
                 text.append(" ")
             text.append(label + " ", style="dim")
-            text.append(number_text(value, label))
+            text.append(number_text(value, 2 if label == "Fig" else NUMBER_WIDTH))
     elif kind.code == "IO":
         on = bool(variant.value)
         text.append(" ON " if on else " OFF", style="bold green" if on else "red")

@@ -698,11 +698,22 @@ def test_state_persists_on_a_shared_simulator(env: dict[str, str], sim_server: i
 def test_latency_reports_round_trip_statistics_as_json() -> None:
     result = subprocess.run(
         [sys.executable, "-m", "rac_console", "--json", "latency", "--count", "200"],
-        capture_output=True, text=True, timeout=60)
+        capture_output=True,
+        text=True,
+        timeout=60,
+    )
     assert result.returncode == 0, result.stderr
     summary = json.loads(result.stdout)
-    assert set(summary) == {"count", "errors", "min_ms", "avg_ms", "p50_ms", "p95_ms",
-                            "max_ms", "requests_per_s"}
+    assert set(summary) == {
+        "count",
+        "errors",
+        "min_ms",
+        "avg_ms",
+        "p50_ms",
+        "p95_ms",
+        "max_ms",
+        "requests_per_s",
+    }
     assert summary["count"] == 200 and summary["errors"] == 0
     assert summary["min_ms"] <= summary["p50_ms"] <= summary["p95_ms"] <= summary["max_ms"]
     assert summary["requests_per_s"] > 0
@@ -714,7 +725,11 @@ def test_latency_against_nothing_is_exit_3_with_one_line() -> None:
         port = probe.getsockname()[1]
     result = subprocess.run(
         [sys.executable, "-m", "rac_console", "-H", "127.0.0.1", "-p", str(port), "latency"],
-        capture_output=True, text=True, timeout=60)
+        capture_output=True,
+        text=True,
+        timeout=60,
+    )
     assert result.returncode == 3
     assert result.stderr.strip().splitlines() == [
-        f"rac-console: cannot connect to 127.0.0.1:{port}: Connection refused"]
+        f"rac-console: cannot connect to 127.0.0.1:{port}: Connection refused"
+    ]

@@ -16,6 +16,7 @@ PURE_MODULES = [
     "rac_console.protocol.messages",
     "rac_console.protocol.variables",
     "rac_console.protocol.framing",
+    "rac_console.commands.argv",
     "rac_console.commands.language",
     "rac_console.commands.outcome",
     "rac_console.commands.completion",

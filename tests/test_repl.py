@@ -14,11 +14,11 @@ from pathlib import Path
 from prompt_toolkit.document import Document
 from prompt_toolkit.input import create_pipe_input
 from prompt_toolkit.output import DummyOutput
-from rich.console import Console
 
 from rac_console.client import Frame
 from rac_console.core import ConsoleCore
 from rac_console.history import History
+from rac_console.render import make_console
 from rac_console.repl.prompt_parts import RacCompleter
 from rac_console.repl.repl import Repl
 
@@ -46,10 +46,12 @@ def test_completer_offers_candidates_with_help() -> None:
 class Driver:
     """A REPL on a pipe: type lines, read what it printed, wait on conditions."""
 
-    def __init__(self, tmp_path: Path, **core_options: object) -> None:
+    def __init__(self, tmp_path: Path, host: str | None = None, **core_options: object) -> None:
         self.out = io.StringIO()
-        self.console = Console(file=self.out, force_terminal=True, width=140, color_system=None)
-        self.core = ConsoleCore(None, **core_options)  # type: ignore[arg-type]
+        self.console = make_console(
+            file=self.out, force_terminal=True, width=140, color_system=None
+        )
+        self.core = ConsoleCore(host, **core_options)  # type: ignore[arg-type]
         self.history = History(tmp_path / "history")
         self.frames: list[Frame] = []
         self.core.add_log_listener(

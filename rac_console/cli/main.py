@@ -9,13 +9,21 @@ from __future__ import annotations
 import argparse
 import os
 import sys
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterable, Sequence
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 from .. import __version__
+
+if TYPE_CHECKING:
+    from ..commands.argv import Option
 
 DESCRIPTION = "A console for DENSO RC8 controllers speaking RAC (TCP port 5006)."
 EPILOG = """\
 Without -H every command talks to a built-in RC8 simulator.
+Options may also come after the command, even after a value. A value that starts
+with - and is not a number goes after --, where every word is the value:
+  rac-console put S 10 -- -text
 Exit status: 0 success, 1 the controller answered an error, 2 refused before
 sending (bad input, read-only), 3 connection failure, timeout or bad reply."""
 
@@ -58,93 +66,192 @@ def _port(text: str) -> int:
     return int(text)
 
 
-def _global_options(parser: argparse.ArgumentParser, suppress: bool) -> None:
+def _help_option(parser: argparse.ArgumentParser) -> argparse.Action:
+    """argparse's own -h/--help, added by hand so its Action can be listed."""
+    return parser.add_argument(
+        "-h", "--help", action="help", help="show this help message and exit"
+    )
+
+
+def _global_options(parser: argparse.ArgumentParser, suppress: bool) -> list[argparse.Action]:
     """The options every command takes, before or after the command word."""
 
     def default(value: object) -> object:
         return argparse.SUPPRESS if suppress else value
 
-    parser.add_argument(
-        "-H",
-        "--host",
-        default=default(None),
-        help="controller address (default: the built-in simulator)",
-    )
-    parser.add_argument(
-        "-p", "--port", type=_port, default=default(5006), help="controller port (default 5006)"
-    )
-    parser.add_argument(
-        "--timeout",
-        type=_seconds(allow_zero=False),
-        default=default(2.0),
-        metavar="SECONDS",
-        help="per-request timeout (default 2)",
-    )
-    parser.add_argument(
-        "--json",
-        action="store_true",
-        default=default(False),
-        help="print one JSON object per result",
-    )
-    parser.add_argument(
-        "--read-only",
-        action="store_true",
-        default=default(False),
-        help="refuse every PUT before sending",
-    )
-    parser.add_argument(
-        "--record",
-        metavar="FILE",
-        default=default(None),
-        help="append every frame sent and received to FILE as JSON lines",
-    )
+    return [
+        parser.add_argument(
+            "-H",
+            "--host",
+            default=default(None),
+            help="controller address (default: the built-in simulator)",
+        ),
+        parser.add_argument(
+            "-p",
+            "--port",
+            type=_port,
+            default=default(5006),
+            help="controller port (default 5006)",
+        ),
+        parser.add_argument(
+            "--timeout",
+            type=_seconds(allow_zero=False),
+            default=default(2.0),
+            metavar="SECONDS",
+            help="per-request timeout (default 2)",
+        ),
+        parser.add_argument(
+            "--json",
+            action="store_true",
+            default=default(False),
+            help="print one JSON object per result",
+        ),
+        parser.add_argument(
+            "--read-only",
+            action="store_true",
+            default=default(False),
+            help="refuse every PUT before sending",
+        ),
+        parser.add_argument(
+            "--record",
+            metavar="FILE",
+            default=default(None),
+            help="append every frame sent and received to FILE as JSON lines",
+        ),
+    ]
+
+
+ONE_SHOT = ("get", "put", "send")
+"""The commands whose words are sorted by :mod:`rac_console.commands.argv`, not argparse."""
+
+WORDS_EPILOG = """\
+Options may come anywhere, also after the value. Negative numbers are values
+(put P 10 1 2 3 0 0 -90 -1); any other word that starts with - is refused, unless
+it comes after --: every word after -- is taken as it is.
+  rac-console put S 10 -- --not-an-option
+  rac-console send -- -text"""
+
+
+@dataclass(frozen=True)
+class CliParser:
+    """The argparse parser, and the options it knows for the word splitter.
+
+    ``get``, ``put`` and ``send`` hand argparse only their options; their other
+    words go to :func:`rac_console.commands.argv.split_words`, which needs to know
+    every option spelling and whether it takes a value.
+    """
+
+    parser: argparse.ArgumentParser
+    top_actions: tuple[argparse.Action, ...]  # options before the command word
+    command_actions: tuple[argparse.Action, ...]  # options of get, put and send
+
+    @property
+    def top_options(self) -> dict[str, Option]:
+        return _option_table(self.top_actions)
+
+    @property
+    def command_options(self) -> dict[str, Option]:
+        return _option_table(self.command_actions)
+
+
+def _option_table(actions: Iterable[argparse.Action]) -> dict[str, Option]:
+    """Every spelling of every option, with its long name and the name of its value."""
+    from ..commands.argv import Option
+
+    table = {}
+    for action in actions:
+        names = action.option_strings
+        long = next((name for name in names if name.startswith("--")), names[-1])
+        metavar = None if action.nargs == 0 else str(action.metavar or action.dest.upper())
+        table.update(dict.fromkeys(names, Option(long, metavar)))
+    return table
 
 
 def build_parser() -> argparse.ArgumentParser:
+    return build_cli().parser
+
+
+def build_cli() -> CliParser:
     parser = argparse.ArgumentParser(
         prog="rac-console",
         description=DESCRIPTION,
         epilog=EPILOG,
         formatter_class=argparse.RawDescriptionHelpFormatter,
+        add_help=False,
     )
-    parser.add_argument("--version", action="version", version=f"rac-console {__version__}")
-    _global_options(parser, suppress=False)
+    top_actions = [
+        _help_option(parser),
+        parser.add_argument("--version", action="version", version=f"rac-console {__version__}"),
+        *_global_options(parser, suppress=False),
+    ]
     console = parser.add_argument_group("console options (no COMMAND: the full-screen console)")
-    console.add_argument("--watch", metavar="FILE", help="load a TOML watch list at start")
-    console.add_argument(
-        "--history", metavar="FILE", help="history file (default: in your state directory)"
-    )
-    console.add_argument(
-        "--interval",
-        type=_seconds(allow_zero=True),
-        default=0.5,
-        metavar="SECONDS",
-        help="time between poll cycles (default 0.5)",
-    )
+    top_actions += [
+        console.add_argument("--watch", metavar="FILE", help="load a TOML watch list at start"),
+        console.add_argument(
+            "--history", metavar="FILE", help="history file (default: in your state directory)"
+        ),
+        console.add_argument(
+            "--interval",
+            type=_seconds(allow_zero=True),
+            default=0.5,
+            metavar="SECONDS",
+            help="time between poll cycles (default 0.5)",
+        ),
+    ]
     commands = parser.add_subparsers(dest="command", metavar="COMMAND")
 
-    def command(name: str, help_text: str) -> argparse.ArgumentParser:
-        sub = commands.add_parser(name, help=help_text, description=help_text)
-        _global_options(sub, suppress=True)
-        return sub
+    def command(
+        name: str, help_text: str, usage: str | None = None, epilog: str | None = None
+    ) -> tuple[argparse.ArgumentParser, list[argparse.Action]]:
+        sub = commands.add_parser(
+            name,
+            help=help_text,
+            description=help_text,
+            usage=usage,
+            epilog=epilog,
+            formatter_class=argparse.RawDescriptionHelpFormatter,
+            add_help=False,
+        )
+        return sub, [_help_option(sub), *_global_options(sub, suppress=True)]
 
-    get = command("get", "read a variable: get P 10")
-    get.add_argument("type", metavar="TYPE", help="I F D S V P J T IO")
-    get.add_argument("index", metavar="INDEX")
-    put = command("put", "write a variable: put P 10 1 2 3 4 5 6 -1")
-    put.add_argument("type", metavar="TYPE", help="I F D S V P J T IO")
-    put.add_argument("index", metavar="INDEX")
+    # The positionals of get, put and send are for --help only: argparse never sees
+    # those words (main() gives them to split_words), hence nargs "?" and "*".
+    type_help = "I F D S V P J T IO; the index may be in the same word: P3, P[3]"
+    get, command_actions = command(
+        "get",
+        "read a variable: get P 10 (also get P10, get 'P[10]')",
+        usage="%(prog)s [options] TYPE INDEX",
+        epilog=WORDS_EPILOG,
+    )
+    get.add_argument("type", metavar="TYPE", nargs="?", help=type_help)
+    get.add_argument("index", metavar="INDEX", nargs="?", help="0 to 32767")
+    put, _ = command(
+        "put",
+        "write a variable: put P 10 1 2 3 4 5 6 -1",
+        usage="%(prog)s [options] TYPE INDEX VALUE...",
+        epilog=WORDS_EPILOG,
+    )
+    put.add_argument("type", metavar="TYPE", nargs="?", help=type_help)
+    put.add_argument("index", metavar="INDEX", nargs="?", help="0 to 32767")
     put.add_argument(
         "value",
         metavar="VALUE",
-        nargs=argparse.REMAINDER,
-        help="the value; V/P/J/T take 3/7/8/10 numbers, IO on|off",
+        nargs="*",
+        help="the value; V/P/J/T take 3/7/8/10 numbers, IO on|off; S takes the words as "
+        'given (several joined with one space; "" for an empty string)',
     )
-    send = command("send", "send a raw RAC string as it is and print the reply")
-    send.add_argument("text", metavar="TEXT", help="e.g. 'GET:RC8:10:I:' (CR is added)")
-    run = command("run", "run console commands from FILE (or - for stdin) over one session")
+    send, _ = command(
+        "send",
+        "send a raw RAC string as it is and print the reply",
+        usage="%(prog)s [options] TEXT",
+        epilog=WORDS_EPILOG,
+    )
+    send.add_argument("text", metavar="TEXT", nargs="?", help="e.g. 'GET:RC8:10:I:' (CR is added)")
+    run, _ = command("run", "run console commands from FILE (or - for stdin) over one session")
     run.add_argument("file", metavar="FILE|-")
-    latency = command("latency", "measure round trips of repeated GETs (like redis-cli --latency)")
+    latency, _ = command(
+        "latency", "measure round trips of repeated GETs (like redis-cli --latency)"
+    )
     latency.add_argument(
         "--count", type=_count(int), default=100, metavar="N", help="how many GETs (default 100)"
     )
@@ -159,7 +266,7 @@ def build_parser() -> argparse.ArgumentParser:
     latency.add_argument(
         "--var", default="I 0", metavar="'TYPE INDEX'", help="the variable to read (default 'I 0')"
     )
-    repl = command("repl", "a line-oriented console for plain terminals, ssh and serial")
+    repl, _ = command("repl", "a line-oriented console for plain terminals, ssh and serial")
     repl.add_argument(
         "--history",
         metavar="FILE",
@@ -228,6 +335,15 @@ def build_parser() -> argparse.ArgumentParser:
             help=text,
         )
     faults.add_argument(
+        "--extra-gap",
+        dest="extra_gap_ms",
+        type=_count(float),
+        default=None,
+        metavar="MS",
+        help="send that extra line as a write of its own, MS ms after the reply (0: straight "
+        "after; up to 60000; without it, the line goes in the reply's own write)",
+    )
+    faults.add_argument(
         "--split", action="store_true", help="send replies in 2-byte pieces with pauses"
     )
     faults.add_argument(
@@ -251,7 +367,7 @@ def build_parser() -> argparse.ArgumentParser:
         metavar="N",
         help="seed of the jitter and error choices (default 0)",
     )
-    return parser
+    return CliParser(parser, tuple(top_actions), tuple(command_actions))
 
 
 def use_uvloop() -> bool:
@@ -326,8 +442,37 @@ def _interactive(args: argparse.Namespace) -> int:
     return run_console(core, history, args.watch)
 
 
+def parse_args(words: Sequence[str]) -> argparse.Namespace:
+    """The command line, with ``get``/``put``/``send`` words sorted by the pure splitter.
+
+    argparse would take ``-1e3`` for an option, drop what the shell quoted once
+    the words were joined, and cannot tell a trailing ``--json`` from a value; so
+    for these commands argparse sees only the options, and ``args.words`` holds
+    the other words as they came (``args.words_problem`` says why they cannot be
+    used, if so). Other commands are argparse's alone.
+    """
+    cli = build_cli()
+    if not set(ONE_SHOT) & set(words):  # --version and the console skip the import
+        return cli.parser.parse_args(words)
+    from ..commands.argv import find_command, split_words
+
+    at = find_command(words, cli.top_options)
+    if at is None or words[at] not in ONE_SHOT:
+        args = cli.parser.parse_args(words)
+        if args.command in ONE_SHOT:  # behind a leading --, where argparse read the words
+            positionals = [args.type, args.index] if args.command != "send" else [args.text]
+            args.words = [w for w in positionals if w is not None] + getattr(args, "value", [])
+            args.words_problem = None
+        return args
+    split = split_words(words[at], words[at + 1 :], cli.command_options, before=words[:at])
+    args = cli.parser.parse_args([*words[: at + 1], *split.options])
+    args.words = list(split.operands)
+    args.words_problem = split.problem
+    return args
+
+
 def main(argv: Sequence[str] | None = None) -> int:
-    args = build_parser().parse_args(argv)
+    args = parse_args(sys.argv[1:] if argv is None else list(argv))
     try:
         return int(_dispatch(args))
     except KeyboardInterrupt:

@@ -8,14 +8,13 @@ import json
 import sys
 from collections.abc import Iterator
 
-from rich.console import Console
-
 from ..client import ConnectFailed, RacSession
-from ..commands.language import Get, Latency, Put, Raw, parse_command, parse_exchange
+from ..commands.argv import exchange_from_words, input_line
+from ..commands.language import Get, Latency, Put, Raw, parse_command
 from ..commands.outcome import ExitStatus, Outcome, refused, worst
 from ..execute import execute, measure_latency
 from ..protocol import InputError
-from ..render import error_text, print_outcome
+from ..render import error_text, make_console, notice_text, print_error, print_outcome
 from .target import open_session
 
 
@@ -24,8 +23,8 @@ class Output:
 
     def __init__(self, as_json: bool) -> None:
         self.as_json = as_json
-        self.out = Console(highlight=False)
-        self.err = Console(stderr=True, highlight=False)
+        self.out = make_console()
+        self.err = make_console(stderr=True)
 
     def show(
         self, outcome: Outcome, extra: dict[str, object] | None = None, prefix: str = ""
@@ -35,27 +34,28 @@ class Output:
             sys.stdout.write(json.dumps(data) + "\n")
             sys.stdout.flush()
             if not outcome.ok:
-                self.err.print(
-                    "rac-console: " + error_text(outcome, prefix), soft_wrap=True, markup=False
-                )
+                print_error(self.err, error_text(outcome, prefix))
         else:
             print_outcome(self.out, self.err, outcome, prefix)
 
 
 def _exchange_line(args: argparse.Namespace) -> str:
-    if args.command == "send":
-        return "send " + args.text
-    words = [args.command, args.type, args.index, *getattr(args, "value", [])]
-    return " ".join(words)
+    """What the user typed, for JSON's ``input``: the command and its words."""
+    return input_line(args.command, args.words)
 
 
 async def one_command(args: argparse.Namespace) -> ExitStatus:
-    """``get``, ``put`` and ``send``: parse, refuse or send, show, exit status."""
+    """``get``, ``put`` and ``send``: build from the words, refuse or send, show, exit status.
+
+    The command is built from ``args.words`` as the shell passed them (see
+    :func:`rac_console.cli.main.parse_args`), never from a line joined and parsed again.
+    """
     output = Output(args.json)
     line = _exchange_line(args)
     try:
-        command = parse_exchange(line)
-        assert command is not None
+        if args.words_problem is not None:
+            raise InputError(args.words_problem)
+        command = exchange_from_words(args.command, args.words)
         async with open_session(args) as session:
             outcome = await execute(session, command, read_only=args.read_only, line=line)
     except InputError as exc:
@@ -82,7 +82,7 @@ async def run_script(args: argparse.Namespace) -> ExitStatus:
         lines = _script_lines(args.file)
         first = next(lines, None)  # opens the file: a missing one is said before connecting
     except OSError as exc:
-        output.err.print(f"rac-console: cannot read {args.file}: {exc.strerror}", markup=False)
+        print_error(output.err, f"cannot read {args.file}: {exc.strerror}")
         return ExitStatus.REFUSED
     try:
         async with open_session(args) as session:
@@ -93,7 +93,7 @@ async def run_script(args: argparse.Namespace) -> ExitStatus:
                     output.show(outcome, {"line": number}, prefix=f"line {number}: ")
                     statuses.append(outcome.status)
     except InputError as exc:
-        output.err.print(f"rac-console: {exc}", markup=False)
+        print_error(output.err, str(exc))
         return ExitStatus.REFUSED
     return worst(statuses)
 
@@ -125,13 +125,13 @@ async def latency(args: argparse.Namespace) -> ExitStatus:
                 session, command.var, command.count, args.latency_interval
             )
     except InputError as exc:
-        output.err.print(f"rac-console: {exc}", markup=False)
+        print_error(output.err, str(exc))
         return ExitStatus.REFUSED
     except ConnectFailed as exc:
-        output.err.print(f"rac-console: {exc}", markup=False)
+        print_error(output.err, str(exc))
         return ExitStatus.TRANSPORT
     if args.json:
         sys.stdout.write(json.dumps(summary.to_json()) + "\n")
     else:
-        output.out.print(summary.text(f"GET {command.var}"), markup=False)
+        output.out.print(notice_text(summary.text(f"GET {command.var}")))
     return ExitStatus.OK if summary.count else ExitStatus.TRANSPORT

@@ -59,7 +59,7 @@ Exchange = Get | Put | Raw
 class Watch:
     vars: tuple[VarRef, ...]
     label: str = ""
-    interval: float | None = None  # ``watch ... every 0.2``
+    every: float | None = None  # ``watch ... every 0.2``: these rows' own poll period
 
 
 @dataclass(frozen=True)
@@ -260,12 +260,36 @@ def _parse_vars(text: str, usage: str) -> tuple[tuple[VarRef, ...], str]:
     return tuple(VarRef(kind, i) for i in range(first, last + 1)), text[match.end() :]
 
 
+_NEXT_VAR_RE = re.compile(r"\s*(?:IO|[IFDSVPJT])\s*\[?\s*\d", re.ASCII | re.IGNORECASE)
+
+
 def _parse_watch(text: str) -> Watch:
-    variables, label = _parse_vars(text, COMMANDS["watch"].usage + ", e.g. watch IO 128-135")
-    every = re.fullmatch(r"(.*?)\s*\bevery\s+(\S+?)s?", label.strip(), re.ASCII | re.DOTALL)
-    if every:
-        return Watch(variables, every.group(1).strip(), _parse_seconds(every.group(2)))
-    return Watch(variables, label.strip())
+    """``watch P 0``, ``watch IO 128-135 gripper``, ``watch P 0 J 0``, ``... every 0.2``.
+
+    Several variables are all watched; a label (quoted to keep it from being read
+    as a variable) names one variable or range, never a list.
+    """
+    usage = COMMANDS["watch"].usage + ", e.g. watch IO 128-135"
+    variables, rest = _parse_vars(text, usage)
+    specs = 1
+    while _NEXT_VAR_RE.match(rest):
+        more, rest = _parse_vars(rest, usage)
+        variables += more
+        specs += 1
+    if len(variables) > MAX_RANGE:
+        raise InputError(f"watch takes at most {MAX_RANGE} variables at once")
+    label, every = rest.strip(), None
+    match = re.fullmatch(r"(.*?)\s*\bevery\s+(\S+?)s?", label, re.ASCII | re.DOTALL)
+    if match:
+        label, every = match.group(1).strip(), _parse_seconds(match.group(2), "every")
+    if len(label) >= 2 and label[0] == label[-1] and label[0] in "\"'":
+        label = label[1:-1]
+    if label and specs > 1:
+        raise InputError(
+            "a label names one variable or range: watch P 0 pick, then watch J 0 home "
+            '(quote a label that starts like a variable: watch P 0 "J 0 side")'
+        )
+    return Watch(tuple(dict.fromkeys(variables)), label, every)
 
 
 def _parse_latency(text: str) -> Latency:
@@ -283,15 +307,15 @@ def _parse_latency(text: str) -> Latency:
     return Latency(var, count)
 
 
-def _parse_seconds(text: str) -> float:
+def _parse_seconds(text: str, word: str = "interval") -> float:
     try:
         seconds = float(text)
     except ValueError:
         raise InputError(
-            f"interval needs a number of seconds, e.g. interval 0.5, got {text!r}"
+            f"{word} needs a number of seconds, e.g. {word} 0.5, got {text!r}"
         ) from None
-    if not MIN_INTERVAL <= seconds <= MAX_INTERVAL:
-        raise InputError(f"interval must be from 0 to {MAX_INTERVAL:g} seconds, got {text}")
+    if not MIN_INTERVAL <= seconds <= MAX_INTERVAL:  # also refuses nan and inf
+        raise InputError(f"{word} must be from 0 to {MAX_INTERVAL:g} seconds, got {text}")
     return seconds
 
 

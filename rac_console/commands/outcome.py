@@ -34,6 +34,7 @@ class Outcome:
     error: str | None = None
     input_line: str | None = None
     written: Variant | None = None
+    failure: Exception | None = None  # why no trustworthy reply came (not in the JSON)
 
     @property
     def ok(self) -> bool:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
@@ -24,6 +25,21 @@ def get_request(kind: VarKind, index: int) -> str:
 
 def put_request(kind: VarKind, index: int, value_text: str) -> str:
     return f"PUT:{PART_NAME}:{index}:{kind.code}:{value_text}"
+
+
+_GET_RE = re.compile(r"GET:RC8:(\d{1,5}):(IO|[IFDSVPJT]):", re.ASCII | re.IGNORECASE)
+
+
+def is_well_formed_get(text: str) -> bool:
+    """True only for ``GET:RC8:<index>:<type>:`` exactly: what read-only lets out.
+
+    A whitelist, not a blacklist: leading bytes, a parameter, an unknown type or
+    anything else that is not a plain read keeps the request off the wire.
+    """
+    from .variables import MAX_INDEX
+
+    match = _GET_RE.fullmatch(text)
+    return match is not None and int(match.group(1)) <= MAX_INDEX
 
 
 def encode_request(text: str) -> bytes:

@@ -26,11 +26,31 @@ def escape_bytes(data: bytes) -> str:
     return "".join(out)
 
 
-def printable(text: str) -> str:
-    """Text safe to put on a terminal: control characters as ``\\xNN``."""
+def terminal_safe(text: str) -> str:
+    """The one escaping function for text that came from the wire or a file.
+
+    Every character a terminal could act on (C0 controls such as ESC, BEL, BS and
+    LF, DEL, the C1 range such as the CSI byte 0x9B, and Unicode format characters
+    such as bidirectional overrides) is written as ``\\xNN`` or ``\\uNNNN``, so
+    it is shown, never obeyed and never silently dropped.
+    """
     if text.isprintable():
         return text
-    return "".join(ch if ch.isprintable() else f"\\x{ord(ch):02x}" for ch in text)
+    return "".join(ch if ch.isprintable() else _escape_char(ch) for ch in text)
+
+
+def terminal_safe_lines(text: str) -> str:
+    """:func:`terminal_safe` line by line: our own multi-line text keeps its lines."""
+    return "\n".join(terminal_safe(line) for line in text.split("\n"))
+
+
+def _escape_char(ch: str) -> str:
+    code = ord(ch)
+    if code < 0x100:
+        return f"\\x{code:02x}"
+    if code < 0x10000:
+        return f"\\u{code:04x}"
+    return f"\\U{code:08x}"
 
 
 def wire_text(data: bytes) -> str:
@@ -52,7 +72,7 @@ def scalar_text(value: Any) -> str:
     if value is None:
         return "(empty)"
     if isinstance(value, str):
-        return printable(value)
+        return terminal_safe(value)
     return str(value)
 
 

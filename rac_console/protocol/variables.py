@@ -52,7 +52,7 @@ class VarKind:
         """Parse the value part of a ``put`` as typed; raise InputError with a fix."""
         text = text.strip()
         if self.code == "S":
-            value = _unquote(text)
+            value = _string(text)
             if "\r" in value or "\n" in value:
                 raise InputError("S cannot hold CR or LF: CR ends a RAC frame")
             return Variant(VT.BSTR, value)
@@ -159,10 +159,24 @@ def encode_value(kind: VarKind, text: str) -> tuple[Variant, str]:
         raise InputError(f"{kind.code}: {exc}") from None
 
 
-def _unquote(text: str) -> str:
-    if len(text) >= 2 and text[0] == text[-1] and text[0] in "\"'":
-        return text[1:-1]
-    return text
+def _string(text: str) -> str:
+    """A typed string: as typed, or inside one pair of quotes to keep outer spaces.
+
+    Nothing is guessed: no value, or quotes that do not enclose exactly one string
+    (``"a" "b"``), is refused rather than written as something nobody typed.
+    """
+    if not text:
+        raise InputError('S needs a value: write "" for an empty string, e.g. put S 10 ""')
+    quote = text[0]
+    if quote not in "\"'":
+        return text
+    if len(text) < 2 or text[-1] != quote or quote in text[1:-1]:
+        other = "'" if quote == '"' else '"'
+        raise InputError(
+            f"a string in quotes is one value, quotes at both ends: put S 10 {quote}a b{quote}"
+            f" (for a {quote} inside, quote with {other})"
+        )
+    return text[1:-1]
 
 
 def _integer(text: str) -> int:

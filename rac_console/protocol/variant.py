@@ -320,6 +320,11 @@ def _check_text(value: Any, name: str, where: str) -> str:
         raise EncodeError(f"{name} needs text, got {value!r}")
     if "\r" in value or "\n" in value:
         raise EncodeError("a string cannot contain CR or LF (CR ends a RAC frame)")
+    control = next((ch for ch in value if ord(ch) < 0x20 or ord(ch) == 0x7F), None)
+    if control is not None:
+        raise EncodeError(
+            f"a string cannot hold the control character {control!r}: RAC strings are plain text"
+        )
     if where == _TOP:
         return value
     if where == _ELEMENT and "," in value:

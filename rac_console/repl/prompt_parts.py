@@ -31,6 +31,7 @@ STYLE = Style.from_dict(
         "auto-suggestion": "#808080",
         "bottom-toolbar": "noreverse bg:#303030 #d0d0d0",
         "toolbar.readonly": "bold bg:ansiblue ansiwhite",
+        "toolbar.hint": "italic bg:#303030 #ffffaf",
         "prompt.sim": "bold ansiyellow",
         "prompt.live": "bold ansired",
         "prompt.off": "ansibrightblack",

@@ -18,14 +18,15 @@ from rich.table import Table
 from rich.text import Text
 
 from ..client import Frame
+from ..commands.completion import hint
 from ..commands.language import Watch, parse_command
 from ..commands.outcome import ExitStatus, Outcome
 from ..core import SIMULATOR_NOTICE, Action, ConsoleCore, LogEvent, Message
 from ..frames import frame_line
 from ..history import History
 from ..protocol import InputError
-from ..protocol.text import printable
-from ..render import error_text, outcome_text
+from ..protocol.text import terminal_safe
+from ..render import error_text, make_console, notice_text, outcome_text
 from ..watch import age_text
 from ..watch_cells import status_cell, value_cell
 from .prompt_parts import STYLE, HintProcessor, RacCompleter, RacLexer, SharedHistory
@@ -90,6 +91,10 @@ class Repl:
         ]
         if self.frames:
             parts.append(("", " frames on "))
+        buffer = self.prompt.default_buffer
+        needs = hint(buffer.text) if buffer.suggestion is not None else ""
+        if needs:  # the history suggestion holds the grey text: the hint shows here
+            parts.append(("class:toolbar.hint", f" needs: {needs} "))
         if self.core.read_only:
             parts.append(("class:toolbar.readonly", " READ-ONLY "))
         return FormattedText(parts)
@@ -125,7 +130,7 @@ class Repl:
         try:
             command = parse_command(line)
         except InputError as exc:
-            self.console.print(Text(str(exc), style="red"))
+            self.console.print(notice_text(str(exc), error=True))
             return True
         if isinstance(command, Watch):
             await self.live_watch(line, command)
@@ -134,9 +139,7 @@ class Repl:
             if isinstance(feedback, Outcome):
                 self._show_outcome(feedback)
             elif isinstance(feedback, Message):
-                self.console.print(
-                    Text(feedback.text, style="red" if feedback.level == "error" else "")
-                )
+                self.console.print(notice_text(feedback.text, error=feedback.level == "error"))
             elif isinstance(feedback, Action):
                 if feedback.name == "quit":
                     return False
@@ -153,7 +156,7 @@ class Repl:
             self.lost = session.state != "connected"
             if self.lost:
                 self.console.print(
-                    Text(f"{error_text(outcome)}: the next command reconnects", style="red")
+                    notice_text(f"{error_text(outcome)}: the next command reconnects", error=True)
                 )
                 return
         elif outcome.response is not None:
@@ -161,7 +164,7 @@ class Repl:
         if outcome.ok:
             self.console.print(outcome_text(outcome), soft_wrap=True)
         else:
-            self.console.print(Text(error_text(outcome), style="red"), soft_wrap=True)
+            self.console.print(notice_text(error_text(outcome), error=True), soft_wrap=True)
 
     def _echo(self, event: LogEvent) -> None:
         """``frames on``: every frame, dimmed, as it crosses the wire (not during a watch)."""
@@ -175,7 +178,7 @@ class Repl:
         added = [v for v in command.vars if v not in self.core.watch.rows]
         for feedback in await self.core.handle_line(line):
             if isinstance(feedback, Message) and feedback.level == "error":
-                self.console.print(Text(feedback.text, style="red"))
+                self.console.print(notice_text(feedback.text, error=True))
                 return
         stop = asyncio.Event()
         keys = self.prompt.input
@@ -186,8 +189,7 @@ class Repl:
 
         self.console.print(
             Text(
-                f"watching every {self.core.interval:g} s: Enter, q or "
-                "Ctrl-C returns to the prompt",
+                f"watching every {self.core.period:g} s: Enter, q or Ctrl-C returns to the prompt",
                 style="dim",
             )
         )
@@ -219,7 +221,7 @@ class Repl:
             if row is not None:
                 table.add_row(
                     str(var),
-                    Text(printable(row.label)),
+                    Text(terminal_safe(row.label)),
                     status_cell(row),
                     age_text(row, now),
                     value_cell(row, now),
@@ -229,4 +231,4 @@ class Repl:
 
 def run_repl(core: ConsoleCore, history: History) -> int:
     """``rac-console repl`` on a terminal."""
-    return asyncio.run(Repl(core, history, Console(highlight=False)).run())
+    return asyncio.run(Repl(core, history, make_console()).run())

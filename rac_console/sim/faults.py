@@ -6,6 +6,7 @@ sequence of requests give the same faults, so a failure seen once can be replaye
 
 from __future__ import annotations
 
+import math
 import random
 from dataclasses import dataclass, fields, replace
 
@@ -15,6 +16,8 @@ SLOW_SECONDS = 3.0  # "late by more than a typical client timeout" (the default 
 GARBAGE = b"\xff\xfe#garbled\x00reply"
 EXTRA_LINE = b"0,3,424242\r"
 ERROR_CODES = sorted(code for code in HRESULTS if code not in (S_OK, E_INVALIDRCVPACKET))
+MAX_EXTRA_GAP_MS = 60_000.0
+UNSET = ("none", "off")  # ``SIM:SET:extra_gap_ms=none``: the extra line back in the reply's write
 
 
 @dataclass(frozen=True)
@@ -27,15 +30,21 @@ class FaultSettings:
     garble_every: int = 0
     split: bool = False
     extra_every: int = 0
+    # None: the extra line leaves in the reply's own write. A number: it is a write of its
+    # own that many ms after the reply (0: straight after), as a peer answering twice sends.
+    extra_gap_ms: float | None = None
     error_rate: float = 0.0
     max_sessions: int = 0
     seed: int = 0
 
     @property
     def active(self) -> bool:
-        """True when any reply may be altered (max_sessions and seed alter none)."""
+        """True when any reply may be altered (max_sessions, seed and the extra line's gap
+        alter none by themselves)."""
         return any(
-            getattr(self, f.name) for f in fields(self) if f.name not in ("max_sessions", "seed")
+            getattr(self, f.name)
+            for f in fields(self)
+            if f.name not in ("max_sessions", "seed", "extra_gap_ms")
         )
 
     def describe(self) -> str:
@@ -51,7 +60,9 @@ class FaultSettings:
             if not sep or name not in kinds:
                 raise ValueError(f"unknown setting {name!r}")
             kind = kinds[name]
-            if kind in (bool, "bool"):
+            if name == "extra_gap_ms":
+                changes[name] = _gap_ms(text)
+            elif kind in (bool, "bool"):
                 changes[name] = text.strip().lower() in ("1", "true", "on", "yes")
             elif kind in (int, "int"):
                 changes[name] = int(text)
@@ -68,6 +79,10 @@ class FaultSettings:
                 raise ValueError(f"{f.name} cannot be negative")
         if self.error_rate > 1:
             raise ValueError("error_rate is a probability from 0 to 1")
+        gap = self.extra_gap_ms
+        if gap is not None and not (math.isfinite(gap) and 0 <= gap <= MAX_EXTRA_GAP_MS):
+            # inf would never send the line, nan would make asyncio's timer raise
+            raise ValueError(f"extra_gap_ms: give 0 to {MAX_EXTRA_GAP_MS:g} ms, got {gap}")
 
 
 @dataclass(frozen=True)
@@ -79,6 +94,7 @@ class ReplyFault:
     error_code: int = 0
     split: bool = False
     extra: bool = False
+    extra_gap: float | None = None  # seconds after the reply, in a write of its own; None: with it
 
 
 class FaultPlan:
@@ -105,8 +121,20 @@ class FaultPlan:
             action = "garble"
         elif s.error_rate and self._random.random() < s.error_rate:
             action, code = "error", self._random.choice(ERROR_CODES)
-        return ReplyFault(delay, action, code, s.split, _every(n, s.extra_every))
+        extra = _every(n, s.extra_every)
+        gap = s.extra_gap_ms / 1000 if extra and s.extra_gap_ms is not None else None
+        return ReplyFault(delay, action, code, s.split, extra, gap)
 
 
 def _every(n: int, every: int) -> bool:
     return every > 0 and n % every == 0
+
+
+def _gap_ms(text: str) -> float | None:
+    """``extra_gap_ms=`` text: ms (range-checked by ``check``), or none/off to unset."""
+    if text.strip().lower() in UNSET:
+        return None
+    try:
+        return float(text)
+    except ValueError:
+        raise ValueError(f"extra_gap_ms: not a number of ms: {text.strip()!r}") from None

@@ -2,7 +2,8 @@
 
 Without faults every reply is written from ``data_received`` (the fast path). With
 faults configured, each session's requests go through a bounded queue served by one
-task, so replies can be delayed, split, dropped or garbled in order.
+task, so replies can be delayed, split, dropped or garbled in order. An extra line with
+a gap is sent by a timer of its own, so it can land while later requests are in flight.
 """
 
 from __future__ import annotations
@@ -44,6 +45,9 @@ class _SimSession(asyncio.Protocol):
         self._queue: asyncio.Queue[tuple[bytes | None, int]] | None = None
         self._task: asyncio.Task[None] | None = None
         self._reading_paused = False
+        self._extra_timers: set[asyncio.TimerHandle] = set()
+        self._mid_reply = False  # a split reply is going out: an extra line must wait
+        self._held_extras = 0
 
     def connection_made(self, transport: asyncio.BaseTransport) -> None:
         server = self._server
@@ -60,6 +64,8 @@ class _SimSession(asyncio.Protocol):
         self._transport = None
         if self._task is not None:
             self._task.cancel()
+        for timer in self._extra_timers:
+            timer.cancel()
 
     def data_received(self, data: bytes) -> None:
         transport = self._transport
@@ -146,19 +152,62 @@ class _SimSession(asyncio.Protocol):
         elif fault.action == "error":
             reply = _reply(fault.error_code)
         server.sent(entry, reply)
-        # The extra line goes out with the reply's end: "right after the reply", as a
-        # peer that answers twice would send it.
-        pieces = [reply[i : i + 2] for i in range(0, len(reply), 2)] if fault.split else [reply]
-        for piece in pieces[:-1]:
-            transport.write(piece)
-            await asyncio.sleep(SPLIT_PAUSE)
-            if transport.is_closing():
-                return False
-        transport.write(pieces[-1] + EXTRA_LINE if fault.extra else pieces[-1])
+        # Without a gap the extra line goes out with the reply's end, in the same write.
+        tail = EXTRA_LINE if fault.extra and fault.extra_gap is None else b""
+        if not await self._write_reply(transport, reply, fault.split, tail):
+            return False
+        if fault.extra_gap == 0:
+            self._write_extra()  # straight after, but a write (a TCP segment) of its own
+        elif fault.extra_gap is not None:
+            self._write_extra_later(fault.extra_gap)
         if close:
             transport.close()
             return False
         return True
+
+    async def _write_reply(
+        self, transport: asyncio.Transport, reply: bytes, split: bool, tail: bytes
+    ) -> bool:
+        """Write one reply (in 2-byte pieces when split) with ``tail`` in its last write;
+        False if the connection closed on the way."""
+        pieces = [reply[i : i + 2] for i in range(0, len(reply), 2)] if split else [reply]
+        self._mid_reply = True
+        try:
+            for piece in pieces[:-1]:
+                transport.write(piece)
+                await asyncio.sleep(SPLIT_PAUSE)
+                if transport.is_closing():
+                    return False
+            transport.write(pieces[-1] + tail)
+        finally:
+            self._mid_reply = False
+        self._flush_held_extras()
+        return True
+
+    def _write_extra_later(self, gap: float) -> None:
+        """The extra line ``gap`` seconds from now, whatever this session does meanwhile."""
+
+        def fire() -> None:
+            self._extra_timers.discard(timer)
+            self._write_extra()
+
+        timer = asyncio.get_running_loop().call_later(gap, fire)
+        self._extra_timers.add(timer)
+
+    def _write_extra(self) -> None:
+        """One extra line as a write of its own; held while a split reply is half out."""
+        transport = self._transport
+        if transport is None or transport.is_closing():
+            return
+        if self._mid_reply:
+            self._held_extras += 1  # a line spliced into a reply would be another fault
+            return
+        transport.write(EXTRA_LINE)
+
+    def _flush_held_extras(self) -> None:
+        held, self._held_extras = self._held_extras, 0
+        for _ in range(held):
+            self._write_extra()
 
     def eof_received(self) -> bool | None:
         """A half-closed client still gets the answers to what it sent."""

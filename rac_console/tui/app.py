@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import asyncio
 import time
 from collections import deque
 from typing import ClassVar
@@ -18,13 +19,16 @@ from ..commands.outcome import Outcome
 from ..core import SIMULATOR_NOTICE, Action, ConsoleCore, Feedback, Message
 from ..core_thread import CoreThread
 from ..history import History
-from ..render import error_text, outcome_text
+from ..protocol.text import terminal_safe
+from ..render import error_text, notice_text, outcome_text
 from .command_line import CommandLine
 from .frame_log import FrameLog
 from .status_bar import StatusBar, status_text
 from .watch_table import WatchTable
 
 LOG_FLUSH_HZ = 10
+#: Candidates listed at most; the list says how many more there are.
+MAX_CANDIDATE_LINES = 7
 TABLE_REFRESH_HZ = 5
 
 
@@ -47,11 +51,13 @@ class RacConsoleApp(App[int]):
         self.watch_file = watch_file
         self._flushes: deque[tuple[float, int]] = deque(maxlen=LOG_FLUSH_HZ * 2)
         self._status = Text()
+        self._entered: asyncio.Queue[str] = asyncio.Queue()
         # Kept as attributes: timers and workers never query a DOM being torn down.
         self.status_bar = StatusBar(id="status")
         self.table = WatchTable(id="watch")
         self.frame_log = FrameLog(id="log")
         self.completions = Static(id="completions")
+        self.hint = Static(id="hint")
         self.results = RichLog(
             id="results", max_lines=500, wrap=True, markup=False, highlight=False
         )
@@ -68,6 +74,7 @@ class RacConsoleApp(App[int]):
         yield self.frame_log
         yield self.completions
         yield self.results
+        yield self.hint
         yield self.command_line
         yield Footer()
 
@@ -85,6 +92,7 @@ class RacConsoleApp(App[int]):
         self.refresh_table()
         self.command_line.focus()
         self.run_worker(self._first_connect(), group="connect", exit_on_error=False)
+        self.run_worker(self._run_entered_lines(), group="commands", exit_on_error=False)
 
     async def on_unmount(self) -> None:
         await self.core_thread.stop()
@@ -142,35 +150,64 @@ class RacConsoleApp(App[int]):
 
     # ------------------------------------------------------------- commands
 
-    @on(CommandLine.Submitted)
-    def submitted(self, event: CommandLine.Submitted) -> None:
-        line = event.value
-        self.command_line.value = ""
+    @on(CommandLine.Entered)
+    def entered(self, event: CommandLine.Entered) -> None:
+        """Queue the line: lines run one at a time, each once, in the order entered."""
         self.completions.remove_class("-visible")
-        if not line.strip():
+        if not event.line.strip():
             return
-        self.command_line.remember(line)
-        self.run_worker(self.run_line(line), group="commands", exit_on_error=False)
+        self.command_line.remember(event.line)
+        self._entered.put_nowait(event.line)
+
+    async def _run_entered_lines(self) -> None:
+        while True:
+            line = await self._entered.get()
+            try:
+                await self.run_line(line)
+            except Exception as exc:  # a bug must not end the session at the cell
+                self.show(Message(f"internal error: {exc!r}", "error"))
 
     @on(CommandLine.Completions)
     def list_completions(self, event: CommandLine.Completions) -> None:
-        width = max(len(c.text) for c in event.candidates)
+        candidates = event.candidates
+        shown = (
+            candidates
+            if len(candidates) <= MAX_CANDIDATE_LINES
+            else candidates[: MAX_CANDIDATE_LINES - 1]
+        )
+        width = max(len(c.text) for c in shown)
         text = Text()
-        for n, candidate in enumerate(event.candidates):
+        for n, candidate in enumerate(shown):
             if n:
                 text.append("\n")
             text.append(f"{candidate.text:<{width}}", style="bold")
             text.append(f"  {candidate.help}", style="dim")
+        if len(shown) < len(candidates):
+            more = len(candidates) - len(shown)
+            text.append(f"\n… and {more} more: type a letter or two to narrow", style="italic")
         self.completions.update(text)
         self.completions.add_class("-visible")
 
     @on(CommandLine.Changed)
-    def hide_completions(self) -> None:
+    def hide_completions(self, event: CommandLine.Changed) -> None:
         self.completions.remove_class("-visible")
+        if not event.value:
+            self.hint.remove_class("-visible")
+
+    @on(CommandLine.Hint)
+    def show_hint(self, event: CommandLine.Hint) -> None:
+        """The argument hint, on its own line while a history suggestion holds the grey text."""
+        if event.value != self.command_line.value:
+            return  # made for a line already changed
+        if event.text:
+            self.hint.update(Text.assemble(("needs: ", "dim"), (event.text, "italic")))
+            self.hint.add_class("-visible")
+        else:
+            self.hint.remove_class("-visible")
 
     async def run_line(self, line: str, echo: bool = True) -> None:
         if echo:
-            self.results.write(Text(f"› {line}", style="bold cyan"))
+            self.results.write(Text(f"› {terminal_safe(line)}", style="bold cyan"))
         for feedback in await self.core_thread.submit(self.core.handle_line(line)):
             self.show(feedback)
         self.refresh_table()
@@ -181,9 +218,9 @@ class RacConsoleApp(App[int]):
             if feedback.ok:
                 results.write(outcome_text(feedback))
             else:
-                results.write(Text(error_text(feedback), style="red"))
+                results.write(notice_text(error_text(feedback), error=True))
         elif isinstance(feedback, Message):
-            results.write(Text(feedback.text, style="red" if feedback.level == "error" else ""))
+            results.write(notice_text(feedback.text, error=feedback.level == "error"))
         elif isinstance(feedback, Action):
             if feedback.name == "clear":
                 self.action_clear_log()

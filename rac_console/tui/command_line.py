@@ -5,6 +5,7 @@ from __future__ import annotations
 from collections.abc import Callable, Iterable
 from typing import ClassVar
 
+from textual import events
 from textual.binding import Binding, BindingType
 from textual.message import Message
 from textual.suggester import Suggester
@@ -16,17 +17,24 @@ from ..history import History
 
 class HintSuggester(Suggester):
     """Grey text after the cursor: a history line that starts with what is typed
-    (Right accepts it), else what the command still needs (never inserted)."""
+    (Right accepts it), else what the command still needs (never inserted).
 
-    def __init__(self, history: History) -> None:
+    When a history line takes the place, the argument hint goes to ``show_hint``
+    so both stay legible.
+    """
+
+    def __init__(self, history: History, show_hint: Callable[[str, str], object]) -> None:
         super().__init__(use_cache=False, case_sensitive=True)
         self._history = history
+        self._show_hint = show_hint
 
     async def get_suggestion(self, value: str) -> str | None:
+        needs = hint(value)
         for entry in reversed(self._history.entries):
             if entry.startswith(value) and entry != value:
+                self._show_hint(value, needs)
                 return entry
-        needs = hint(value)
+        self._show_hint(value, "")
         return value + needs if needs else None
 
 
@@ -36,6 +44,21 @@ class CommandLine(Input):
         Binding("up", "history(-1)", "History back", show=False, id="history-back"),
         Binding("down", "history(1)", "History forward", show=False, id="history-forward"),
     ]
+
+    class Entered(Message):
+        """A line the user entered, taken out of the line the moment Enter was read."""
+
+        def __init__(self, line: str) -> None:
+            super().__init__()
+            self.line = line
+
+    class Hint(Message):
+        """What the command still needs, when a history suggestion holds the grey text."""
+
+        def __init__(self, value: str, text: str) -> None:
+            super().__init__()
+            self.value = value  # the line it was made for: a late one is ignored
+            self.text = text
 
     class Completions(Message):
         """Several candidates fit: the app lists them with their help."""
@@ -47,11 +70,36 @@ class CommandLine(Input):
     def __init__(
         self, history: History, seen: Callable[[], Iterable[tuple[str, int]]], **kwargs: object
     ) -> None:
-        super().__init__(suggester=HintSuggester(history), **kwargs)  # type: ignore[arg-type]
+        suggester = HintSuggester(history, lambda *hint: self.post_message(self.Hint(*hint)))
+        super().__init__(suggester=suggester, **kwargs)  # type: ignore[arg-type]
         self.history = history
         self._seen = seen
         self._position: int | None = None
         self._draft = ""
+
+    async def _on_key(self, event: events.Key) -> None:
+        """Run this line's own key bindings here, in key order.
+
+        Textual runs a binding only after the key has bubbled up to the app, so in a
+        burst of keys (a paste, a slow ssh link) the characters typed after Enter,
+        Backspace or Tab reach the line before those keys act: Enter then submitted a
+        line merged with the next one. Handled here, every key acts in the order typed.
+        """
+        if event.is_printable:
+            return  # Input inserts it, in order
+        for binding in self._bindings.key_to_bindings.get(event.key, ()):
+            event.stop()
+            event.prevent_default()
+            await self.run_action(binding.action)
+            return
+
+    async def action_submit(self) -> None:
+        """Take the line out now, so keys already on their way start a fresh one."""
+        line = self.value
+        self.value = ""
+        self._position = None
+        self._draft = ""
+        self.post_message(self.Entered(line))
 
     def action_cursor_right(self, select: bool = False) -> None:
         needs = hint(self.value)
@@ -93,5 +141,3 @@ class CommandLine(Input):
 
     def remember(self, line: str) -> None:
         self.history.append(line)
-        self._position = None
-        self._draft = ""

@@ -9,6 +9,7 @@ from textual.widgets import Log
 from ..client import Frame
 from ..core import LogEvent
 from ..frames import clock_text, frame_line
+from ..protocol.text import terminal_safe
 
 MAX_LINES = 5000
 MAX_PENDING = 50_000
@@ -38,7 +39,12 @@ class FrameLog(Log):
         shown = [e for e in events if not isinstance(e, Frame) or self.show_polls or not e.poll]
         lines = [_line(e) for e in shown[-MAX_LINES:]]
         if lines:
-            self.write_lines(lines)
+            # Log follows only when the view already sat at the end, and any layout
+            # change (a resize, the candidate list) moves the end away from the view:
+            # follow by this widget's own flag instead, until F4 freezes it.
+            self.write_lines(lines, scroll_end=False)
+            if self.auto_scroll:
+                self.scroll_end(animate=False, immediate=True, x_axis=False)
         return len(events)
 
 
@@ -47,4 +53,4 @@ def _line(event: LogEvent) -> str:
         return frame_line(event)
     import time
 
-    return f"{clock_text(time.time())} ── {event} ──"
+    return f"{clock_text(time.time())} ── {terminal_safe(event)} ──"

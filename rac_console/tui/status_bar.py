@@ -8,6 +8,10 @@ from rich.text import Text
 from textual.widgets import Static
 
 from ..core import ConsoleCore
+from ..protocol.text import terminal_safe
+
+#: A reply is shown as awaited once it is this late (seconds): quicker ones would flicker.
+WAITING_SHOWN_AFTER = 0.2
 
 
 def status_text(core: ConsoleCore, frames_per_second: float) -> Text:
@@ -18,7 +22,7 @@ def status_text(core: ConsoleCore, frames_per_second: float) -> Text:
         style = "bold black on yellow"
     else:
         style = "bold white on red"
-    text.append(f" {core.target} ", style=style)
+    text.append(f" {terminal_safe(core.target)} ", style=style)
     text.append(" ")
     state = core.connection
     if state == "lost" and core.retry_at is not None:
@@ -30,12 +34,24 @@ def status_text(core: ConsoleCore, frames_per_second: float) -> Text:
         text.append("connecting…", style="yellow")
     else:
         text.append("idle" if core.session is not None else "disconnected", style="dim")
-    rtt = core.session.last_rtt if core.session is not None else None
+    connected = state == "connected" and core.session is not None
+    rtt = core.session.last_rtt if connected and core.session is not None else None
     text.append(f" · rtt {rtt * 1000:.2f} ms" if rtt is not None else " · rtt –")
+    sent_at = core.session.waiting_since if connected and core.session is not None else None
+    if sent_at is not None:
+        waited = time.perf_counter() - sent_at
+        if waited >= WAITING_SHOWN_AFTER:
+            text.append(
+                f" · waiting for a reply {waited:.1f} s of {core.timeout:g} s", style="bold yellow"
+            )
     if core.paused:
         text.append("  POLLING PAUSED", style="bold yellow")
-    elif core.watch.rows and core.cycle_seconds is not None and core.polls_per_second:
-        text.append(f" · cycle {core.cycle_seconds * 1000:.0f} ms/{core.interval:g} s")
+    elif connected and core.watch.rows and core.cycle_seconds is not None and core.polls_per_second:
+        period = core.period
+        if period == 0:
+            text.append(f" · cycle {core.cycle_seconds * 1000:.0f} ms back to back")
+        else:
+            text.append(f" · cycle {core.cycle_seconds * 1000:.0f} ms/{period:g} s")
         if not core.interval_met:
             text.append(" NOT MET", style="bold yellow")
         text.append(f" · {core.polls_per_second:.0f} polls/s")

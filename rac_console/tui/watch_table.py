@@ -6,7 +6,7 @@ from rich.text import Text
 from textual.widgets import DataTable
 
 from ..commands.language import VarRef
-from ..protocol.text import printable
+from ..protocol.text import terminal_safe
 from ..watch import WatchRow, age_text
 from ..watch_cells import status_cell, type_text, value_cell
 
@@ -45,7 +45,7 @@ class WatchTable(DataTable):
             key = str(var)
             cells = (
                 key,
-                Text(printable(row.label), no_wrap=True),  # never read as markup
+                Text(terminal_safe(row.label), no_wrap=True),  # never read as markup
                 status_cell(row),
                 age_text(row, now),
                 value_cell(row, now),

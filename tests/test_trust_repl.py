@@ -1,0 +1,119 @@
+"""The REPL runs typed lines exactly as typed, and prints controller text escaped.
+
+prompt-toolkit's pipe input against the simulator or a hostile server written here.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import socket
+import threading
+from collections.abc import Iterator
+from pathlib import Path
+
+import pytest
+from test_repl import Driver
+
+TERMINAL_CONTROLS = ("\x1b", "\x07", "\x08", "\x9b")
+
+
+def sent(driver: Driver) -> list[bytes]:
+    return [f.data for f in driver.frames if f.direction == "tx"]
+
+
+async def test_a_burst_of_lines_runs_each_once_in_order(tmp_path: Path) -> None:
+    driver = Driver(tmp_path)
+
+    async def steps(d: Driver) -> None:
+        d.type("put I 10 1\r5\rget I 1\rget I 2\rget I 3\r")
+        await d.until(lambda out: "I3 = " in out, "the last line")
+
+    out = await driver.run(steps)
+    assert sent(driver) == [
+        b"PUT:RC8:10:I:3,1\r",
+        b"GET:RC8:1:I:\r",
+        b"GET:RC8:2:I:\r",
+        b"GET:RC8:3:I:\r",
+    ]
+    assert "unknown command '5'" in out
+
+
+@pytest.fixture
+def hostile_port() -> Iterator[int]:
+    """Answers every line with a string full of terminal controls and emoji codes."""
+    server = socket.create_server(("127.0.0.1", 0))
+    stop = threading.Event()
+
+    def serve(conn: socket.socket) -> None:
+        with conn:
+            while not stop.is_set():
+                try:
+                    data = conn.recv(4096)
+                except OSError:
+                    return
+                if not data:
+                    return
+                for line in data.split(b"\r")[:-1]:
+                    if b":I:" in line:
+                        reply = b"\x1b]0;garbled\x07\r"
+                    else:
+                        reply = b"0,8,\x1b]0;pwned\x07 \x1b[2J bell\x07 bs\x08 :V: :smile:\r"
+                    conn.sendall(reply)
+
+    def accept() -> None:
+        while not stop.is_set():
+            try:
+                conn, _ = server.accept()
+            except OSError:
+                return
+            threading.Thread(target=serve, args=(conn,), daemon=True).start()
+
+    threading.Thread(target=accept, daemon=True).start()
+    yield server.getsockname()[1]
+    stop.set()
+    server.close()
+
+
+async def test_controller_text_is_printed_escaped(tmp_path: Path, hostile_port: int) -> None:
+    driver = Driver(tmp_path, "127.0.0.1", port=hostile_port)
+
+    async def steps(d: Driver) -> None:
+        d.type("get S 1\r")
+        await d.until(lambda out: "S1 = " in out, "the get")
+        d.type("send GET:RC8:2:S:\r")
+        await d.until(lambda out: out.count("pwned") >= 2, "the raw reply")
+        d.type("get I 3\r")
+        await d.until(lambda out: "bad reply" in out, "the garbled reply")
+        d.type("frames on\r")
+        d.type("send GET:RC8:4:S:\r")
+        await d.until(lambda out: out.count("pwned") >= 5, "the frames")
+
+    out = await driver.run(steps)
+    for control in TERMINAL_CONTROLS:
+        assert control not in out
+    assert "\\x1b]0;pwned\\x07" in out
+    assert "bell\\x07 bs\\x08" in out
+    assert ":V: :smile:" in out
+
+
+async def test_argument_hint_stays_legible_beside_a_history_suggestion(tmp_path: Path) -> None:
+    driver = Driver(tmp_path)
+    driver.history.append("put P 10 1 2 3 4 5 6 -1")
+
+    def toolbar_text() -> str:
+        return "".join(text for _, text, *_ in driver.repl._toolbar())
+
+    async def steps(d: Driver) -> None:
+        d.type("put P 10 ")
+        deadline = asyncio.get_running_loop().time() + 5
+        while d.repl.prompt.default_buffer.suggestion is None:
+            assert asyncio.get_running_loop().time() < deadline, "no history suggestion"
+            await asyncio.sleep(0.02)
+        assert "needs: X Y Z Rx Ry Rz Fig" in toolbar_text()
+        d.type("\x15")  # Ctrl-U: an empty line has no hint
+        while d.repl.prompt.default_buffer.text:
+            assert asyncio.get_running_loop().time() < deadline, "the line was not cleared"
+            await asyncio.sleep(0.02)
+        assert "needs:" not in toolbar_text()
+
+    await driver.run(steps)
