@@ -51,6 +51,20 @@ PRIORITY_COMMAND = 0
 PRIORITY_POLL = 1
 _POLL = getattr(select, "poll", None)  # POSIX; select.select serves where it is missing
 
+#: A request made this soon (seconds) after a reply first gives up the CPU once.
+YIELD_WINDOW = 0.001
+
+
+def _yield_cpu() -> None:
+    """Let another runnable process have the CPU: ``sched_yield`` where there is one
+    (POSIX), else ``sleep(0)``, which yields the rest of the time slice on Windows."""
+    sched_yield = getattr(os, "sched_yield", None)
+    if sched_yield is not None:
+        sched_yield()
+    else:
+        time.sleep(0)
+
+
 Direction = Literal["tx", "rx"]
 State = Literal["closed", "connecting", "connected"]
 
@@ -185,6 +199,7 @@ class RacSession:
         self._watchdog: asyncio.TimerHandle | None = None
         self._after_cr = False
         self._polling = False
+        self._replied_at = 0.0  # perf_counter() of the last reply taken
         self._sock: Any = None  # this connection's socket, asked before each request
         self._poll: Any = None
         self._fd = -1
@@ -265,6 +280,10 @@ class RacSession:
         self, text: str, data: bytes, check: Callable[[Response], str | None] | None
     ) -> Reply:
         transport = await self._connected_transport()
+        if time.perf_counter() - self._replied_at < YIELD_WINDOW:
+            # A peer on this machine may be one write short of a stray line: let it run
+            # before asking the socket, or the stray would leave after this request.
+            _yield_cpu()
         if self._loop_reads_ahead or self._peer_spoke():
             transport = await self._after_stray(transport)
         loop = asyncio.get_running_loop()
@@ -460,6 +479,7 @@ class RacSession:
                 if self._frame_observers:
                     self._publish(Frame(time.time(), "rx", frame + b"\r", rtt, poll=self._polling))
                 pending.set_result((frame, rtt))  # type: ignore[union-attr]
+                self._replied_at = now
                 waiting = False
             else:
                 self._publish(Frame(time.time(), "rx", frame + b"\r", unsolicited=True))

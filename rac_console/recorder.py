@@ -19,7 +19,7 @@ def open_private(path: str, mode: str = "a") -> TextIO:
     """Open a text file to append (``"a"``) or rewrite (``"w"``), created owner-only."""
     flags = os.O_WRONLY | os.O_CREAT | (os.O_TRUNC if mode == "w" else os.O_APPEND)
     fd = os.open(path, flags, 0o600)
-    return os.fdopen(fd, mode, encoding="utf-8")
+    return os.fdopen(fd, mode, encoding="utf-8")  # type: ignore[return-value]
 
 
 class FrameRecorder:

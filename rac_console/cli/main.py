@@ -376,7 +376,7 @@ def use_uvloop() -> bool:
     if os.environ.get("RAC_CONSOLE_NO_UVLOOP"):
         return False
     try:
-        import uvloop
+        import uvloop  # type: ignore[import-not-found, unused-ignore]
     except ImportError:
         return False
     import asyncio

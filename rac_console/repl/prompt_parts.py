@@ -6,6 +6,7 @@ from collections.abc import Callable, Iterable, Iterator
 
 from prompt_toolkit.completion import CompleteEvent, Completer, Completion
 from prompt_toolkit.document import Document
+from prompt_toolkit.formatted_text import StyleAndTextTuples
 from prompt_toolkit.history import History as PromptHistory
 from prompt_toolkit.layout.processors import (
     Processor,
@@ -57,10 +58,10 @@ class RacCompleter(Completer):
 class RacLexer(Lexer):
     """Colours each token: command, type, index, value, raw RAC string."""
 
-    def lex_document(self, document: Document) -> Callable[[int], list[tuple[str, str]]]:
+    def lex_document(self, document: Document) -> Callable[[int], StyleAndTextTuples]:
         lines = document.lines
 
-        def line(number: int) -> list[tuple[str, str]]:
+        def line(number: int) -> StyleAndTextTuples:
             if number >= len(lines):
                 return []
             return [

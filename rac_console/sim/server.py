@@ -54,7 +54,7 @@ class _SimSession(asyncio.Protocol):
         limit = server.plan.settings.max_sessions
         if limit and len(server.sessions) >= limit:
             server.refused += 1
-            transport.abort()
+            transport.abort()  # type: ignore[attr-defined]
             return
         self._transport = transport  # type: ignore[assignment]
         server.sessions.add(self)

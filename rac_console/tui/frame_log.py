@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import time
 from collections import deque
 
 from textual.widgets import Log
@@ -21,13 +22,22 @@ class FrameLog(Log):
 
     def __init__(self, **kwargs: object) -> None:
         super().__init__(max_lines=MAX_LINES, auto_scroll=True, **kwargs)  # type: ignore[arg-type]
-        self._pending: deque[LogEvent] = deque(maxlen=MAX_PENDING)
+        self._pending: deque[Frame | tuple[float, str]] = deque(maxlen=MAX_PENDING)
         self.show_polls = True
         self.frames_seen = 0
 
+    def on_resize(self) -> None:
+        """A resize moves the end away from the view: bring it back while following."""
+        if self.auto_scroll:
+            self.call_after_refresh(self.scroll_end, animate=False, x_axis=False)
+
     def add(self, event: LogEvent) -> None:
-        """Called for every frame; cheap, so the session never waits on the screen."""
-        self._pending.append(event)
+        """Called for every frame; cheap, so the session never waits on the screen.
+
+        A note is stamped now, not when it is written, so it sits in time order
+        among the frames around it.
+        """
+        self._pending.append(event if isinstance(event, Frame) else (time.time(), event))
 
     def flush(self) -> int:
         """Write what arrived since the last flush; returns the number of events."""
@@ -48,9 +58,8 @@ class FrameLog(Log):
         return len(events)
 
 
-def _line(event: LogEvent) -> str:
+def _line(event: Frame | tuple[float, str]) -> str:
     if isinstance(event, Frame):
         return frame_line(event)
-    import time
-
-    return f"{clock_text(time.time())} ── {terminal_safe(event)} ──"
+    stamp, text = event
+    return f"{clock_text(stamp)} ── {terminal_safe(text)} ──"
