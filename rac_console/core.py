@@ -13,6 +13,7 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass
 
+from .backoff import Backoff
 from .client import (
     PRIORITY_POLL,
     BadReply,
@@ -49,7 +50,6 @@ from .watch import WatchList, WatchRow
 
 DEFAULT_INTERVAL = 0.5
 SIMULATOR_NOTICE = "no -H given: talking to the built-in RC8 simulator, not a controller"
-MAX_BACKOFF = 5.0
 
 
 @dataclass(frozen=True)
@@ -68,8 +68,15 @@ class Action:
     on: bool = True
 
 
+@dataclass(frozen=True)
+class Alert:
+    """Something to tell the user at once, whatever they are doing: a recording stopped."""
+
+    text: str
+
+
 Feedback = Outcome | Message | Action
-LogEvent = Frame | str  # a frame, or a note such as a connection gap
+LogEvent = Frame | str | Alert  # a frame, a note such as a connection gap, or an alert
 LogListener = Callable[[LogEvent], None]
 
 
@@ -98,10 +105,11 @@ class ConsoleCore:
         self.polls_per_second: float | None = None
         self.polls = 0
         self._listeners: list[LogListener] = []
-        self._recorder = FrameRecorder(record) if record else None
+        self._recorder = FrameRecorder(record, self._alert) if record else None
         self._wake = asyncio.Event()
         self._poll_task: asyncio.Task[None] | None = None
         self._lost = False
+        self.backoff = Backoff()
 
     # ------------------------------------------------------------ lifecycle
 
@@ -165,11 +173,21 @@ class ConsoleCore:
         for listener in self._listeners:
             listener(text)
 
+    def _alert(self, text: str) -> None:
+        for listener in self._listeners:
+            listener(Alert(text))
+
+    @property
+    def record_failure(self) -> str | None:
+        """Why ``--record`` stopped, once it has."""
+        return self._recorder.failure if self._recorder is not None else None
+
     def _on_state(self, state: State) -> None:
         self.connection = state
         if state != "connected":
             self._forget_figures()
         if state == "connected":
+            self.backoff.connected()
             self.retry_at = None
             if self._lost:
                 self._lost = False
@@ -318,7 +336,6 @@ class ConsoleCore:
     # -------------------------------------------------------------- polling
 
     async def _poll_forever(self) -> None:
-        backoff = 0.5
         while True:
             if self.session is None or self.paused or not self.watch.rows:
                 await self._wake.wait()
@@ -332,16 +349,12 @@ class ConsoleCore:
                     self._lost = True
                     self.watch.mark_all("DISCONNECTED")
                     self.note(f"connection lost: {exc}")
-                self.connection = "lost"
-                self.retry_at = time.monotonic() + backoff
-                await self._sleep(backoff)
-                backoff = min(backoff * 2, MAX_BACKOFF)
+                await self._wait_to_retry("lost")
                 continue
             except Exception as exc:  # a bug must not silently stop the live table
                 self.note(f"polling error: {exc!r}")
                 await self._sleep(1.0)
                 continue
-            backoff = 0.5
             elapsed = time.perf_counter() - started
             if count:
                 self.cycle_seconds = elapsed
@@ -349,6 +362,13 @@ class ConsoleCore:
             period = time.perf_counter() - started
             if count and period > 0:
                 self.polls_per_second = count / period
+
+    async def _wait_to_retry(self, state: str) -> None:
+        """Back off before the next cycle; the status line counts it down."""
+        delay = self.backoff.next_delay()
+        self.connection = state
+        self.retry_at = time.monotonic() + delay
+        await self._sleep(delay)
 
     async def _sleep(self, seconds: float) -> None:
         """Wait, but wake early when the watch list, interval or target changes
@@ -384,8 +404,21 @@ class ConsoleCore:
             self.mark_failure(exc)
             status = {RequestTimeout: "TIMEOUT", BadReply: "BAD REPLY"}.get(type(exc))
             row.fail(status or "DISCONNECTED", time.monotonic())
+            self.polls += 1
+            self.watch.dirty.add(var)
+            dropped = isinstance(exc, Disconnected | BadReply) and session.state != "connected"
+            if dropped and self.backoff.dropped_early():
+                # Back off here and go on with the next row: cutting the cycle short
+                # would leave the rows after this one never polled.
+                self.note(
+                    f"the connection was lost before it answered anything: waiting "
+                    f"{self.backoff.delay:g} s before the next try"
+                )
+                await self._wait_to_retry("dropped")
+            return
         else:
             response = reply.response
+            self.backoff.good()
             if response.ok and response.variant is not None:
                 row.update(response.variant, time.monotonic())
             else:

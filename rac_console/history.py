@@ -3,11 +3,17 @@
 The file holds one command per line (commands never contain a newline), oldest
 first. Consecutive duplicates are not stored; the file is trimmed to the newest
 ``limit`` entries when it grows past twice that.
+
+Several consoles may share the file: each appends, and a trim keeps the newest
+lines *of the file* (not of one console's memory), under a lock that appends take
+too, so no console's entries are lost and none is written to a file being replaced.
 """
 
 from __future__ import annotations
 
+import contextlib
 import os
+from collections.abc import Iterator
 from pathlib import Path
 
 from .recorder import open_private
@@ -26,7 +32,10 @@ class History:
         self.path = Path(path)
         self.limit = limit
         self.entries: list[str] = self._read()[-limit:]
-        self._lines_in_file = len(self.entries)
+        self._appends = 0
+        with contextlib.suppress(OSError):  # an older file may be readable by others
+            if self.path.exists():
+                self.path.chmod(0o600)
 
     def _read(self) -> list[str]:
         try:
@@ -44,18 +53,57 @@ class History:
         del self.entries[: -self.limit]
         try:
             self.path.parent.mkdir(parents=True, exist_ok=True)
-            if self._lines_in_file >= 2 * self.limit:
-                self._rewrite()
-            else:
+            with _locked(self.path):
                 with open_private(str(self.path)) as handle:
                     handle.write(line + "\n")
-                self._lines_in_file += 1
+                self._appends += 1
+                if self._appends >= self.limit:  # now and then, see whether to trim
+                    self._appends = 0
+                    self._trim()
         except OSError:
             pass  # history is a convenience: a read-only home must not stop the console
 
-    def _rewrite(self) -> None:
-        temporary = self.path.with_suffix(".tmp")
+    def _trim(self) -> None:
+        """Keep the newest ``limit`` lines of the file as it is now (the lock is held)."""
+        lines = self._read()
+        if len(lines) < 2 * self.limit:
+            return
+        temporary = self.path.with_name(self.path.name + ".tmp")
         with open_private(str(temporary), "w") as handle:
-            handle.write("".join(entry + "\n" for entry in self.entries))
+            handle.write("".join(entry + "\n" for entry in lines[-self.limit :]))
         os.replace(temporary, self.path)
-        self._lines_in_file = len(self.entries)
+
+
+@contextlib.contextmanager
+def _locked(path: Path) -> Iterator[None]:
+    """An exclusive lock beside the history file, shared by every console using it:
+    ``flock`` on POSIX, ``msvcrt.locking`` on Windows."""
+    fd = os.open(str(path.with_name(path.name + ".lock")), os.O_RDWR | os.O_CREAT, 0o600)
+    try:
+        _lock(fd)
+        try:
+            yield
+        finally:
+            _unlock(fd)
+    finally:
+        os.close(fd)
+
+
+try:
+    import fcntl
+
+    def _lock(fd: int) -> None:
+        fcntl.flock(fd, fcntl.LOCK_EX)
+
+    def _unlock(fd: int) -> None:
+        fcntl.flock(fd, fcntl.LOCK_UN)
+
+except ImportError:  # Windows
+    import msvcrt
+
+    def _lock(fd: int) -> None:
+        msvcrt.locking(fd, msvcrt.LK_LOCK, 1)  # type: ignore[attr-defined]
+
+    def _unlock(fd: int) -> None:
+        os.lseek(fd, 0, os.SEEK_SET)
+        msvcrt.locking(fd, msvcrt.LK_UNLCK, 1)  # type: ignore[attr-defined]

@@ -7,8 +7,11 @@ hold values from a production cell.
 
 from __future__ import annotations
 
+import contextlib
+import errno
 import json
 import os
+from collections.abc import Callable
 from typing import TextIO
 
 from .client import Frame
@@ -23,17 +26,30 @@ def open_private(path: str, mode: str = "a") -> TextIO:
 
 
 class FrameRecorder:
-    """A frame observer appending JSON lines: ``t``, ``dir``, ``text``, ``rtt_ms``."""
+    """A frame observer appending JSON lines: ``t``, ``dir``, ``text``, ``rtt_ms``.
 
-    def __init__(self, path: str) -> None:
+    A write that fails (a full disk, a quota, a file-size limit) stops the recording
+    for good: the failure is kept in :attr:`failure` and told once to ``on_failure``;
+    every later frame is skipped, so the work on screen goes on untouched. Each line is
+    one unbuffered write, so the file holds only whole lines up to the failure.
+    """
+
+    def __init__(self, path: str, on_failure: Callable[[str], None] | None = None) -> None:
         """Raises InputError when the file cannot be opened for appending."""
         self.path = path
+        self.frames = 0
+        self.failure: str | None = None
+        self._on_failure = on_failure
         try:
-            self._file = open_private(path)
+            self._fd: int | None = os.open(
+                path, os.O_WRONLY | os.O_CREAT | os.O_APPEND | getattr(os, "O_BINARY", 0), 0o600
+            )
         except OSError as exc:
             raise InputError(f"cannot write the record file {path}: {exc.strerror}") from None
 
     def __call__(self, frame: Frame) -> None:
+        if self._fd is None:
+            return
         data = frame.data[:-1] if frame.data.endswith(b"\r") else frame.data
         record: dict[str, object] = {
             "t": round(frame.time, 6),
@@ -46,8 +62,26 @@ class FrameRecorder:
             record["partial"] = True
         if frame.unsolicited:
             record["unsolicited"] = True
-        self._file.write(json.dumps(record) + "\n")
-        self._file.flush()
+        line = (json.dumps(record) + "\n").encode("ascii")
+        try:
+            written = os.write(self._fd, line)
+            if written != len(line):  # a short write: the disk filled up mid-line
+                os.ftruncate(self._fd, os.lseek(self._fd, 0, os.SEEK_END) - written)
+                raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+        except OSError as exc:
+            self._fail(exc)
+            return
+        self.frames += 1
+
+    def _fail(self, exc: OSError) -> None:
+        reason = exc.strerror or str(exc)
+        self.failure = f"recording stopped: {reason} after {self.frames} frames ({self.path})"
+        self.close()
+        if self._on_failure is not None:
+            self._on_failure(self.failure)
 
     def close(self) -> None:
-        self._file.close()
+        if self._fd is not None:
+            fd, self._fd = self._fd, None
+            with contextlib.suppress(OSError):
+                os.close(fd)

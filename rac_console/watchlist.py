@@ -9,6 +9,11 @@ from pathlib import Path
 from .commands.language import VarRef
 from .protocol import InputError, kind_of, parse_index
 
+#: A watch list larger than this is not a cell's list: refused before it is parsed.
+MAX_FILE_BYTES = 1024 * 1024
+#: Rows a watch list may hold (a console polls every row over one session).
+MAX_ROWS = 4096
+
 
 def _toml_string(text: str) -> str:
     escaped = text.replace("\\", "\\\\").replace('"', '\\"')
@@ -31,11 +36,15 @@ def loads(text: str) -> list[tuple[VarRef, str]]:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise InputError(f"not a TOML watch list: {exc}") from None
+    except RecursionError:
+        raise InputError("not a watch list: its TOML is nested too deeply") from None
     entries = data.get("watch", [])
     if isinstance(entries, dict):
         entries = [entries]
     if not isinstance(entries, list):
         raise InputError("a watch list holds [[watch]] tables with type, index and label")
+    if len(entries) > MAX_ROWS:
+        raise InputError(f"a watch list holds at most {MAX_ROWS} rows; this one has more than that")
     rows = []
     for n, entry in enumerate(entries, 1):
         if not isinstance(entry, dict):
@@ -59,8 +68,14 @@ def save(path: str | Path, rows: Iterable[tuple[VarRef, str]]) -> None:
 
 
 def load(path: str | Path) -> list[tuple[VarRef, str]]:
+    """The rows of a watch list file; InputError, one line, for anything wrong with it."""
     try:
-        text = Path(path).expanduser().read_text(encoding="utf-8")
+        file = Path(path).expanduser()
+        if file.stat().st_size > MAX_FILE_BYTES:
+            raise InputError(
+                f"{path} is larger than {MAX_FILE_BYTES // 1024} KiB: not a watch list"
+            )
+        text = file.read_text(encoding="utf-8")
     except (OSError, RuntimeError) as exc:
         raise InputError(f"cannot read {path}: {getattr(exc, 'strerror', None) or exc}") from None
     except UnicodeDecodeError:

@@ -25,8 +25,11 @@ def make_app(
     interval: float = 0.05,
     timeout: float = 1.0,
     watch_file: str | None = None,
+    record: str | None = None,
 ) -> RacConsoleApp:
-    core = ConsoleCore(host, port, timeout=timeout, read_only=read_only, interval=interval)
+    core = ConsoleCore(
+        host, port, timeout=timeout, read_only=read_only, interval=interval, record=record
+    )
     return RacConsoleApp(core, History(tmp_path / "history"), watch_file)
 
 

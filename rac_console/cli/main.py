@@ -25,7 +25,8 @@ Options may also come after the command, even after a value. A value that starts
 with - and is not a number goes after --, where every word is the value:
   rac-console put S 10 -- -text
 Exit status: 0 success, 1 the controller answered an error, 2 refused before
-sending (bad input, read-only), 3 connection failure, timeout or bad reply."""
+sending (bad input, read-only), 3 connection failure, timeout or bad reply,
+4 a local file failed (--record on a full disk: said once, the work went on)."""
 
 
 def _seconds(allow_zero: bool) -> Callable[[str], float]:
@@ -419,6 +420,7 @@ def _interactive(args: argparse.Namespace) -> int:
     from ..core import ConsoleCore
     from ..history import History, default_history_path
     from ..protocol import InputError
+    from ..protocol.text import terminal_safe
 
     try:
         core = ConsoleCore(
@@ -430,8 +432,16 @@ def _interactive(args: argparse.Namespace) -> int:
             interval=args.interval,
         )
     except InputError as exc:
-        print(f"rac-console: {exc}", file=sys.stderr)
+        print(f"rac-console: {terminal_safe(str(exc))}", file=sys.stderr)
         return 2
+    if args.command is None and args.watch:
+        from ..watchlist import load
+
+        try:
+            load(args.watch)  # a broken list is one line now, not a console that starts half-set
+        except InputError as exc:
+            print(f"rac-console: {terminal_safe(str(exc))}", file=sys.stderr)
+            return 2
     history = History(args.history or default_history_path())
     if args.command == "repl":
         from ..repl.repl import run_repl

@@ -25,6 +25,16 @@ class Output:
         self.as_json = as_json
         self.out = make_console()
         self.err = make_console(stderr=True)
+        self.local_failed = False
+
+    def local_failure(self, message: str) -> None:
+        """A local file failed (``--record`` on a full disk): said once, as it happens;
+        the work goes on, and the exit status says so at the end."""
+        print_error(self.err, message)
+        self.local_failed = True
+
+    def status(self, status: ExitStatus) -> ExitStatus:
+        return worst([status, ExitStatus.LOCAL_IO]) if self.local_failed else status
 
     def show(
         self, outcome: Outcome, extra: dict[str, object] | None = None, prefix: str = ""
@@ -56,12 +66,12 @@ async def one_command(args: argparse.Namespace) -> ExitStatus:
         if args.words_problem is not None:
             raise InputError(args.words_problem)
         command = exchange_from_words(args.command, args.words)
-        async with open_session(args) as session:
+        async with open_session(args, output.local_failure) as session:
             outcome = await execute(session, command, read_only=args.read_only, line=line)
     except InputError as exc:
         outcome = refused(line, str(exc))
     output.show(outcome)
-    return outcome.status
+    return output.status(outcome.status)
 
 
 def _script_lines(source: str) -> Iterator[str]:
@@ -85,7 +95,7 @@ async def run_script(args: argparse.Namespace) -> ExitStatus:
         print_error(output.err, f"cannot read {args.file}: {exc.strerror}")
         return ExitStatus.REFUSED
     try:
-        async with open_session(args) as session:
+        async with open_session(args, output.local_failure) as session:
             for number, raw_line in enumerate(itertools.chain([first] if first else [], lines), 1):
                 line = raw_line.rstrip("\r\n")
                 outcome = await _run_line(session, line, args.read_only)
@@ -95,7 +105,7 @@ async def run_script(args: argparse.Namespace) -> ExitStatus:
     except InputError as exc:
         print_error(output.err, str(exc))
         return ExitStatus.REFUSED
-    return worst(statuses)
+    return output.status(worst(statuses))
 
 
 async def _run_line(session: RacSession, line: str, read_only: bool) -> Outcome | None:
@@ -120,7 +130,7 @@ async def latency(args: argparse.Namespace) -> ExitStatus:
     try:
         command = parse_command(f"latency {max(1, int(args.count))} {args.var}")
         assert isinstance(command, Latency)
-        async with open_session(args) as session:
+        async with open_session(args, output.local_failure) as session:
             summary = await measure_latency(
                 session, command.var, command.count, args.latency_interval
             )
@@ -134,4 +144,4 @@ async def latency(args: argparse.Namespace) -> ExitStatus:
         sys.stdout.write(json.dumps(summary.to_json()) + "\n")
     else:
         output.out.print(notice_text(summary.text(f"GET {command.var}")))
-    return ExitStatus.OK if summary.count else ExitStatus.TRANSPORT
+    return output.status(ExitStatus.OK if summary.count else ExitStatus.TRANSPORT)

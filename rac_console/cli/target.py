@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 import sys
-from collections.abc import AsyncIterator
+from collections.abc import AsyncIterator, Callable
 from contextlib import AsyncExitStack, asynccontextmanager
 
 from ..client import RacSession
@@ -15,9 +15,10 @@ from ..sim.server import SimulatorServer
 
 @asynccontextmanager
 async def open_session(
-    args: argparse.Namespace,
+    args: argparse.Namespace, on_record_failure: Callable[[str], None] | None = None
 ) -> AsyncIterator[RacSession]:
-    """A session to ``args.host``, or to an in-process simulator when no host was given."""
+    """A session to ``args.host``, or to an in-process simulator when no host was given;
+    with ``--record``, a recorder that tells ``on_record_failure`` when it stops."""
     async with AsyncExitStack() as stack:
         if args.host:
             session = RacSession(args.host, args.port, timeout=args.timeout)
@@ -26,7 +27,7 @@ async def open_session(
             print(f"rac-console: {SIMULATOR_NOTICE} (at {sim.host}:{sim.port})", file=sys.stderr)
             session = RacSession(sim.host, sim.port, timeout=args.timeout)
         if args.record:
-            recorder = FrameRecorder(args.record)
+            recorder = FrameRecorder(args.record, on_record_failure)
             stack.callback(recorder.close)
             session.add_frame_observer(recorder)
         stack.push_async_callback(session.close)

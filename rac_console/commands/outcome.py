@@ -19,6 +19,7 @@ class ExitStatus(IntEnum):
     CONTROLLER_ERROR = 1  # the controller answered an error HRESULT
     REFUSED = 2  # refused before anything was sent
     TRANSPORT = 3  # no connection, timeout, or a reply that cannot be parsed
+    LOCAL_IO = 4  # a local file failed (--record on a full disk); the work itself went on
 
 
 @dataclass(frozen=True)

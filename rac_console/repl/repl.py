@@ -21,7 +21,7 @@ from ..client import Frame
 from ..commands.completion import hint
 from ..commands.language import Watch, parse_command
 from ..commands.outcome import ExitStatus, Outcome
-from ..core import SIMULATOR_NOTICE, Action, ConsoleCore, LogEvent, Message
+from ..core import SIMULATOR_NOTICE, Action, Alert, ConsoleCore, LogEvent, Message
 from ..frames import frame_line
 from ..history import History
 from ..protocol import InputError
@@ -167,8 +167,11 @@ class Repl:
             self.console.print(notice_text(error_text(outcome), error=True), soft_wrap=True)
 
     def _echo(self, event: LogEvent) -> None:
-        """``frames on``: every frame, dimmed, as it crosses the wire (not during a watch)."""
-        if self.frames and isinstance(event, Frame) and not event.poll:
+        """``frames on``: every frame, dimmed, as it crosses the wire (not during a watch);
+        an alert (a recording stopped) always."""
+        if isinstance(event, Alert):
+            self.console.print(notice_text(event.text, error=True))
+        elif self.frames and isinstance(event, Frame) and not event.poll:
             self.console.print(Text(frame_line(event), style="dim"), soft_wrap=True)
 
     # ------------------------------------------------------------- watch

@@ -16,7 +16,7 @@ from textual.worker import Worker, WorkerState
 
 from .. import __version__
 from ..commands.outcome import Outcome
-from ..core import SIMULATOR_NOTICE, Action, ConsoleCore, Feedback, Message
+from ..core import SIMULATOR_NOTICE, Action, Alert, ConsoleCore, Feedback, LogEvent, Message
 from ..core_thread import CoreThread
 from ..history import History
 from ..protocol.text import terminal_safe
@@ -82,6 +82,13 @@ class RacConsoleApp(App[int]):
         self.table.border_title = "Watch"
         self.frame_log.border_title = "Frames (→ sent, ← received)"
         self.core.add_log_listener(self.frame_log.add)
+        ui_loop = asyncio.get_running_loop()
+
+        def alert(event: LogEvent) -> None:  # on the session's thread: hand it to ours
+            if isinstance(event, Alert):
+                ui_loop.call_soon_threadsafe(self.show, Message(event.text, "error"))
+
+        self.core.add_log_listener(alert)
         await self.core_thread.start()
         self.sub_title = self.core.target
         self._welcome()

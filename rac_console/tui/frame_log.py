@@ -8,7 +8,7 @@ from collections import deque
 from textual.widgets import Log
 
 from ..client import Frame
-from ..core import LogEvent
+from ..core import Alert, LogEvent
 from ..frames import clock_text, frame_line
 from ..protocol.text import terminal_safe
 
@@ -37,7 +37,10 @@ class FrameLog(Log):
         A note is stamped now, not when it is written, so it sits in time order
         among the frames around it.
         """
-        self._pending.append(event if isinstance(event, Frame) else (time.time(), event))
+        if isinstance(event, Frame):
+            self._pending.append(event)
+        else:
+            self._pending.append((time.time(), event.text if isinstance(event, Alert) else event))
 
     def flush(self) -> int:
         """Write what arrived since the last flush; returns the number of events."""

@@ -25,9 +25,10 @@ def status_text(core: ConsoleCore, frames_per_second: float) -> Text:
     text.append(f" {terminal_safe(core.target)} ", style=style)
     text.append(" ")
     state = core.connection
-    if state == "lost" and core.retry_at is not None:
+    if state in ("lost", "dropped") and core.retry_at is not None:
         wait = max(0.0, core.retry_at - time.monotonic())
-        text.append(f"lost, retrying in {wait:.0f} s", style="bold red")
+        what = "lost" if state == "lost" else "dropped early"
+        text.append(f"{what}, retrying in {wait:.1f} s (backoff)", style="bold red")
     elif state == "connected":
         text.append("connected", style="green")
     elif state == "connecting":
@@ -60,6 +61,9 @@ def status_text(core: ConsoleCore, frames_per_second: float) -> Text:
     if core.read_only:
         text.append("  ")
         text.append(" READ-ONLY ", style="bold white on blue")
+    if core.record_failure is not None:
+        text.append("  ")
+        text.append(" RECORDING STOPPED ", style="bold white on red")
     return text
 
 

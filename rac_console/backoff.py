@@ -1,0 +1,48 @@
+"""When the poller may try the controller again (pure: no clock, no I/O).
+
+Reconnecting at once after every failure turns a controller that accepts and then
+drops each connection into a storm (50 watched rows: 100 connections a second).
+The delay starts at 0.5 s and doubles to 5 s, both when connecting fails and when a
+connection is lost before it answered anything (closed by the peer, or reset after a
+reply that could not be its answer); a stretch of good exchanges brings it back to
+the start. A flaky controller that answers between its faults is not slowed down.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+FIRST_DELAY = 0.5
+MAX_DELAY = 5.0
+#: A connection lost before it served this many good exchanges was dropped early.
+EARLY_EXCHANGES = 1
+#: This many good exchanges in a row, and the next failure starts from FIRST_DELAY.
+GOOD_STRETCH = 5
+
+
+@dataclass
+class Backoff:
+    delay: float = FIRST_DELAY
+    served: int = 0  # good exchanges on the current connection
+    streak: int = 0  # good exchanges in a row, across connections
+
+    def connected(self) -> None:
+        self.served = 0
+
+    def good(self) -> None:
+        self.served += 1
+        self.streak += 1
+        if self.streak >= GOOD_STRETCH:
+            self.delay = FIRST_DELAY
+
+    def dropped_early(self) -> bool:
+        """A connection failed: True when it served too little to be trusted yet."""
+        self.streak = 0
+        return self.served < EARLY_EXCHANGES
+
+    def next_delay(self) -> float:
+        """The wait before the next try; each call doubles the one after, up to MAX_DELAY."""
+        delay = self.delay
+        self.delay = min(self.delay * 2, MAX_DELAY)
+        self.streak = 0
+        return delay

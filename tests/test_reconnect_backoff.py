@@ -1,0 +1,97 @@
+"""A controller that drops every connection is not hammered: the poller backs off."""
+
+from __future__ import annotations
+
+import socket
+import threading
+from pathlib import Path
+
+from tui_helpers import log_text, make_app, type_line, until
+
+from rac_console.backoff import EARLY_EXCHANGES, FIRST_DELAY, GOOD_STRETCH, MAX_DELAY, Backoff
+from rac_console.tui.status_bar import StatusBar
+
+
+class DropAfterOneRequest:
+    """Accepts, reads one request, and closes without answering; counts connections.
+    With ``answer`` set it answers every request instead (a controller come back)."""
+
+    def __init__(self) -> None:
+        self.sock = socket.create_server(("127.0.0.1", 0))
+        self.port = self.sock.getsockname()[1]
+        self.accepted = 0
+        self.answer = False
+        self._stop = threading.Event()
+        threading.Thread(target=self._accept, daemon=True).start()
+
+    def _accept(self) -> None:
+        self.sock.settimeout(0.05)
+        while not self._stop.is_set():
+            try:
+                conn, _ = self.sock.accept()
+            except TimeoutError:
+                continue
+            except OSError:
+                return
+            self.accepted += 1
+            threading.Thread(target=self._serve, args=(conn,), daemon=True).start()
+
+    def _serve(self, conn: socket.socket) -> None:
+        with conn:
+            buffer = b""
+            while not self._stop.is_set():
+                try:
+                    data = conn.recv(4096)
+                except OSError:
+                    return
+                if not data:
+                    return
+                if not self.answer:
+                    return  # read one request, then close
+                buffer += data
+                while b"\r" in buffer:
+                    line, _, buffer = buffer.partition(b"\r")
+                    conn.sendall(b"0,3,1\r" if b":I:" in line else b"-2147024809\r")
+
+    def close(self) -> None:
+        self._stop.set()
+        self.sock.close()
+
+
+def test_backoff_doubles_on_early_drops_and_resets_after_good_exchanges() -> None:
+    backoff = Backoff()
+    backoff.connected()
+    assert backoff.dropped_early()
+    delays = [backoff.next_delay() for _ in range(6)]
+    assert delays == [FIRST_DELAY, 1.0, 2.0, 4.0, MAX_DELAY, MAX_DELAY]
+    backoff.connected()
+    for _ in range(EARLY_EXCHANGES):
+        backoff.good()
+    assert not backoff.dropped_early()  # it served: a drop now is not an early one
+    for _ in range(GOOD_STRETCH):
+        backoff.good()
+    assert backoff.next_delay() == FIRST_DELAY
+
+
+async def test_a_controller_that_drops_every_connection_is_not_hammered(tmp_path: Path) -> None:
+    server = DropAfterOneRequest()
+    try:
+        app = make_app(tmp_path, "127.0.0.1", server.port, interval=0.05, timeout=1)
+        async with app.run_test(size=(160, 40)) as pilot:
+            status = app.query_one(StatusBar)
+            await type_line(pilot, "watch I 0-49")
+            await until(
+                pilot,
+                lambda: app.core.backoff.delay >= 4.0,
+                "the backoff to reach 4 s",
+                timeout=15,
+            )
+            # One connection per try: 0.5, 1 and 2 s waits between the first four.
+            assert server.accepted <= 5, server.accepted
+            assert "dropped early, retrying in" in str(status.render())
+            await until(pilot, lambda: "waiting 2 s before the next try" in log_text(app), "a mark")
+            server.answer = True  # the controller comes back: polling resumes
+            await until(pilot, lambda: app.core.connection == "connected", "polling again", 10)
+            await until(pilot, lambda: app.core.backoff.delay == FIRST_DELAY, "a reset", 10)
+    finally:
+        server.close()
