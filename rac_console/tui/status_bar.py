@@ -23,6 +23,13 @@ def status_text(core: ConsoleCore, frames_per_second: float) -> Text:
     else:
         style = "bold white on red"
     text.append(f" {terminal_safe(core.target)} ", style=style)
+    # Badges that change what a command does come first: never cut off a narrow screen.
+    if core.read_only:
+        text.append(" ")
+        text.append(" READ-ONLY ", style="bold white on blue")
+    if core.record_failure is not None:
+        text.append(" ")
+        text.append(" RECORDING STOPPED ", style="bold white on red")
     text.append(" ")
     state = core.connection
     if state in ("lost", "dropped") and core.retry_at is not None:
@@ -58,12 +65,6 @@ def status_text(core: ConsoleCore, frames_per_second: float) -> Text:
         text.append(f" · {core.polls_per_second:.0f} polls/s")
     if frames_per_second:
         text.append(f" · {frames_per_second:.0f} frames/s", style="dim")
-    if core.read_only:
-        text.append("  ")
-        text.append(" READ-ONLY ", style="bold white on blue")
-    if core.record_failure is not None:
-        text.append("  ")
-        text.append(" RECORDING STOPPED ", style="bold white on red")
     return text
 
 
