@@ -12,7 +12,7 @@ from dataclasses import dataclass
 
 from .errors import EncodeError, InputError
 from .text import scalar_text
-from .variant import Variant, canonical_r4, format_variant
+from .variant import Variant, format_variant, r4_from_text
 from .vartypes import INTEGER_RANGES, NUMERIC_TYPES, VT, VT_ARRAY, element_type, is_array
 
 R4_ARRAY = VT.R4 | VT_ARRAY
@@ -192,12 +192,12 @@ def _integer(text: str) -> int:
 def _number(text: str, vt: int, what: str) -> float:
     if not _NUMBER_RE.fullmatch(text):
         raise InputError(f"{what} needs a number such as 1.5 or -2e3, got {text!r}")
-    value = float(text)
     if vt == VT.R4:
         try:
-            return canonical_r4(value)
+            return r4_from_text(text)  # rounded once, as the controller's strtof would
         except OverflowError:
             raise InputError(f"{text} is out of range for {what} (VT_R4, up to ±3.4e38)") from None
+    value = float(text)
     if not math.isfinite(value):
         raise InputError(f"{text} is out of range for {what} (VT_R8)")
     return value

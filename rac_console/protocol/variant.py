@@ -8,7 +8,11 @@ element values (any VT_ARRAY type).
 
 VT_R4 values are kept canonical: the double nearest to the shortest decimal that
 rounds to the same float32, so ``4,123.01`` decodes to ``123.01`` and writes
-back as ``123.01``.
+back as ``123.01``. VT_R4 text is rounded once, straight to the nearest float32
+(ties to even, as C's ``strtof``), never to a double first.
+
+VT_EMPTY and VT_NULL are written ``0,`` and ``1,`` (the form DENSO's ``rac_string.c``
+writes and reads) and read with or without the comma; empty array data is an empty array.
 """
 
 from __future__ import annotations
@@ -58,26 +62,98 @@ def json_value(value: Any) -> Any:
 
 # --------------------------------------------------------------------- floats
 
+_F32 = struct.Struct("<f")
+_FLOAT32_TOP = 2.0**128  # the first power of two float32 cannot hold
+
 
 def _to_float32(x: float) -> float:
-    return struct.unpack("<f", struct.pack("<f", x))[0]
+    """x rounded once to float32, ties to even.
+
+    OverflowError from the midpoint between FLT_MAX and 2**128 on, where C's ``(float)x``
+    gives infinity.
+    """
+    value: float = _F32.unpack(_F32.pack(x))[0]
+    return value
+
+
+def _midpoint_gap(x: float) -> float:
+    """Half the float32 spacing when x lies exactly halfway between two float32 neighbours.
+
+    0.0 otherwise. Only on such a point can rounding decimal text to a double first pick
+    the wrong float32: the text may lie a hair above or below it, the double cannot.
+    """
+    if not 0 < abs(x) < _FLOAT32_TOP:
+        return 0.0
+    # float32 spacing is 2**(e-24) in [2**(e-1), 2**e), and 2**-149 below 2**-126
+    shift = min(25 - math.frexp(x)[1], 150)
+    scaled = math.ldexp(x, shift)
+    return math.ldexp(1.0, -shift) if scaled.is_integer() and scaled % 2 == 1 else 0.0
+
+
+def _nearest_float32(text: str, x: float) -> float:
+    """The float32 nearest to the exact value of decimal ``text`` (``x = float(text)``).
+
+    Rounds once, as C's ``strtof``: exact decimal arithmetic settles a double that fell on
+    a midpoint. OverflowError when the value rounds beyond FLT_MAX.
+    """
+    gap = _midpoint_gap(x)
+    if gap:
+        exact, middle = Decimal(text), Decimal(x)  # both exact
+        if exact != middle:
+            # the neighbour on the text's side; copysign keeps -0.0 for a negative text
+            x = math.copysign(x + gap if exact > middle else x - gap, x)
+    return _to_float32(x)
 
 
 def canonical_r4(x: float) -> float:
     """The double nearest to the shortest decimal that rounds to float32(x).
 
-    Raises OverflowError when x is outside float32's range.
+    x is a value, not text: it is rounded to float32 once. Raises OverflowError when x is
+    outside float32's range.
     """
     if x == 0:
         return x  # keeps the sign of -0.0, which the cache below would confuse with 0.0
-    return _canonical_r4(x)
+    value = _r4_of_double(x)[0]
+    if value != value:  # NaN marks out of range
+        raise OverflowError(f"{x!r} is beyond float32's range")
+    return value
+
+
+def r4_from_text(text: str) -> float:
+    """The canonical VT_R4 value of decimal text, rounded once to the nearest float32.
+
+    Raises OverflowError when the text rounds beyond FLT_MAX (or is not finite).
+    """
+    x = float(text)
+    if x == 0:
+        return x  # also text too small for a double: it rounds to a zero of its sign
+    value, gap = _r4_of_double(x)
+    if gap:  # rare: a double on a float32 midpoint, so the text decides the side
+        return canonical_r4(_nearest_float32(text, x))
+    if value != value:
+        raise OverflowError(f"{text} is beyond float32's range")
+    return value
 
 
 @lru_cache(maxsize=8192)
-def _canonical_r4(x: float) -> float:
+def _r4_of_double(x: float) -> tuple[float, float]:
+    """``canonical_r4(x)`` (NaN when out of range) and x's midpoint gap, cached together.
+
+    The parser is on every poll's path and polled values repeat, so one cache lookup per
+    element keeps the exact rounding off the common path.
+    """
     if not math.isfinite(x):
-        raise OverflowError("not finite")
-    f32 = _to_float32(x)
+        return math.nan, 0.0
+    gap = _midpoint_gap(x)
+    try:
+        f32 = _to_float32(x)
+    except OverflowError:
+        return math.nan, gap
+    return _shortest_r4(f32), gap
+
+
+def _shortest_r4(f32: float) -> float:
+    """The double of the shortest decimal text that reads back (``strtof``) as f32."""
     for digits in range(1, 10):
         mantissa, _, exponent = f"{f32:.{digits - 1}e}".partition("e")
         sign = "-" if mantissa.startswith("-") else ""
@@ -88,7 +164,12 @@ def _canonical_r4(x: float) -> float:
         for candidate_digits in (integer, integer - 1, integer + 1):
             candidate = float(f"{sign}{candidate_digits}e{scale}")
             try:
-                if _to_float32(candidate) == f32:
+                # what float_text writes must read back as f32, and the double itself
+                # (rounded as a value by canonical_r4) must too
+                if (
+                    _to_float32(candidate) == f32
+                    and _nearest_float32(repr(candidate), candidate) == f32
+                ):
                     return candidate
             except OverflowError:
                 continue
@@ -158,14 +239,14 @@ def _parse_int(field: str, vt: int) -> int:
 def _parse_float(field: str, vt: int) -> float:
     if not _FLOAT_RE.fullmatch(field):
         raise ProtocolError(f"{vt_name(vt)} needs a number, got {field!r}")
+    if vt == VT.R4:
+        try:
+            return r4_from_text(field)
+        except OverflowError:
+            raise ProtocolError(f"{field!r} is out of range for VT_R4") from None
     value = float(field)
     if not math.isfinite(value):
         raise ProtocolError(f"{field!r} is out of range for {vt_name(vt)}")
-    if vt == VT.R4:
-        try:
-            return canonical_r4(value)
-        except OverflowError:
-            raise ProtocolError(f"{field!r} is out of range for VT_R4") from None
     return value
 
 
@@ -243,7 +324,7 @@ def _format(variant: Variant, where: str) -> str:
     if vt in (VT.EMPTY, VT.NULL):
         if variant.value is not None:
             raise EncodeError(f"{vt_name(vt)} carries no value")
-        return str(vt)
+        return f"{vt},"  # no data, but the comma of <VARTYPE>,<data>, as rac_string.c writes
     if is_array(vt):
         values = variant.value
         if not isinstance(values, (list, tuple)):
@@ -255,7 +336,10 @@ def _format(variant: Variant, where: str) -> str:
             and isinstance(values[0], str)
             and not values[0].strip(_BLANKS)
         ):
-            raise EncodeError("an array holding one blank string cannot be written")
+            raise EncodeError(
+                f"{vt_name(vt)} holding one empty or blank string cannot be written:"
+                f" '{vt},' reads back as an empty array"
+            )
         return f"{vt}," + ",".join(_format_scalar(base, v, _ELEMENT) for v in values)
     return f"{vt}," + _format_scalar(vt, variant.value, where)
 
