@@ -300,6 +300,20 @@ def build_cli() -> CliParser:
         default=5006,
         help="port to listen on (default 5006)",
     )
+    sim.add_argument(
+        "--idle-timeout",
+        type=_seconds(allow_zero=True),
+        default=0,
+        metavar="SECONDS",
+        help="close a connection that sends and reads nothing for SECONDS "
+        "(up to 3600; default 0: never)",
+    )
+    sim.add_argument(
+        "--no-control",
+        action="store_true",
+        help="turn off the SIM:SET:/SIM:GET: control lines (then answered "
+        "E_INVALIDCOMMAND, like any unknown command)",
+    )
     faults = sim.add_argument_group(
         "faults (each reproducible with --seed; change them while it runs with a line "
         "SIM:SET:delay_ms=50,drop_every=7 on any connection, read them with SIM:GET:)"
@@ -310,7 +324,7 @@ def build_cli() -> CliParser:
         type=_count(float),
         default=0,
         metavar="MS",
-        help="delay every reply by MS milliseconds",
+        help="delay every reply by MS milliseconds (up to 60000)",
     )
     faults.add_argument(
         "--jitter",
@@ -318,7 +332,7 @@ def build_cli() -> CliParser:
         type=_count(float),
         default=0,
         metavar="MS",
-        help="vary each delay by up to ±MS milliseconds",
+        help="vary each delay by up to ±MS milliseconds (up to 60000)",
     )
     for name, text in (
         ("slow", "answer every Nth reply 3 s late (past a 2 s client timeout)"),
@@ -352,7 +366,7 @@ def build_cli() -> CliParser:
         type=_count(float),
         default=0,
         metavar="P",
-        help="answer an error HRESULT from the spec's table with probability P",
+        help="answer an error HRESULT from the spec's table with probability P (0 to 1)",
     )
     faults.add_argument(
         "--max-sessions",

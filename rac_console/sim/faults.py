@@ -17,6 +17,15 @@ GARBAGE = b"\xff\xfe#garbled\x00reply"
 EXTRA_LINE = b"0,3,424242\r"
 ERROR_CODES = sorted(code for code in HRESULTS if code not in (S_OK, E_INVALIDRCVPACKET))
 MAX_EXTRA_GAP_MS = 60_000.0
+MAX_DELAY_MS = 60_000.0  # delay_ms and jitter_ms: a minute is far past any client's timeout
+#: The float settings and their ranges: finite, from 0 to the maximum. inf would hold
+#: every reply for ever, nan would make asyncio's timers raise.
+FLOAT_RANGES = {
+    "delay_ms": (MAX_DELAY_MS, "ms"),
+    "jitter_ms": (MAX_DELAY_MS, "ms"),
+    "error_rate": (1.0, "(a probability)"),
+    "extra_gap_ms": (MAX_EXTRA_GAP_MS, "ms"),
+}
 UNSET = ("none", "off")  # ``SIM:SET:extra_gap_ms=none``: the extra line back in the reply's write
 
 
@@ -67,22 +76,28 @@ class FaultSettings:
             elif kind in (int, "int"):
                 changes[name] = int(text)
             else:
-                changes[name] = float(text)
+                try:
+                    changes[name] = float(text)
+                except ValueError:
+                    raise ValueError(f"{name}: not a number: {text.strip()!r}") from None
         updated = replace(self, **changes)  # type: ignore[arg-type]
         updated.check()
         return updated
 
     def check(self) -> None:
+        """ValueError naming the setting, unless every value is in its range."""
         for f in fields(self):
             value = getattr(self, f.name)
-            if isinstance(value, (int, float)) and not isinstance(value, bool) and value < 0:
+            if f.name in FLOAT_RANGES:
+                if value is None and f.name == "extra_gap_ms":
+                    continue
+                high, unit = FLOAT_RANGES[f.name]
+                if not (isinstance(value, (int, float)) and math.isfinite(value)):
+                    raise ValueError(f"{f.name}: give 0 to {high:g} {unit}, got {value}")
+                if not 0 <= value <= high:
+                    raise ValueError(f"{f.name}: give 0 to {high:g} {unit}, got {value:g}")
+            elif isinstance(value, int) and not isinstance(value, bool) and value < 0:
                 raise ValueError(f"{f.name} cannot be negative")
-        if self.error_rate > 1:
-            raise ValueError("error_rate is a probability from 0 to 1")
-        gap = self.extra_gap_ms
-        if gap is not None and not (math.isfinite(gap) and 0 <= gap <= MAX_EXTRA_GAP_MS):
-            # inf would never send the line, nan would make asyncio's timer raise
-            raise ValueError(f"extra_gap_ms: give 0 to {MAX_EXTRA_GAP_MS:g} ms, got {gap}")
 
 
 @dataclass(frozen=True)
@@ -100,6 +115,7 @@ class ReplyFault:
 class FaultPlan:
     def __init__(self, settings: FaultSettings) -> None:
         self.settings = settings
+        self.active = settings.active  # asked on every read: worked out once (frozen settings)
         self._random = random.Random(settings.seed)
         self.replies = 0
 
