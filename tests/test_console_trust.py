@@ -7,10 +7,9 @@ a paste or a slow ssh link delivers them.
 
 from __future__ import annotations
 
-import socket
-import threading
 from pathlib import Path
 
+from servers import CLOSE, Answering, RecordingServer
 from textual import events
 from textual.pilot import Pilot
 from tui_helpers import FrameTap, log_text, make_app, results_text, type_line, until
@@ -113,60 +112,25 @@ async def test_the_frame_log_follows_after_layout_changes(tmp_path: Path) -> Non
         assert log.scroll_y == frozen_at
 
 
-class SilentServer:
-    """Accepts connections and reads requests, but answers only ``answer`` lines."""
-
-    def __init__(self, answer: bytes | None = None) -> None:
-        self.answer = answer
-        self.sock = socket.create_server(("127.0.0.1", 0))
-        self.port = self.sock.getsockname()[1]
-        self.stop = threading.Event()
-        self.connections: list[socket.socket] = []
-        threading.Thread(target=self._accept, daemon=True).start()
-
-    def _accept(self) -> None:
-        self.sock.settimeout(0.05)
-        while not self.stop.is_set():
-            try:
-                conn, _ = self.sock.accept()
-            except TimeoutError:
-                continue
-            except OSError:
-                return
-            self.connections.append(conn)
-            threading.Thread(target=self._serve, args=(conn,), daemon=True).start()
-
-    def _serve(self, conn: socket.socket) -> None:
-        with conn:
-            while not self.stop.is_set():
-                try:
-                    data = conn.recv(4096)
-                except OSError:
-                    return
-                if not data:
-                    return
-                if self.answer is not None:
-                    if self.answer == b"CLOSE":
-                        return
-                    conn.sendall(self.answer)
-
-    def close(self) -> None:
-        self.stop.set()
-        self.sock.close()
+def silent_server(answer: bytes | None = None) -> tuple[RecordingServer, Answering]:
+    """A server that answers every request with ``answering.answer`` (None: silence,
+    CLOSE: close the connection), which a test may change while it runs."""
+    answering = Answering(answer)
+    return RecordingServer(answering), answering
 
 
 async def test_per_request_failures_are_marked_in_the_frame_log(tmp_path: Path) -> None:
-    server = SilentServer()
+    server, answering = silent_server()
     try:
         app = make_app(tmp_path, "127.0.0.1", server.port, timeout=0.3)
         async with app.run_test(size=(120, 40)) as pilot:
             await type_line(pilot, "get I 1")
             await until(pilot, lambda: "no reply within 0.3 s" in log_text(app), "a timeout mark")
-            server.answer = b"\xff\x1bgarbage\r"
+            answering.answer = b"\xff\x1bgarbage\r"
             await type_line(pilot, "get I 2")
             await until(pilot, lambda: "session reset" in log_text(app), "a bad-reply mark")
             assert log_text(app).count("──") >= 2
-            server.answer = b"CLOSE"
+            answering.answer = CLOSE
             await type_line(pilot, "get I 3")
             await until(
                 pilot, lambda: "closed the connection" in log_text(app), "a dropped-connection mark"
@@ -176,7 +140,7 @@ async def test_per_request_failures_are_marked_in_the_frame_log(tmp_path: Path) 
 
 
 async def test_status_line_shows_a_request_waiting_and_no_stale_figures(tmp_path: Path) -> None:
-    server = SilentServer(b"0,3,1\r")
+    server, answering = silent_server(b"0,3,1\r")
     try:
         app = make_app(tmp_path, "127.0.0.1", server.port, timeout=2)
         async with app.run_test(size=(160, 40)) as pilot:
@@ -184,7 +148,7 @@ async def test_status_line_shows_a_request_waiting_and_no_stale_figures(tmp_path
             await type_line(pilot, "get I 1")
             await until(pilot, lambda: "I1 = 1" in results_text(app), "the first reply")
             await until(pilot, lambda: " ms" in str(status.render()), "a round-trip time")
-            server.answer = None  # the controller goes quiet
+            answering.answer = None  # the controller goes quiet
             await type_line(pilot, "get I 2")
             await until(
                 pilot, lambda: "waiting for a reply" in str(status.render()), "a waiting request"
@@ -214,14 +178,14 @@ async def test_status_line_never_says_not_met_with_interval_zero(tmp_path: Path)
 
 
 async def test_controller_text_reaches_the_results_pane_escaped(tmp_path: Path) -> None:
-    server = SilentServer(b"0,8,\x1b]0;pwned\x07 \x1b[2J bell\x07 bs\x08 :V: :smile:\r")
+    server, answering = silent_server(b"0,8,\x1b]0;pwned\x07 \x1b[2J bell\x07 bs\x08 :V: :smile:\r")
     try:
         app = make_app(tmp_path, "127.0.0.1", server.port)
         async with app.run_test(size=(160, 40)) as pilot:
             await type_line(pilot, "send GET:RC8:1:S:")
             await type_line(pilot, "get S 2")
             await until(pilot, lambda: "S2 = " in results_text(app), "the replies")
-            server.answer = b"\x1b]0;garbled\x07\r"
+            answering.answer = b"\x1b]0;garbled\x07\r"
             await type_line(pilot, "get I 3")
             await until(pilot, lambda: "bad reply" in results_text(app), "the garbled reply")
             shown = results_text(app) + log_text(app)

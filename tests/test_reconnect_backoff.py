@@ -2,60 +2,31 @@
 
 from __future__ import annotations
 
-import socket
-import threading
 from pathlib import Path
 
+from servers import CLOSE, RecordingServer
 from tui_helpers import log_text, make_app, type_line, until
 
 from rac_console.backoff import EARLY_EXCHANGES, FIRST_DELAY, GOOD_STRETCH, MAX_DELAY, Backoff
 from rac_console.tui.status_bar import StatusBar
 
 
-class DropAfterOneRequest:
-    """Accepts, reads one request, and closes without answering; counts connections.
-    With ``answer`` set it answers every request instead (a controller come back)."""
+class DropAfterOneRequest(RecordingServer):
+    """Accepts, reads one request, and closes without answering. With ``answer`` set it
+    answers every request instead (a controller come back)."""
 
     def __init__(self) -> None:
-        self.sock = socket.create_server(("127.0.0.1", 0))
-        self.port = self.sock.getsockname()[1]
-        self.accepted = 0
         self.answer = False
-        self._stop = threading.Event()
-        threading.Thread(target=self._accept, daemon=True).start()
+        super().__init__(self._reply)
 
-    def _accept(self) -> None:
-        self.sock.settimeout(0.05)
-        while not self._stop.is_set():
-            try:
-                conn, _ = self.sock.accept()
-            except TimeoutError:
-                continue
-            except OSError:
-                return
-            self.accepted += 1
-            threading.Thread(target=self._serve, args=(conn,), daemon=True).start()
+    def _reply(self, line: bytes) -> bytes | object:
+        if not self.answer:
+            return CLOSE
+        return b"0,3,1\r" if b":I:" in line else b"-2147024809\r"
 
-    def _serve(self, conn: socket.socket) -> None:
-        with conn:
-            buffer = b""
-            while not self._stop.is_set():
-                try:
-                    data = conn.recv(4096)
-                except OSError:
-                    return
-                if not data:
-                    return
-                if not self.answer:
-                    return  # read one request, then close
-                buffer += data
-                while b"\r" in buffer:
-                    line, _, buffer = buffer.partition(b"\r")
-                    conn.sendall(b"0,3,1\r" if b":I:" in line else b"-2147024809\r")
-
-    def close(self) -> None:
-        self._stop.set()
-        self.sock.close()
+    @property
+    def accepted(self) -> int:
+        return len(self.peers)
 
 
 def test_backoff_doubles_on_early_drops_and_resets_after_good_exchanges() -> None:

@@ -36,10 +36,10 @@ try:
 except ImportError:  # not POSIX
     resource = None  # type: ignore[assignment]
 
-HOST = "127.0.0.1"
 ROOT = Path(__file__).resolve().parent.parent
-PROBE = b"GET:RC8:1:S:\r"
-PROBE_REPLY = b"0,8,RC8 simulator\r"
+sys.path.insert(0, str(ROOT / "benchmarks"))  # the benchmark's misbehaving clients, reused
+from abusive_clients import HOST, PROBE, PROBE_REPLY, ask, hostile  # noqa: E402
+
 LONG_TEXT = "x" * 240  # PUT:RC8:10:S:8,<240> + CR is exactly 256 bytes
 HAS_PROC = Path("/proc/self/status").exists()
 needs_proc = pytest.mark.skipif(not HAS_PROC, reason="measures the process through /proc")
@@ -127,56 +127,6 @@ class SimProcess:
 
     def __exit__(self, *exc_info: object) -> None:
         self.close()
-
-
-def ask(port: int, deadline: float, sock: socket.socket | None = None) -> float | None:
-    """Seconds until the probe is answered right (on a new connection unless given);
-    None if it is not, within ``deadline``."""
-    started = time.monotonic()
-    own = sock is None
-    try:
-        if sock is None:
-            sock = socket.create_connection((HOST, port), timeout=deadline)
-        sock.settimeout(deadline)
-        sock.sendall(PROBE)
-        reply = b""
-        while not reply.endswith(b"\r"):
-            left = deadline - (time.monotonic() - started)
-            if left <= 0:
-                return None
-            sock.settimeout(left)
-            chunk = sock.recv(100)
-            if not chunk:
-                return None
-            reply += chunk
-        return time.monotonic() - started if reply == PROBE_REPLY else None
-    except OSError:
-        return None
-    finally:
-        if own and sock is not None:
-            sock.close()
-
-
-def hostile(port: int, n: int) -> None:
-    """One short hostile connection of kind ``n % 4``: junk, a partial line, 50 pipelined
-    requests then close without reading, or a request then half-close."""
-    try:
-        sock = socket.create_connection((HOST, port), timeout=5)
-    except OSError:
-        return
-    with sock, contextlib.suppress(OSError):
-        kind = n % 4
-        if kind == 0:
-            sock.sendall(os.urandom(300 + n % 3000))
-        elif kind == 1:
-            sock.sendall(b"GET:RC8:1")
-            if n % 8 == 1:  # gone with an RST
-                sock.setsockopt(socket.SOL_SOCKET, socket.SO_LINGER, b"\x01" + b"\x00" * 7)
-        elif kind == 2:
-            sock.sendall(b"GET:RC8:1:P:\r" * 50)
-        else:
-            sock.sendall(PROBE)
-            sock.shutdown(socket.SHUT_WR)
 
 
 def storm(port: int, count: int, threads: int = 8) -> None:

@@ -6,12 +6,11 @@ prompt-toolkit's pipe input against the simulator or a hostile server written he
 from __future__ import annotations
 
 import asyncio
-import socket
-import threading
 from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
+from servers import RecordingServer
 from test_repl import Driver
 
 TERMINAL_CONTROLS = ("\x1b", "\x07", "\x08", "\x9b")
@@ -38,39 +37,17 @@ async def test_a_burst_of_lines_runs_each_once_in_order(tmp_path: Path) -> None:
     assert "unknown command '5'" in out
 
 
+def hostile_reply(line: bytes) -> bytes:
+    """A string full of terminal controls and emoji codes; garbage for an I."""
+    if b":I:" in line:
+        return b"\x1b]0;garbled\x07\r"
+    return b"0,8,\x1b]0;pwned\x07 \x1b[2J bell\x07 bs\x08 :V: :smile:\r"
+
+
 @pytest.fixture
 def hostile_port() -> Iterator[int]:
-    """Answers every line with a string full of terminal controls and emoji codes."""
-    server = socket.create_server(("127.0.0.1", 0))
-    stop = threading.Event()
-
-    def serve(conn: socket.socket) -> None:
-        with conn:
-            while not stop.is_set():
-                try:
-                    data = conn.recv(4096)
-                except OSError:
-                    return
-                if not data:
-                    return
-                for line in data.split(b"\r")[:-1]:
-                    if b":I:" in line:
-                        reply = b"\x1b]0;garbled\x07\r"
-                    else:
-                        reply = b"0,8,\x1b]0;pwned\x07 \x1b[2J bell\x07 bs\x08 :V: :smile:\r"
-                    conn.sendall(reply)
-
-    def accept() -> None:
-        while not stop.is_set():
-            try:
-                conn, _ = server.accept()
-            except OSError:
-                return
-            threading.Thread(target=serve, args=(conn,), daemon=True).start()
-
-    threading.Thread(target=accept, daemon=True).start()
-    yield server.getsockname()[1]
-    stop.set()
+    server = RecordingServer(hostile_reply)
+    yield server.port
     server.close()
 
 
