@@ -287,6 +287,7 @@ class RacSession:
         if self._loop_reads_ahead or self._peer_spoke():
             transport = await self._after_stray(transport)
         loop = asyncio.get_running_loop()
+        self._sent_at = time.perf_counter()  # before _pending: waiting_since reads both
         pending = self._pending = loop.create_future()
         self._deadline = loop.time() + self.timeout
         if self._watchdog is None:

@@ -110,6 +110,7 @@ class ConsoleCore:
         self._poll_task: asyncio.Task[None] | None = None
         self._lost = False
         self.backoff = Backoff()
+        self._early_drop = False
 
     # ------------------------------------------------------------ lifecycle
 
@@ -131,6 +132,7 @@ class ConsoleCore:
             self.simulator = await SimulatorServer().start()
             host, port = self.simulator.host, self.simulator.port
         self.host, self.port = host, port
+        self.backoff, self._early_drop = Backoff(), False  # a new target starts afresh
         session = RacSession(host, port, timeout=self.timeout)
         session.add_frame_observer(self._on_frame)
         session.add_state_observer(self._on_state)
@@ -177,6 +179,11 @@ class ConsoleCore:
         for listener in self._listeners:
             listener(Alert(text))
 
+    def exit_status(self, status: int) -> int:
+        """The console's exit status: 4 (a local I/O error) when it would be 0 but the
+        recording stopped on the way."""
+        return 4 if status == 0 and self.record_failure is not None else status
+
     @property
     def record_failure(self) -> str | None:
         """Why ``--record`` stopped, once it has."""
@@ -186,6 +193,8 @@ class ConsoleCore:
         self.connection = state
         if state != "connected":
             self._forget_figures()
+        if state == "closed" and self.backoff.closed():
+            self._early_drop = True  # the poller waits before its next request
         if state == "connected":
             self.backoff.connected()
             self.retry_at = None
@@ -364,11 +373,16 @@ class ConsoleCore:
                 self.polls_per_second = count / period
 
     async def _wait_to_retry(self, state: str) -> None:
-        """Back off before the next cycle; the status line counts it down."""
+        """Back off before the next try; the status line counts it down, then shows
+        the session's real state again (also when a pause or a new target cut it short)."""
         delay = self.backoff.next_delay()
         self.connection = state
         self.retry_at = time.monotonic() + delay
-        await self._sleep(delay)
+        try:
+            await self._sleep(delay)
+        finally:
+            self.retry_at = None
+            self.connection = self.session.state if self.session is not None else "closed"
 
     async def _sleep(self, seconds: float) -> None:
         """Wait, but wake early when the watch list, interval or target changes
@@ -390,6 +404,18 @@ class ConsoleCore:
                 continue  # unwatched during the cycle
             if not row.due(now, self.interval):
                 continue  # a row with its own, longer period
+            if self._early_drop:
+                # The last connection closed before it served a couple of exchanges: wait
+                # here, then go on with this row (cutting the cycle would starve the rest).
+                self._early_drop = False
+                self.note(
+                    f"the connection closed after {self.backoff.served} good "
+                    f"exchange{'s' * (self.backoff.served != 1)}: waiting "
+                    f"{self.backoff.delay:g} s before the next try"
+                )
+                await self._wait_to_retry("dropped")
+                if self.paused or session is not self.session:
+                    break
             await self._poll_row(session, row)
             count += 1
         return count
@@ -406,15 +432,6 @@ class ConsoleCore:
             row.fail(status or "DISCONNECTED", time.monotonic())
             self.polls += 1
             self.watch.dirty.add(var)
-            dropped = isinstance(exc, Disconnected | BadReply) and session.state != "connected"
-            if dropped and self.backoff.dropped_early():
-                # Back off here and go on with the next row: cutting the cycle short
-                # would leave the rows after this one never polled.
-                self.note(
-                    f"the connection was lost before it answered anything: waiting "
-                    f"{self.backoff.delay:g} s before the next try"
-                )
-                await self._wait_to_retry("dropped")
             return
         else:
             response = reply.response

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import contextlib
 import os
+import time
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -31,8 +32,10 @@ class History:
     def __init__(self, path: Path | str, limit: int = DEFAULT_LIMIT) -> None:
         self.path = Path(path)
         self.limit = limit
-        self.entries: list[str] = self._read()[-limit:]
-        self._appends = 0
+        lines = self._read()
+        self.entries: list[str] = lines[-limit:]
+        # A file left long by an earlier run is trimmed at this run's first append.
+        self._appends = limit if len(lines) >= 2 * limit else 0
         with contextlib.suppress(OSError):  # an older file may be readable by others
             if self.path.exists():
                 self.path.chmod(0o600)
@@ -89,11 +92,27 @@ def _locked(path: Path) -> Iterator[None]:
         os.close(fd)
 
 
+#: How long an append waits for another console's lock before it gives the line up.
+LOCK_TRIES, LOCK_PAUSE = 50, 0.01
+
+
+def _lock(fd: int) -> None:
+    """Take the lock without blocking for long: the screen's thread appends, and a
+    stuck holder (a network home) must not freeze it. OSError when it cannot."""
+    for _ in range(LOCK_TRIES):
+        try:
+            _try_lock(fd)
+            return
+        except OSError:
+            time.sleep(LOCK_PAUSE)
+    raise OSError("the history file is locked by another console")
+
+
 try:
     import fcntl
 
-    def _lock(fd: int) -> None:
-        fcntl.flock(fd, fcntl.LOCK_EX)
+    def _try_lock(fd: int) -> None:
+        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
 
     def _unlock(fd: int) -> None:
         fcntl.flock(fd, fcntl.LOCK_UN)
@@ -101,8 +120,9 @@ try:
 except ImportError:  # Windows
     import msvcrt
 
-    def _lock(fd: int) -> None:
-        msvcrt.locking(fd, msvcrt.LK_LOCK, 1)  # type: ignore[attr-defined]
+    def _try_lock(fd: int) -> None:
+        os.lseek(fd, 0, os.SEEK_SET)
+        msvcrt.locking(fd, msvcrt.LK_NBLCK, 1)  # type: ignore[attr-defined]
 
     def _unlock(fd: int) -> None:
         os.lseek(fd, 0, os.SEEK_SET)

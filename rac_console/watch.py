@@ -88,8 +88,9 @@ class WatchList:
 
     def period(self, interval: float) -> float:
         """How often a poll cycle starts: the shortest period any row asks for."""
-        own = [row.every for row in self.rows.values() if row.every is not None]
-        return min([interval, *own]) if len(own) < len(self.rows) else min(own, default=interval)
+        rows = list(self.rows.values())  # one step under the GIL: the engine's thread adds rows
+        own = [row.every for row in rows if row.every is not None]
+        return min([interval, *own]) if len(own) < len(rows) else min(own, default=interval)
 
     def remove(self, variables: tuple[VarRef, ...] | list[VarRef]) -> int:
         targets = list(self.rows) if not variables else [v for v in variables if v in self.rows]

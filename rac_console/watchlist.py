@@ -71,11 +71,15 @@ def load(path: str | Path) -> list[tuple[VarRef, str]]:
     """The rows of a watch list file; InputError, one line, for anything wrong with it."""
     try:
         file = Path(path).expanduser()
-        if file.stat().st_size > MAX_FILE_BYTES:
+        if not file.is_file():  # a device or a pipe could be endless, or never end
+            raise InputError(f"{path} is not a regular file: not a watch list")
+        with file.open("rb") as handle:
+            data = handle.read(MAX_FILE_BYTES + 1)
+        if len(data) > MAX_FILE_BYTES:
             raise InputError(
                 f"{path} is larger than {MAX_FILE_BYTES // 1024} KiB: not a watch list"
             )
-        text = file.read_text(encoding="utf-8")
+        text = data.decode("utf-8")
     except (OSError, RuntimeError) as exc:
         raise InputError(f"cannot read {path}: {getattr(exc, 'strerror', None) or exc}") from None
     except UnicodeDecodeError:

@@ -63,6 +63,18 @@ async def test_a_burst_of_typed_lines_runs_each_line_once_in_order(tmp_path: Pat
         assert app.query_one(CommandLine).value == ""
 
 
+async def test_a_pasted_block_runs_each_line_once_in_order(tmp_path: Path) -> None:
+    app = make_app(tmp_path)
+    async with app.run_test(size=(120, 40)) as pilot:
+        tap = FrameTap(app)
+        pilot.app.query_one(CommandLine).post_message(
+            events.Paste("get I 1\nget I 2\r\nput I 10 7\nget I")
+        )
+        await until(pilot, lambda: "I10 ← 7" in results_text(app), "the pasted lines")
+        assert sent_lines(tap) == [b"GET:RC8:1:I:", b"GET:RC8:2:I:", b"PUT:RC8:10:I:3,7"]
+        assert app.query_one(CommandLine).value == "get I"  # the unfinished line, to edit
+
+
 async def test_a_line_typed_right_after_enter_is_kept(tmp_path: Path) -> None:
     app = make_app(tmp_path)
     async with app.run_test(size=(120, 40)) as pilot:
@@ -188,6 +200,9 @@ async def test_controller_text_reaches_the_results_pane_escaped(tmp_path: Path) 
             answering.answer = b"\x1b]0;garbled\x07\r"
             await type_line(pilot, "get I 3")
             await until(pilot, lambda: "bad reply" in results_text(app), "the garbled reply")
+            answering.answer = b"0,4,1\x9b31m\r"  # the C1 CSI byte
+            await type_line(pilot, "get F 4")
+            await until(pilot, lambda: "\\x9b31m" in results_text(app), "the C1 reply, escaped")
             shown = results_text(app) + log_text(app)
             for control in ("\x1b", "\x07", "\x08", "\x9b"):
                 assert control not in shown

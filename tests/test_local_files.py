@@ -5,8 +5,6 @@ from __future__ import annotations
 
 import json
 import os
-import resource
-import signal
 import stat
 import subprocess
 import sys
@@ -21,10 +19,17 @@ from tui_helpers import log_text, make_app, results_text, type_line, until
 from rac_console.history import History
 from rac_console.tui.status_bar import StatusBar
 
+needs_dev_full = pytest.mark.skipif(
+    not Path("/dev/full").exists(), reason="a device that is always full (Linux)"
+)
+
 GETS = "".join(f"get I {n % 100}\n" for n in range(300))
 
 
 def _limit_file_size(size: int) -> Callable[[], None]:
+    import resource  # POSIX: this test runs only where there is a /dev/full
+    import signal
+
     def limit() -> None:
         signal.signal(signal.SIGXFSZ, signal.SIG_IGN)  # a write past the limit fails: EFBIG
         resource.setrlimit(resource.RLIMIT_FSIZE, (size, size))
@@ -39,6 +44,7 @@ def error_lines(stderr: str) -> list[str]:
 # ----------------------------------------------------------------- --record
 
 
+@needs_dev_full
 def test_record_on_a_full_device_is_one_line_and_exit_4(env: dict[str, str]) -> None:  # noqa: F811
     result = cli(env, "--record", "/dev/full", "run", "-", stdin=GETS)
     assert result.returncode == 4, result.stderr
@@ -50,6 +56,7 @@ def test_record_on_a_full_device_is_one_line_and_exit_4(env: dict[str, str]) -> 
     assert result.stdout.count(" = ") == 300  # every result still printed
 
 
+@needs_dev_full
 def test_record_that_fails_midway_keeps_whole_lines_and_says_how_many(
     env: dict[str, str],  # noqa: F811
     tmp_path: Path,
@@ -74,6 +81,7 @@ def test_record_that_fails_midway_keeps_whole_lines_and_says_how_many(
     assert len(result.stdout.splitlines()) == 300  # every JSON result still printed
 
 
+@needs_dev_full
 def test_get_with_record_on_a_full_device_still_prints_the_value(
     env: dict[str, str],  # noqa: F811
 ) -> None:
@@ -83,6 +91,7 @@ def test_get_with_record_on_a_full_device_still_prints_the_value(
     assert len(error_lines(result.stderr)) == 1
 
 
+@needs_dev_full
 async def test_console_reports_a_failing_recorder_once_and_keeps_logging(tmp_path: Path) -> None:
     app = make_app(tmp_path, record="/dev/full")
     async with app.run_test(size=(160, 40)) as pilot:
@@ -94,6 +103,7 @@ async def test_console_reports_a_failing_recorder_once_and_keeps_logging(tmp_pat
         assert "RECORDING STOPPED" in str(app.query_one(StatusBar).render())
 
 
+@needs_dev_full
 async def test_repl_reports_a_failing_recorder_once(tmp_path: Path) -> None:
     driver = Driver(tmp_path, record="/dev/full")
 
@@ -177,6 +187,15 @@ def test_an_existing_history_file_is_made_owner_only(tmp_path: Path) -> None:
     path.chmod(0o644)
     History(path).append("get I 2")
     assert stat.S_IMODE(path.stat().st_mode) == 0o600
+
+
+def test_a_history_file_left_long_is_trimmed_at_the_next_run(tmp_path: Path) -> None:
+    path = tmp_path / "history"
+    path.write_text("".join(f"get I {n}\n" for n in range(5000)))
+    history = History(path, limit=1000)
+    history.append("get S 1")
+    lines = path.read_text().splitlines()
+    assert len(lines) == 1000 and lines[-1] == "get S 1" and lines[0] == "get I 4001"
 
 
 def test_two_consoles_sharing_history_keep_each_others_entries(tmp_path: Path) -> None:

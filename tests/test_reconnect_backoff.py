@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import socket
 from pathlib import Path
 
 from servers import CLOSE, RecordingServer
@@ -31,14 +32,16 @@ class DropAfterOneRequest(RecordingServer):
 
 def test_backoff_doubles_on_early_drops_and_resets_after_good_exchanges() -> None:
     backoff = Backoff()
+    assert not backoff.closed()  # never connected: nothing dropped
     backoff.connected()
-    assert backoff.dropped_early()
+    assert backoff.closed()
     delays = [backoff.next_delay() for _ in range(6)]
     assert delays == [FIRST_DELAY, 1.0, 2.0, 4.0, MAX_DELAY, MAX_DELAY]
     backoff.connected()
     for _ in range(EARLY_EXCHANGES):
         backoff.good()
-    assert not backoff.dropped_early()  # it served: a drop now is not an early one
+    assert not backoff.closed()  # it served: a drop now is not an early one
+    backoff.connected()
     for _ in range(GOOD_STRETCH):
         backoff.good()
     assert backoff.next_delay() == FIRST_DELAY
@@ -64,5 +67,52 @@ async def test_a_controller_that_drops_every_connection_is_not_hammered(tmp_path
             server.answer = True  # the controller comes back: polling resumes
             await until(pilot, lambda: app.core.connection == "connected", "polling again", 10)
             await until(pilot, lambda: app.core.backoff.delay == FIRST_DELAY, "a reset", 10)
+    finally:
+        server.close()
+
+
+class AnswerOnceThenClose(RecordingServer):
+    """Answers the first request of each connection, then closes it."""
+
+    def __init__(self) -> None:
+        super().__init__(lambda line: b"0,3,1\r")
+
+    def _serve(self, conn: socket.socket) -> None:  # one answer, then the connection ends
+        with conn:
+            conn.settimeout(5)
+            try:
+                if conn.recv(4096):
+                    conn.sendall(b"0,3,1\r")
+            except OSError:
+                return
+
+
+async def test_a_controller_that_answers_once_then_closes_is_not_hammered(
+    tmp_path: Path,
+) -> None:
+    server = AnswerOnceThenClose()
+    try:
+        app = make_app(tmp_path, "127.0.0.1", server.port, interval=0.05, timeout=1)
+        async with app.run_test(size=(160, 40)) as pilot:
+            await type_line(pilot, "watch I 0-49")
+            await until(
+                pilot, lambda: app.core.backoff.delay >= 4.0, "the backoff to reach 4 s", 15
+            )
+            assert len(server.peers) <= 6, len(server.peers)
+    finally:
+        server.close()
+
+
+async def test_a_pause_during_a_backoff_leaves_no_countdown(tmp_path: Path) -> None:
+    server = DropAfterOneRequest()
+    try:
+        app = make_app(tmp_path, "127.0.0.1", server.port, interval=0.05, timeout=1)
+        async with app.run_test(size=(160, 40)) as pilot:
+            status = app.query_one(StatusBar)
+            await type_line(pilot, "watch I 0-9")
+            await until(pilot, lambda: "retrying in" in str(status.render()), "a countdown")
+            await type_line(pilot, "pause")
+            await until(pilot, lambda: "POLLING PAUSED" in str(status.render()), "paused")
+            await until(pilot, lambda: "retrying" not in str(status.render()), "no countdown")
     finally:
         server.close()

@@ -57,6 +57,9 @@ def test_watch_takes_several_variables() -> None:
     command = parse_command('watch P 0 "J 0 side"')
     assert isinstance(command, Watch)
     assert [str(v) for v in command.vars] == ["P0"] and command.label == "J 0 side"
+    command = parse_command('watch P 0 "check every 5" every 2')
+    assert isinstance(command, Watch)
+    assert command.label == "check every 5" and command.every == 2
     command = parse_command("watch IO 128-135 gripper bank")
     assert isinstance(command, Watch) and command.label == "gripper bank"
     with pytest.raises(InputError, match="a label names one variable or range"):

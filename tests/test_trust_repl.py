@@ -41,7 +41,20 @@ def hostile_reply(line: bytes) -> bytes:
     """A string full of terminal controls and emoji codes; garbage for an I."""
     if b":I:" in line:
         return b"\x1b]0;garbled\x07\r"
+    if b":F:" in line:
+        return b"0,4,1\x9b31m\r"  # the C1 CSI byte
     return b"0,8,\x1b]0;pwned\x07 \x1b[2J bell\x07 bs\x08 :V: :smile:\r"
+
+
+async def test_a_pasted_block_runs_line_by_line(tmp_path: Path) -> None:
+    driver = Driver(tmp_path)
+
+    async def steps(d: Driver) -> None:
+        d.type("\x1b[200~get I 1\nget I 2\nput I 10 7\x1b[201~\r")  # a bracketed paste
+        await d.until(lambda out: "I10 ← 7" in out, "the pasted lines")
+
+    await driver.run(steps)
+    assert sent(driver) == [b"GET:RC8:1:I:\r", b"GET:RC8:2:I:\r", b"PUT:RC8:10:I:3,7\r"]
 
 
 @pytest.fixture
@@ -61,6 +74,8 @@ async def test_controller_text_is_printed_escaped(tmp_path: Path, hostile_port: 
         await d.until(lambda out: out.count("pwned") >= 2, "the raw reply")
         d.type("get I 3\r")
         await d.until(lambda out: "bad reply" in out, "the garbled reply")
+        d.type("get F 5\r")
+        await d.until(lambda out: "\\x9b31m" in out, "the C1 reply, escaped")
         d.type("frames on\r")
         d.type("send GET:RC8:4:S:\r")
         await d.until(lambda out: out.count("pwned") >= 5, "the frames")

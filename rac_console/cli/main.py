@@ -111,7 +111,7 @@ def _global_options(parser: argparse.ArgumentParser, suppress: bool) -> list[arg
             "--read-only",
             action="store_true",
             default=default(False),
-            help="refuse every PUT before sending",
+            help="send only well-formed GET requests; refuse everything else before sending",
         ),
         parser.add_argument(
             "--record",

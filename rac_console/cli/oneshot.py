@@ -34,7 +34,9 @@ class Output:
         self.local_failed = True
 
     def status(self, status: ExitStatus) -> ExitStatus:
-        return worst([status, ExitStatus.LOCAL_IO]) if self.local_failed else status
+        """4 when the commands succeeded but a local file failed; a controller or
+        connection failure keeps its own status (the file's failure was said already)."""
+        return ExitStatus.LOCAL_IO if self.local_failed and status == ExitStatus.OK else status
 
     def show(
         self, outcome: Outcome, extra: dict[str, object] | None = None, prefix: str = ""

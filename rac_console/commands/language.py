@@ -278,12 +278,18 @@ def _parse_watch(text: str) -> Watch:
         specs += 1
     if len(variables) > MAX_RANGE:
         raise InputError(f"watch takes at most {MAX_RANGE} variables at once")
-    label, every = rest.strip(), None
-    match = re.fullmatch(r"(.*?)\s*\bevery\s+(\S+?)s?", label, re.ASCII | re.DOTALL)
+    label, every, rest = "", None, rest.strip()
+    if rest[:1] in ("'", '"'):  # a quoted label is taken whole, "every" inside it too
+        close = rest.find(rest[0], 1)
+        if close < 0:
+            raise InputError(f'the label\'s closing {rest[0]} is missing: watch P 0 "pick"')
+        label, rest = rest[1:close], rest[close + 1 :].strip()
+    match = re.fullmatch(r"(.*?)\s*\bevery\s+(\S+?)s?", rest, re.ASCII | re.DOTALL)
     if match:
-        label, every = match.group(1).strip(), _parse_seconds(match.group(2), "every")
-    if len(label) >= 2 and label[0] == label[-1] and label[0] in "\"'":
-        label = label[1:-1]
+        rest, every = match.group(1).strip(), _parse_seconds(match.group(2), "every")
+    if label and rest:
+        raise InputError(f"after a quoted label only every SECONDS may follow, not {rest!r}")
+    label = label or rest
     if label and specs > 1:
         raise InputError(
             "a label names one variable or range: watch P 0 pick, then watch J 0 home "

@@ -125,7 +125,15 @@ class Repl:
             await self.core.stop()
         return 0
 
-    async def handle(self, line: str) -> bool:
+    async def handle(self, text: str) -> bool:
+        """Run what was entered, line by line (a paste may hold several); False when a
+        line asks to leave."""
+        for line in text.replace("\r\n", "\n").replace("\r", "\n").split("\n"):
+            if line.strip() and not await self._handle_line(line):
+                return False
+        return True
+
+    async def _handle_line(self, line: str) -> bool:
         """Run one line; False when it asks to leave."""
         try:
             command = parse_command(line)
@@ -171,6 +179,8 @@ class Repl:
         an alert (a recording stopped) always."""
         if isinstance(event, Alert):
             self.console.print(notice_text(event.text, error=True))
+        elif self.frames and isinstance(event, str):  # a gap or a failed request, marked
+            self.console.print(notice_text(f"── {event} ──", style="dim"), soft_wrap=True)
         elif self.frames and isinstance(event, Frame) and not event.poll:
             self.console.print(Text(frame_line(event), style="dim"), soft_wrap=True)
 
@@ -234,4 +244,4 @@ class Repl:
 
 def run_repl(core: ConsoleCore, history: History) -> int:
     """``rac-console repl`` on a terminal."""
-    return asyncio.run(Repl(core, history, make_console()).run())
+    return core.exit_status(asyncio.run(Repl(core, history, make_console()).run()))

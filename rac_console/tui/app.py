@@ -274,4 +274,4 @@ class RacConsoleApp(App[int]):
 
 
 def run_console(core: ConsoleCore, history: History, watch_file: str | None) -> int:
-    return RacConsoleApp(core, history, watch_file).run() or 0
+    return core.exit_status(RacConsoleApp(core, history, watch_file).run() or 0)

@@ -93,6 +93,21 @@ class CommandLine(Input):
             await self.run_action(binding.action)
             return
 
+    def _on_paste(self, event: events.Paste) -> None:
+        """A pasted block runs line by line, as if each line were typed and entered:
+        every complete line is entered in order, the unfinished last one stays to edit
+        (Textual's Input would keep the first line and drop the rest without a word)."""
+        event.stop()
+        event.prevent_default()
+        *complete, tail = event.text.replace("\r\n", "\n").replace("\r", "\n").split("\n")
+        if complete:
+            first = self.value[: self.cursor_position] + complete[0]
+            self.value = ""
+            for line in (first, *complete[1:]):
+                self.post_message(self.Entered(line))
+        if tail:
+            self.insert_text_at_cursor(tail)
+
     async def action_submit(self) -> None:
         """Take the line out now, so keys already on their way start a fresh one."""
         line = self.value

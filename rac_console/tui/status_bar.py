@@ -42,10 +42,11 @@ def status_text(core: ConsoleCore, frames_per_second: float) -> Text:
         text.append("connecting…", style="yellow")
     else:
         text.append("idle" if core.session is not None else "disconnected", style="dim")
-    connected = state == "connected" and core.session is not None
-    rtt = core.session.last_rtt if connected and core.session is not None else None
+    session = core.session  # read once: a disconnect on the engine's thread may clear it
+    connected = state == "connected" and session is not None
+    rtt = session.last_rtt if connected and session is not None else None
     text.append(f" · rtt {rtt * 1000:.2f} ms" if rtt is not None else " · rtt –")
-    sent_at = core.session.waiting_since if connected and core.session is not None else None
+    sent_at = session.waiting_since if connected and session is not None else None
     if sent_at is not None:
         waited = time.perf_counter() - sent_at
         if waited >= WAITING_SHOWN_AFTER:
