@@ -406,6 +406,11 @@ class RacSession:
         except (OSError, UnicodeError, ValueError) as exc:  # TimeoutError is an OSError
             self._set_state("closed")
             raise ConnectFailed(f"cannot connect to {self.address}: {_reason(exc)}") from None
+        if transport.is_closing():
+            # Closed by the peer before we got hold of it: its connection_lost has come
+            # and gone, so say it now rather than send into it and wait for a timeout.
+            self._set_state("closed")
+            raise Disconnected("the controller closed the connection as soon as it was made")
         self._transport = transport  # type: ignore[assignment]
         self._protocol = protocol
         self._decoder.clear()

@@ -195,7 +195,7 @@ class ConsoleCore:
             self._forget_figures()
         if state == "closed" and self.backoff.closed():
             self._early_drop = True  # the poller waits before its next request
-        if state == "connected":
+        if state in ("connecting", "connected"):  # closed while connecting counts too
             self.backoff.connected()
             self.retry_at = None
             if self._lost:
@@ -359,6 +359,7 @@ class ConsoleCore:
                     self.watch.mark_all("DISCONNECTED")
                     self.note(f"connection lost: {exc}")
                 await self._wait_to_retry("lost")
+                self._early_drop = False  # that failure has had its wait
                 continue
             except Exception as exc:  # a bug must not silently stop the live table
                 self.note(f"polling error: {exc!r}")

@@ -116,3 +116,18 @@ async def test_a_pause_during_a_backoff_leaves_no_countdown(tmp_path: Path) -> N
             await until(pilot, lambda: "retrying" not in str(status.render()), "no countdown")
     finally:
         server.close()
+
+
+async def test_a_controller_that_closes_at_once_is_not_hammered(tmp_path: Path) -> None:
+    server = RecordingServer(lambda line: CLOSE)
+    server._serve = lambda conn: conn.close()  # type: ignore[method-assign]
+    try:
+        app = make_app(tmp_path, "127.0.0.1", server.port, interval=0.05, timeout=5)
+        async with app.run_test(size=(160, 40)) as pilot:
+            await type_line(pilot, "watch I 0-49")
+            await until(
+                pilot, lambda: app.core.backoff.delay >= 4.0, "the backoff to reach 4 s", 15
+            )
+            assert len(server.peers) <= 6, len(server.peers)
+    finally:
+        server.close()

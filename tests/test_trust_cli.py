@@ -6,6 +6,9 @@ assertions are on the bytes the server received and the bytes the CLI printed.
 
 from __future__ import annotations
 
+import contextlib
+import socket
+import threading
 from collections.abc import Callable
 
 import pytest
@@ -135,3 +138,42 @@ def test_json_error_line_keeps_colons_as_typed(
     assert result.returncode == 1
     assert "GET:RC8:11:V:" in result.stderr
     assert "✌" not in result.stderr
+
+
+def test_a_controller_that_closes_at_once_is_not_a_timeout(
+    env: dict[str, str],  # noqa: F811
+    recording: Callable[..., RecordingServer],  # noqa: F811
+) -> None:
+    closer = socket.create_server(("127.0.0.1", 0))
+    port = closer.getsockname()[1]
+    stop = threading.Event()
+
+    def close_every_connection() -> None:
+        closer.settimeout(0.05)
+        while not stop.is_set():
+            with contextlib.suppress(TimeoutError, OSError):
+                conn, _ = closer.accept()
+                conn.close()
+
+    threading.Thread(target=close_every_connection, daemon=True).start()
+    try:
+        for _ in range(5):  # the race has two sides: try it a few times
+            result = cli(
+                env,
+                "-H",
+                "127.0.0.1",
+                "-p",
+                str(port),
+                "--timeout",
+                "60",
+                "run",
+                "-",
+                stdin="put I 1 5\n",
+                timeout=30,
+            )
+            assert result.returncode == 3
+            assert "closed the connection" in result.stderr
+            assert "may have been applied" not in result.stderr
+    finally:
+        stop.set()
+        closer.close()
