@@ -313,7 +313,9 @@ class RacSession:
             problem = str(exc)
         if problem:
             self._drop_connection()
-            raise BadReply(f"bad reply '{escape_bytes(frame)}': {problem}", frame)
+            if len(problem) > QUOTED_BYTES:  # a parser's message may quote the reply too
+                problem = problem[:QUOTED_BYTES] + "…"
+            raise BadReply(f"bad reply '{_quoted(frame)}': {problem}", frame)
         self.last_rtt = rtt
         return Reply(text, frame, response, rtt)
 
@@ -590,6 +592,18 @@ def _put_check(response: Response) -> str | None:
     if response.variant is not None:
         return "a PUT reply carries no value"
     return None
+
+
+#: Bytes of a bad reply quoted in a message; the whole reply is in the log and --record.
+QUOTED_BYTES = 120
+
+
+def _quoted(frame: bytes) -> str:
+    """A reply as a message quotes it: escaped, and cut when long (a 64 KiB line of
+    garbage must not fill a screen)."""
+    if len(frame) <= QUOTED_BYTES:
+        return escape_bytes(frame)
+    return f"{escape_bytes(frame[:QUOTED_BYTES])}… ({len(frame)} bytes)"
 
 
 def _reason(exc: BaseException) -> str:

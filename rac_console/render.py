@@ -17,6 +17,9 @@ from .commands.outcome import Outcome
 from .protocol import Variant, vt_name
 from .protocol.text import describe_response, terminal_safe, terminal_safe_lines
 
+#: Characters of a reply quoted in an error line.
+MAX_QUOTED_REPLY = 200
+
 
 def make_console(*, stderr: bool = False, **options: Any) -> Console:
     """A console that prints text as given: no markup, no emoji codes, no highlighting."""
@@ -77,7 +80,10 @@ def error_text(outcome: Outcome, prefix: str = "") -> str:
     if outcome.request and outcome.response_text is None:
         parts.append(f"(request {outcome.request})")
     elif outcome.request:
-        parts.append(f"(request {outcome.request}, reply {outcome.response_text})")
+        reply = outcome.response_text or ""
+        if len(reply) > MAX_QUOTED_REPLY:  # the whole reply is in --json, the log and --record
+            reply = f"{reply[:MAX_QUOTED_REPLY]}… ({len(reply)} characters)"
+        parts.append(f"(request {outcome.request}, reply {reply})")
     return terminal_safe(" ".join(parts))
 
 

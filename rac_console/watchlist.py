@@ -71,7 +71,7 @@ def load(path: str | Path) -> list[tuple[VarRef, str]]:
     """The rows of a watch list file; InputError, one line, for anything wrong with it."""
     try:
         file = Path(path).expanduser()
-        if not file.is_file():  # a device or a pipe could be endless, or never end
+        if file.exists() and not file.is_file():  # a device or a pipe: endless, or no end
             raise InputError(f"{path} is not a regular file: not a watch list")
         with file.open("rb") as handle:
             data = handle.read(MAX_FILE_BYTES + 1)

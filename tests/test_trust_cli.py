@@ -177,3 +177,29 @@ def test_a_controller_that_closes_at_once_is_not_a_timeout(
     finally:
         stop.set()
         closer.close()
+
+
+def test_a_port_without_a_host_is_refused(env: dict[str, str]) -> None:  # noqa: F811
+    result = cli(env, "-p", "40653", "get", "I", "50")
+    assert result.returncode == 2
+    assert "-p 40653 needs -H HOST" in result.stderr
+    assert result.stdout == ""
+
+
+def test_the_console_without_a_terminal_says_so_and_exits(env: dict[str, str]) -> None:  # noqa: F811
+    result = cli(env, "--json", timeout=30)  # stdin and stdout are pipes here
+    assert result.returncode == 2
+    assert "the console needs a terminal" in result.stderr
+    assert "\x1b" not in result.stdout
+
+
+def test_a_huge_garbage_reply_is_quoted_short(
+    env: dict[str, str],  # noqa: F811
+    recording: Callable[..., RecordingServer],  # noqa: F811
+) -> None:
+    server = recording(lambda line: b"Z" * 60_000 + b"\r")
+    result = cli(env, *server.args, "get", "I", "1")
+    assert result.returncode == 3
+    lines = result.stderr.strip().splitlines()
+    assert len(lines) == 1 and len(lines[0]) < 1000, len(result.stderr)
+    assert "(60000 bytes)" in lines[0]

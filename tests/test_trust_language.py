@@ -7,7 +7,7 @@ from pathlib import Path
 import pytest
 from tui_helpers import FrameTap, make_app, results_text, type_line, until
 
-from rac_console.commands.language import Put, Watch, parse_command
+from rac_console.commands.language import Put, Unwatch, Watch, parse_command
 from rac_console.protocol import InputError
 
 
@@ -64,6 +64,10 @@ def test_watch_takes_several_variables() -> None:
     assert isinstance(command, Watch) and command.label == "gripper bank"
     with pytest.raises(InputError, match="a label names one variable or range"):
         parse_command("watch P 0 J 0 home")
+    command = parse_command("unwatch P 0 J 0")
+    assert isinstance(command, Unwatch) and [str(v) for v in command.vars] == ["P0", "J0"]
+    with pytest.raises(InputError, match="unwatch takes variables only"):
+        parse_command("unwatch P 0 garbage words here")
     for bad in ("watch I 1 every nan", "watch I 1 every inf", "watch I 1 every -1"):
         with pytest.raises(InputError, match="every must be from 0"):
             parse_command(bad)

@@ -403,6 +403,13 @@ def use_uvloop() -> bool:
 def _dispatch(args: argparse.Namespace) -> int:
     import asyncio
 
+    if getattr(args, "port", 5006) != 5006 and not getattr(args, "host", None):
+        print(
+            f"rac-console: -p {args.port} needs -H HOST: without -H every command talks "
+            "to a built-in simulator of its own",
+            file=sys.stderr,
+        )
+        return 2
     use_uvloop()
 
     if args.command in ("get", "put", "send"):
@@ -456,6 +463,13 @@ def _interactive(args: argparse.Namespace) -> int:
         except InputError as exc:
             print(f"rac-console: {terminal_safe(str(exc))}", file=sys.stderr)
             return 2
+    if not (sys.stdin.isatty() and sys.stdout.isatty()):
+        print(
+            "rac-console: the console needs a terminal; for scripts use "
+            "'rac-console run -' (or get, put, send with --json)",
+            file=sys.stderr,
+        )
+        return 2
     history = History(args.history or default_history_path())
     if args.command == "repl":
         from ..repl.repl import run_repl

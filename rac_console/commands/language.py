@@ -208,7 +208,10 @@ def parse_command(line: str) -> Command | None:
     if word == "unwatch":
         if rest.lower() == "all":
             return Unwatch(())
-        return Unwatch(_parse_vars(rest, spec.usage)[0])
+        variables, extra, _ = _parse_var_list(rest, spec.usage)
+        if extra.strip():
+            raise InputError(f"unwatch takes variables only, not {extra.strip()!r}: {spec.usage}")
+        return Unwatch(variables)
     if word == "interval":
         return SetInterval(_parse_seconds(rest))
     if word == "connect":
@@ -263,13 +266,11 @@ def _parse_vars(text: str, usage: str) -> tuple[tuple[VarRef, ...], str]:
 _NEXT_VAR_RE = re.compile(r"\s*(?:IO|[IFDSVPJT])\s*\[?\s*\d", re.ASCII | re.IGNORECASE)
 
 
-def _parse_watch(text: str) -> Watch:
-    """``watch P 0``, ``watch IO 128-135 gripper``, ``watch P 0 J 0``, ``... every 0.2``.
-
-    Several variables are all watched; a label (quoted to keep it from being read
-    as a variable) names one variable or range, never a list.
-    """
-    usage = COMMANDS["watch"].usage + ", e.g. watch IO 128-135"
+def _parse_var_list(
+    text: str, usage: str, counted: bool = False
+) -> tuple[tuple[VarRef, ...], str, int]:
+    """Variables and ranges one after another (``P 0 J 0 IO 128-135``), the text after
+    them, and how many were written (a label may name one only)."""
     variables, rest = _parse_vars(text, usage)
     specs = 1
     while _NEXT_VAR_RE.match(rest):
@@ -277,7 +278,18 @@ def _parse_watch(text: str) -> Watch:
         variables += more
         specs += 1
     if len(variables) > MAX_RANGE:
-        raise InputError(f"watch takes at most {MAX_RANGE} variables at once")
+        raise InputError(f"at most {MAX_RANGE} variables at once")
+    return tuple(dict.fromkeys(variables)), rest, specs
+
+
+def _parse_watch(text: str) -> Watch:
+    """``watch P 0``, ``watch IO 128-135 gripper``, ``watch P 0 J 0``, ``... every 0.2``.
+
+    Several variables are all watched; a label (quoted to keep it from being read
+    as a variable) names one variable or range, never a list.
+    """
+    usage = COMMANDS["watch"].usage + ", e.g. watch IO 128-135"
+    variables, rest, specs = _parse_var_list(text, usage, counted=True)
     label, every, rest = "", None, rest.strip()
     if rest[:1] in ("'", '"'):  # a quoted label is taken whole, "every" inside it too
         close = rest.find(rest[0], 1)
@@ -295,7 +307,7 @@ def _parse_watch(text: str) -> Watch:
             "a label names one variable or range: watch P 0 pick, then watch J 0 home "
             '(quote a label that starts like a variable: watch P 0 "J 0 side")'
         )
-    return Watch(tuple(dict.fromkeys(variables)), label, every)
+    return Watch(variables, label, every)
 
 
 def _parse_latency(text: str) -> Latency:
