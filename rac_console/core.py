@@ -330,14 +330,14 @@ class ConsoleCore:
 
         try:
             if command.action == "save":
-                rows = [(row.var, row.label) for row in self.watch.rows.values()]
-                watchlist.save(command.path, rows)
-                return Message(f"saved {len(rows)} watched variables to {command.path}")
+                saved = [(row.var, row.label, row.every) for row in self.watch.rows.values()]
+                watchlist.save(command.path, saved)
+                return Message(f"saved {len(saved)} watched variables to {command.path}")
             rows = watchlist.load(command.path)
         except InputError as exc:
             return Message(str(exc), "error")
-        for var, label in rows:
-            self.watch.add((var,), label)
+        for var, label, every in rows:
+            self.watch.add((var,), label, every)
             self.seen.add((var.kind.code, var.index))
         self._wake.set()
         return Message(f"loaded {len(rows)} watched variables from {command.path}")

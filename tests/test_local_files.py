@@ -233,3 +233,45 @@ def test_history_writers_in_two_processes_lose_nothing(tmp_path: Path) -> None:
         mine = [int(line.split()[2]) for line in lines if line.endswith(f"# {name}")]
         # What is left of each writer is the end of what it wrote, with no gap.
         assert mine == list(range(300 - len(mine), 300)), (name, mine)
+
+
+@pytest.mark.parametrize(
+    ("content", "message"),
+    [
+        ('[[watch]]\ntype = "I"\nindex = "3"\n', "index is a whole number"),
+        ('[[watch]]\ntype = "I"\nindex = 3\ncolour = "red"\n', "unknown key 'colour'"),
+        ('[[watch]]\ntype = "I"\nindex = 3\n[[watch]]\ntype = "i"\nindex = 3\n', "repeats I3"),
+        ('[[watch]]\ntype = "I"\nindex = 3\nevery = -1\n', "every is 0 to 3600 seconds"),
+        ('[[watch]]\ntype = "I"\nindex = 3\nlabel = 5\n', "label is text"),
+    ],
+)
+def test_a_watch_list_is_taken_as_written_or_refused(
+    tmp_path: Path, content: str, message: str
+) -> None:
+    from rac_console.protocol import InputError
+    from rac_console.watchlist import load
+
+    path = tmp_path / "cell.toml"
+    path.write_text(content)
+    with pytest.raises(InputError, match=message):
+        load(path)
+
+
+async def test_save_and_load_keep_labels_and_every(tmp_path: Path) -> None:
+    path = tmp_path / "cell.toml"
+    first = make_app(tmp_path)
+    async with first.run_test(size=(120, 40)) as pilot:
+        await type_line(pilot, 'watch P 10 "pick every time" every 2.5')
+        await type_line(pilot, "watch IO 128-129 gripper")
+        await type_line(pilot, f"save {path}")
+        await until(pilot, lambda: "saved 3 watched variables" in results_text(first), "save")
+    second = make_app(tmp_path)
+    async with second.run_test(size=(120, 40)) as pilot:
+        await type_line(pilot, f"load {path}")
+        await until(pilot, lambda: "loaded 3 watched variables" in results_text(second), "load")
+        rows = {str(var): (row.label, row.every) for var, row in second.core.watch.rows.items()}
+        assert rows == {
+            "P10": ("pick every time", 2.5),
+            "IO128": ("gripper", None),
+            "IO129": ("gripper", None),
+        }
