@@ -26,9 +26,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
-import re
-import select
 import selectors
 import socket
 import statistics
@@ -40,9 +37,9 @@ import time
 from collections import Counter
 from collections.abc import Callable, Iterator
 from pathlib import Path
-from typing import IO, Any
+from typing import Any
 
-from abusive_clients import HOST, ask, hostile
+from sim_harness import HOST, SimulatorProcess, ask, hostile
 
 try:
     import resource
@@ -53,72 +50,6 @@ SECTIONS = ("noise", "deaf", "fds", "control")
 
 
 # ------------------------------------------------------------------- helpers
-
-
-class Simulator:
-    """``python -m rac_console sim --port 0 ARGS`` with stderr to a file or a pipe."""
-
-    def __init__(
-        self,
-        *args: str,
-        stderr_pipe: bool = False,
-        preexec: Callable[[], None] | None = None,
-    ) -> None:
-        self._scratch = tempfile.TemporaryDirectory()
-        self.err_path = Path(self._scratch.name) / "stderr"
-        self._err: IO[bytes] | None = None if stderr_pipe else open(self.err_path, "wb")  # noqa: SIM115
-        self.process = subprocess.Popen(
-            [sys.executable, "-m", "rac_console", "sim", "--port", "0", *args],
-            stdout=subprocess.PIPE,
-            stderr=subprocess.PIPE if stderr_pipe else self._err,
-            cwd=self._scratch.name,  # not the checkout: PYTHONPATH picks the package
-            preexec_fn=preexec,
-        )
-        assert self.process.stdout is not None
-        ready, _, _ = select.select([self.process.stdout], [], [], 20)
-        line = self.process.stdout.readline().decode() if ready else ""
-        found = re.search(r":(\d+) ", line)
-        if not found:
-            self.stop()
-            raise RuntimeError(f"the simulator did not start: {line!r} {self.stderr()[:500]!r}")
-        self.port = int(found.group(1))
-
-    def stderr(self) -> str:
-        if self._err is None:
-            return ""
-        self._err.flush()
-        return self.err_path.read_text(errors="replace")
-
-    def stderr_lines(self) -> int:
-        return len(self.stderr().splitlines())
-
-    def rss_kb(self, field: str = "VmRSS") -> int:
-        with open(f"/proc/{self.process.pid}/status") as status:
-            for line in status:
-                if line.startswith(field + ":"):
-                    return int(line.split()[1])
-        return -1
-
-    def fds(self) -> int:
-        try:
-            return len(os.listdir(f"/proc/{self.process.pid}/fd"))
-        except OSError:
-            return -1
-
-    def stop(self) -> None:
-        if self.process.poll() is None:
-            self.process.kill()
-        self.process.wait(10)
-        for stream in (self.process.stdout, self.process.stderr, self._err):
-            if stream is not None:
-                stream.close()
-        self._scratch.cleanup()
-
-    def __enter__(self) -> Simulator:
-        return self
-
-    def __exit__(self, *exc_info: object) -> None:
-        self.stop()
 
 
 def wait_for(predicate: Callable[[], bool], timeout: float) -> bool:
@@ -151,7 +82,7 @@ def storm(port: int, count: int, batch: int = 100) -> float:
 
 def noise_section(count: int) -> dict[str, Any]:
     out: dict[str, Any] = {}
-    with Simulator() as sim:
+    with SimulatorProcess() as sim:
         out["storm_seconds"] = round(storm(sim.port, count), 2)
         out["answered_after"] = ask(sim.port, 10) is not None
         time.sleep(1.0)  # let the last writes fail and any summary line come out
@@ -161,7 +92,7 @@ def noise_section(count: int) -> dict[str, Any]:
         out["stderr_kinds"] = dict(
             Counter(line.strip()[:60] for line in text.splitlines()).most_common(4)
         )
-    with Simulator(stderr_pipe=True) as sim:  # stderr a pipe that nobody reads
+    with SimulatorProcess(stderr_pipe=True) as sim:  # stderr a pipe that nobody reads
         storm(sim.port, count)
         answered = ask(sim.port, 10)
         out["answered_with_undrained_stderr"] = answered is not None
@@ -248,22 +179,16 @@ def flood(
     return sent, time.perf_counter() - started
 
 
-def cpu_seconds(pid: int) -> float:
-    with open(f"/proc/{pid}/stat") as stat:
-        fields = stat.read().rsplit(")", 1)[1].split()
-    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
-
-
-def watch_until_idle(sim: Simulator, cap: float) -> tuple[int, float]:
+def watch_until_idle(sim: SimulatorProcess, cap: float) -> tuple[int, float]:
     """Sample RSS every 0.2 s until the simulator uses under 5% of a CPU for a second
     (or ``cap`` seconds pass); the highest RSS seen and how long it stayed busy."""
     started = time.monotonic()
-    peak, window = sim.rss_kb(), [(started, cpu_seconds(sim.process.pid))]
+    peak, window = sim.rss_kb(), [(started, sim.cpu_seconds())]
     while time.monotonic() - started < cap:
         time.sleep(0.2)
         peak = max(peak, sim.rss_kb())
         now = time.monotonic()
-        window.append((now, cpu_seconds(sim.process.pid)))
+        window.append((now, sim.cpu_seconds()))
         window = [w for w in window if now - w[0] <= 1.05]
         elapsed = now - window[0][0]
         if elapsed >= 0.95 and (window[-1][1] - window[0][1]) / elapsed < 0.05:
@@ -274,7 +199,7 @@ def watch_until_idle(sim: Simulator, cap: float) -> tuple[int, float]:
 def deaf_section(count: int) -> dict[str, Any]:
     """Each deaf client asks for S10, set to 240 characters: 14 bytes in, 252 out."""
     out: dict[str, Any] = {}
-    with Simulator() as sim:
+    with SimulatorProcess() as sim:
         with socket.create_connection((HOST, sim.port), timeout=5) as setup:
             setup.sendall(b"PUT:RC8:10:S:8," + b"x" * 240 + b"\r")
             setup.recv(10)
@@ -309,7 +234,7 @@ def deaf_section(count: int) -> dict[str, Any]:
         out["normal_unanswered"] = normal.unanswered
         out["normal_rtt_median_ms"] = round(statistics.median(rtts) * 1000, 2) if rtts else None
         out["normal_rtt_max_ms"] = round(max(rtts) * 1000, 1) if rtts else None
-        out["stderr_lines"] = sim.stderr_lines()
+        out["stderr_lines"] = len(sim.stderr().splitlines())
         for sock in clients:
             sock.close()
     return out
@@ -329,7 +254,7 @@ def fd_section(idle: int, limit: int) -> dict[str, Any]:
         resource.setrlimit(resource.RLIMIT_NOFILE, (limit, hard))
 
     out: dict[str, Any] = {"fd_limit": limit, "idle_connections": idle}
-    with Simulator(preexec=lower) as sim:
+    with SimulatorProcess(preexec=lower) as sim:
         out["fds_at_start"] = sim.fds()
         clients: list[socket.socket] = []
         refused = 0
@@ -416,7 +341,7 @@ def idle_fates(clients: list[socket.socket]) -> dict[str, int]:
 
 def control_section() -> dict[str, Any]:
     out: dict[str, Any] = {}
-    with Simulator() as sim, socket.create_connection((HOST, sim.port), timeout=5) as sock:
+    with SimulatorProcess() as sim, socket.create_connection((HOST, sim.port), timeout=5) as sock:
         sock.sendall(b"SIM:SET:delay_ms=inf\r")
         out["set_delay_inf_reply"] = sock.recv(100).decode(errors="replace").strip()
         answered = ask(sim.port, 3, sock)

@@ -12,8 +12,6 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import logging
-import os
-import queue
 import socket
 import subprocess
 import sys
@@ -21,7 +19,7 @@ import threading
 import time
 from collections.abc import Callable
 from pathlib import Path
-from typing import IO, Any
+from typing import Any
 
 import pytest
 
@@ -38,7 +36,7 @@ except ImportError:  # not POSIX
 
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT / "benchmarks"))  # the benchmark's misbehaving clients, reused
-from abusive_clients import HOST, PROBE, PROBE_REPLY, ask, hostile  # noqa: E402
+from sim_harness import HOST, PROBE, PROBE_REPLY, SimulatorProcess, ask, hostile  # noqa: E402
 
 LONG_TEXT = "x" * 240  # PUT:RC8:10:S:8,<240> + CR is exactly 256 bytes
 HAS_PROC = Path("/proc/self/status").exists()
@@ -54,79 +52,6 @@ def wait_for(predicate: Callable[[], bool], timeout: float, what: str) -> None:
         if time.monotonic() > deadline:
             raise AssertionError(f"timed out after {timeout} s waiting for {what}")
         time.sleep(0.02)
-
-
-class SimProcess:
-    """``python -m rac_console sim --port 0 ARGS``; stderr to a file, or to a pipe that
-    nobody reads. Killed on exit."""
-
-    def __init__(
-        self,
-        tmp_path: Path,
-        *args: str,
-        stderr_pipe: bool = False,
-        preexec: Callable[[], None] | None = None,
-    ) -> None:
-        self.err_path = tmp_path / f"stderr-{time.monotonic_ns()}"
-        self._err: IO[bytes] | None = None if stderr_pipe else open(self.err_path, "wb")  # noqa: SIM115
-        paths = [str(ROOT), *filter(None, [os.environ.get("PYTHONPATH")])]
-        env = dict(os.environ, PYTHONPATH=os.pathsep.join(paths))
-        self.process = subprocess.Popen(
-            [sys.executable, "-m", "rac_console", "sim", "--port", "0", *args],
-            stdout=subprocess.PIPE,
-            stderr=subprocess.PIPE if stderr_pipe else self._err,
-            env=env,
-            preexec_fn=preexec,
-        )
-        lines: queue.Queue[bytes] = queue.Queue()
-        assert self.process.stdout is not None
-        stdout = self.process.stdout
-        threading.Thread(target=lambda: lines.put(stdout.readline()), daemon=True).start()
-        try:
-            first = lines.get(timeout=20).decode()
-        except queue.Empty:
-            first = ""
-        if "listening on" not in first:
-            self.close()
-            raise AssertionError(f"the simulator did not start: {first!r} {self.stderr()!r}")
-        self.port = int(first.split(" (")[0].rsplit(":", 1)[1])
-
-    @property
-    def pid(self) -> int:
-        return self.process.pid
-
-    def stderr(self) -> str:
-        if self._err is None:
-            return ""
-        self._err.flush()
-        return self.err_path.read_text(errors="replace")
-
-    def rss_kb(self) -> int:
-        for line in Path(f"/proc/{self.pid}/status").read_text().splitlines():
-            if line.startswith("VmRSS:"):
-                return int(line.split()[1])
-        raise AssertionError("no VmRSS")
-
-    def fds(self) -> int:
-        return len(os.listdir(f"/proc/{self.pid}/fd"))
-
-    def cpu_seconds(self) -> float:
-        fields = Path(f"/proc/{self.pid}/stat").read_text().rsplit(")", 1)[1].split()
-        return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
-
-    def close(self) -> None:
-        if self.process.poll() is None:
-            self.process.kill()
-        self.process.wait(10)
-        for stream in (self.process.stdout, self.process.stderr, self._err):
-            if stream is not None:
-                stream.close()
-
-    def __enter__(self) -> SimProcess:
-        return self
-
-    def __exit__(self, *exc_info: object) -> None:
-        self.close()
 
 
 def storm(port: int, count: int, threads: int = 8) -> None:
@@ -151,7 +76,7 @@ def quiet(text: str) -> list[str]:
 
 @needs_proc
 def test_hostile_connections_leave_stderr_small(tmp_path: Path) -> None:
-    with SimProcess(tmp_path) as sim:
+    with SimulatorProcess(pythonpath=str(ROOT)) as sim:
         baseline = sim.fds()
         storm(sim.port, 2000)
         assert ask(sim.port, 10) is not None
@@ -165,7 +90,7 @@ def test_hostile_connections_leave_stderr_small(tmp_path: Path) -> None:
 
 @needs_proc
 def test_stderr_nobody_reads_does_not_stop_it(tmp_path: Path) -> None:
-    with SimProcess(tmp_path, stderr_pipe=True) as sim:
+    with SimulatorProcess(stderr_pipe=True, pythonpath=str(ROOT)) as sim:
         storm(sim.port, 2000)
         assert ask(sim.port, 10) is not None, "no answer with stderr on an undrained pipe"
 
@@ -239,7 +164,7 @@ def test_clients_that_never_read_cost_flat_memory_and_starve_no_one(tmp_path: Pa
     it grows about 2 MB), and a normal client is answered all along, each request within
     10 s (it takes well under a second)."""
     count, bound_kb = 150, 16 * 1024
-    with SimProcess(tmp_path) as sim, contextlib.ExitStack() as stack:
+    with SimulatorProcess(pythonpath=str(ROOT)) as sim, contextlib.ExitStack() as stack:
         with socket.create_connection((HOST, sim.port), timeout=5) as setup:
             setup.sendall(f"PUT:RC8:10:S:8,{LONG_TEXT}\r".encode())
             assert setup.recv(10) == b"0\r"
@@ -359,7 +284,7 @@ def test_out_of_file_descriptors_it_keeps_serving(tmp_path: Path) -> None:
     answered, stderr has a line or two and no traceback, and the process lives on."""
     limit, idle = 256, 300
     with (
-        SimProcess(tmp_path, preexec=lowered_fd_limit(limit)) as sim,
+        SimulatorProcess(preexec=lowered_fd_limit(limit), pythonpath=str(ROOT)) as sim,
         contextlib.ExitStack() as stack,
     ):
         for _ in range(idle):

@@ -10,7 +10,15 @@ from __future__ import annotations
 import re
 from dataclasses import dataclass
 
-from ..protocol import InputError, Variant, VarKind, encode_request, kind_of, parse_index
+from ..protocol import (
+    KINDS,
+    InputError,
+    Variant,
+    VarKind,
+    encode_request,
+    kind_of,
+    parse_index,
+)
 from ..protocol.messages import get_request, put_request
 from ..protocol.variables import encode_value
 from .table import COMMANDS
@@ -238,17 +246,7 @@ def _parse_vars(text: str, usage: str) -> tuple[tuple[VarRef, ...], str]:
     match = re.match(
         r"\s*([A-Za-z]+)\s*(?:\[\s*(\d+)\s*-\s*(\d+)\s*\]|(\d+)\s*-\s*(\d+))", text, re.ASCII
     )
-    if match is None or match.group(1).upper() not in (
-        "I",
-        "F",
-        "D",
-        "S",
-        "V",
-        "P",
-        "J",
-        "T",
-        "IO",
-    ):
+    if match is None or match.group(1).upper() not in KINDS:
         var, rest = parse_var(text, usage)
         return (var,), rest
     kind = kind_of(match.group(1))
@@ -263,7 +261,8 @@ def _parse_vars(text: str, usage: str) -> tuple[tuple[VarRef, ...], str]:
     return tuple(VarRef(kind, i) for i in range(first, last + 1)), text[match.end() :]
 
 
-_NEXT_VAR_RE = re.compile(r"\s*(?:IO|[IFDSVPJT])\s*\[?\s*\d", re.ASCII | re.IGNORECASE)
+_TYPE_CODES = "|".join(sorted(KINDS, key=len, reverse=True))  # IO before I
+_NEXT_VAR_RE = re.compile(rf"\s*(?:{_TYPE_CODES})\s*\[?\s*\d", re.ASCII | re.IGNORECASE)
 
 
 def _parse_var_list(

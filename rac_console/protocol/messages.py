@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import re
 from dataclasses import dataclass
+from functools import cache
 from typing import TYPE_CHECKING
 
 from .errors import InputError, ProtocolError
@@ -27,9 +28,6 @@ def put_request(kind: VarKind, index: int, value_text: str) -> str:
     return f"PUT:{PART_NAME}:{index}:{kind.code}:{value_text}"
 
 
-_GET_RE = re.compile(r"GET:RC8:(\d{1,5}):(IO|[IFDSVPJT]):", re.ASCII | re.IGNORECASE)
-
-
 def is_well_formed_get(text: str) -> bool:
     """True only for ``GET:RC8:<index>:<type>:`` exactly: what read-only lets out.
 
@@ -38,8 +36,18 @@ def is_well_formed_get(text: str) -> bool:
     """
     from .variables import MAX_INDEX
 
-    match = _GET_RE.fullmatch(text)
+    match = _get_pattern().fullmatch(text)
     return match is not None and int(match.group(1)) <= MAX_INDEX
+
+
+@cache
+def _get_pattern() -> re.Pattern[str]:
+    """``GET:RC8:<index>:<type>:`` for the variable types the protocol has (made on first
+    use: ``variables`` imports this module's neighbours)."""
+    from .variables import KINDS
+
+    codes = "|".join(sorted(KINDS, key=len, reverse=True))
+    return re.compile(rf"GET:{PART_NAME}:(\d{{1,5}}):({codes}):", re.ASCII | re.IGNORECASE)
 
 
 def encode_request(text: str) -> bytes:
