@@ -2,9 +2,12 @@
 
 from __future__ import annotations
 
+import contextlib
 import time
 from collections import deque
 
+from rich.cells import cell_len
+from textual import work
 from textual.widgets import Log
 
 from ..client import Frame
@@ -59,6 +62,17 @@ class FrameLog(Log):
             if self.auto_scroll:
                 self.scroll_end(animate=False, immediate=True, x_axis=False)
         return len(events)
+
+    @work(thread=True, exit_on_error=False)
+    def _update_size(self, updates: int, lines: list[str]) -> None:
+        """Log's background width update, made safe for shutdown: a flush just before the
+        console closes may run this after the widget left the app or the app stopped
+        (a RuntimeError, which in Log's own version ends the app with a traceback)."""
+        if not lines:
+            return
+        with contextlib.suppress(RuntimeError):
+            width = max(cell_len(self._process_line(line)) for line in lines)
+            self.app.call_from_thread(self._update_maximum_width, updates, width)
 
 
 def _line(event: Frame | tuple[float, str]) -> str:
