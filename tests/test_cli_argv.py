@@ -392,7 +392,7 @@ def test_get_io_index_in_the_word() -> None:
 )
 def test_string_value_is_the_words(value_words: list[str], value: str) -> None:
     command = exchange_from_words("put", ["S", "10", *value_words])
-    assert command == Put(VarRef(S, 10), Variant(VT.BSTR, value), f"8,{value}")
+    assert command == Put.of(VarRef(S, 10), Variant(VT.BSTR, value), f"8,{value}")
     assert command.wire == f"PUT:RC8:10:S:8,{value}"
 
 
@@ -414,9 +414,9 @@ def test_put_other_types(words: list[str], wire: str) -> None:
 
 
 def test_send_takes_the_text() -> None:
-    assert exchange_from_words("send", ["-weird-text"]) == Raw("-weird-text")
-    assert exchange_from_words("send", ["  GET:RC8:1:I:"]) == Raw("  GET:RC8:1:I:")
-    assert exchange_from_words("send", ["GET:RC8:1:I:", "x"]) == Raw("GET:RC8:1:I: x")
+    assert exchange_from_words("send", ["-weird-text"]) == Raw.of("-weird-text")
+    assert exchange_from_words("send", ["  GET:RC8:1:I:"]) == Raw.of("  GET:RC8:1:I:")
+    assert exchange_from_words("send", ["GET:RC8:1:I:", "x"]) == Raw.of("GET:RC8:1:I: x")
 
 
 @pytest.mark.parametrize(
@@ -462,4 +462,4 @@ def test_any_printable_string_after_double_dash_is_written_as_given(text: str) -
     split = split_words("put", ["S", "10", "--json", "--", text], OPTIONS)
     assert split == SplitWords(("--json",), ("S", "10", text))
     command = exchange_from_words("put", split.operands)
-    assert command == Put(VarRef(S, 10), Variant(VT.BSTR, text), f"8,{text}")
+    assert command == Put.of(VarRef(S, 10), Variant(VT.BSTR, text), f"8,{text}")

@@ -46,8 +46,8 @@ def sent_lines(tap: FrameTap) -> list[bytes]:
 async def test_a_burst_of_typed_lines_runs_each_line_once_in_order(tmp_path: Path) -> None:
     app = make_app(tmp_path)
     async with app.run_test(size=(120, 40)) as pilot:
-        tap = FrameTap(app)
-        await until(pilot, lambda: app.core.connection == "connected", "the first connection")
+        tap = FrameTap(tmp_path)
+        await until(pilot, lambda: app.status is not None and app.status.connection == "connected", "the first connection")
         burst(pilot, "put I 10 1\n5\nget I 1\nget I 2\nget I 3\n")
         await until(pilot, lambda: len(tap.sent) >= 4, "the burst to run")
         await until(pilot, lambda: "I3 = " in results_text(app), "the last line's result")
@@ -66,7 +66,7 @@ async def test_a_burst_of_typed_lines_runs_each_line_once_in_order(tmp_path: Pat
 async def test_a_pasted_block_runs_each_line_once_in_order(tmp_path: Path) -> None:
     app = make_app(tmp_path)
     async with app.run_test(size=(120, 40)) as pilot:
-        tap = FrameTap(app)
+        tap = FrameTap(tmp_path)
         pilot.app.query_one(CommandLine).post_message(
             events.Paste("get I 1\nget I 2\r\nput I 10 7\nget I")
         )
@@ -78,7 +78,7 @@ async def test_a_pasted_block_runs_each_line_once_in_order(tmp_path: Path) -> No
 async def test_a_line_typed_right_after_enter_is_kept(tmp_path: Path) -> None:
     app = make_app(tmp_path)
     async with app.run_test(size=(120, 40)) as pilot:
-        tap = FrameTap(app)
+        tap = FrameTap(tmp_path)
         burst(pilot, "get I 4\nget I 5")  # the second line is typed, not yet entered
         await until(pilot, lambda: "I4 = " in results_text(app), "the first line's result")
         await pilot.pause(0.1)

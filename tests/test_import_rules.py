@@ -1,4 +1,5 @@
-"""The layers show in the imports: pure code stays pure, only two modules touch sockets."""
+"""The layers show in the imports: pure code stays pure, only two modules touch sockets,
+and the layers contract in pyproject.toml (import-linter) holds."""
 
 from __future__ import annotations
 
@@ -20,12 +21,13 @@ PURE_MODULES = [
     "rac_console.commands.language",
     "rac_console.commands.outcome",
     "rac_console.commands.completion",
-    "rac_console.commands.table",
+    "rac_console.commands.registry",
     "rac_console.commands.tokens",
+    "rac_console.protocol.request",
     "rac_console.sim.controller",
 ]
 FORBIDDEN_IN_PURE = ["asyncio", "socket", "selectors", "textual", "prompt_toolkit", "rich"]
-SOCKET_OWNERS = {"client.py", "sim/server.py"}
+SOCKET_OWNERS = {"session/blocking.py", "sim/server.py"}
 SOCKET_CALLS = {
     "create_connection",
     "create_server",
@@ -62,7 +64,24 @@ def _socket_uses(path: Path) -> list[str]:
     return found
 
 
-def test_only_the_client_and_the_simulator_server_touch_sockets() -> None:
+def test_the_layers_contract_holds() -> None:
+    """pyproject.toml's import-linter contracts: each layer imports only the ones below
+    it; no toolkit below the front ends; no rich below present/."""
+    result = subprocess.run(
+        [
+            sys.executable,
+            "-c",
+            "import sys; from importlinter.cli import lint_imports_command; "
+            "sys.exit(lint_imports_command())",
+        ],
+        capture_output=True,
+        text=True,
+        cwd=PACKAGE.parent,
+    )
+    assert result.returncode == 0, result.stdout[-3000:] + result.stderr[-2000:]
+
+
+def test_only_the_session_and_the_simulator_server_touch_sockets() -> None:
     offenders = {}
     for path in PACKAGE.rglob("*.py"):
         relative = path.relative_to(PACKAGE).as_posix()

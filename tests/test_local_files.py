@@ -16,7 +16,7 @@ from test_cli import cli, env  # noqa: F401 (fixture)
 from test_repl import Driver
 from tui_helpers import log_text, make_app, results_text, type_line, until
 
-from rac_console.history import History
+from rac_console.present.history import History
 from rac_console.tui.status_bar import StatusBar
 
 needs_dev_full = pytest.mark.skipif(
@@ -217,7 +217,7 @@ def test_history_writers_in_two_processes_lose_nothing(tmp_path: Path) -> None:
     path = tmp_path / "history"
     script = (
         "import sys\n"
-        "from rac_console.history import History\n"
+        "from rac_console.present.history import History\n"
         "h = History(sys.argv[1], limit=20)\n"
         "for n in range(300):\n"
         "    h.append(f'get I {n} # ' + sys.argv[2])\n"
@@ -249,7 +249,7 @@ def test_a_watch_list_is_taken_as_written_or_refused(
     tmp_path: Path, content: str, message: str
 ) -> None:
     from rac_console.protocol import InputError
-    from rac_console.watchlist import load
+    from rac_console.engine.watchlist import load
 
     path = tmp_path / "cell.toml"
     path.write_text(content)
@@ -269,7 +269,7 @@ async def test_save_and_load_keep_labels_and_every(tmp_path: Path) -> None:
     async with second.run_test(size=(120, 40)) as pilot:
         await type_line(pilot, f"load {path}")
         await until(pilot, lambda: "loaded 3 watched variables" in results_text(second), "load")
-        rows = {str(var): (row.label, row.every) for var, row in second.core.watch.rows.items()}
+        rows = {str(var): (row.label, row.every) for var, row in second.rows.items()}
         assert rows == {
             "P10": ("pick every time", 2.5),
             "IO128": ("gripper", None),

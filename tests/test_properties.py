@@ -10,7 +10,7 @@ from decimal import Decimal
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from rac_console.commands.language import parse_command
+from rac_console.commands.registry import parse_command
 from rac_console.protocol import (
     RacError,
     Variant,

@@ -9,7 +9,7 @@ import pytest
 from servers import CLOSE, RecordingServer
 from tui_helpers import log_text, make_app, type_line, until
 
-from rac_console.backoff import EARLY_EXCHANGES, FIRST_DELAY, GOOD_STRETCH, MAX_DELAY, Backoff
+from rac_console.engine.backoff import EARLY_EXCHANGES, FIRST_DELAY, GOOD_STRETCH, MAX_DELAY, Backoff
 from rac_console.tui.status_bar import StatusBar
 
 
@@ -57,17 +57,27 @@ async def test_a_controller_that_drops_every_connection_is_not_hammered(tmp_path
             await type_line(pilot, "watch I 0-49")
             await until(
                 pilot,
-                lambda: app.core.backoff.delay >= 4.0,
+                lambda: "waiting 4 s before the next try" in log_text(app),
                 "the backoff to reach 4 s",
                 timeout=15,
             )
             # One connection per try: 0.5, 1 and 2 s waits between the first four.
             assert server.accepted <= 5, server.accepted
-            assert "dropped early, retrying in" in str(status.render())
-            await until(pilot, lambda: "waiting 2 s before the next try" in log_text(app), "a mark")
+            assert "waiting 2 s before the next try" in log_text(app)
+            await until(
+                pilot, lambda: "dropped early, retrying in" in str(status.render()), "countdown"
+            )
             server.answer = True  # the controller comes back: polling resumes
-            await until(pilot, lambda: app.core.connection == "connected", "polling again", 10)
-            await until(pilot, lambda: app.core.backoff.delay == FIRST_DELAY, "a reset", 10)
+            await until(pilot, lambda: "polls/s" in str(status.render()), "polling again", 10)
+            # A stretch of good exchanges resets the backoff: the next drop waits 0.5 s.
+            first_waits = log_text(app).count(f"waiting {FIRST_DELAY:g} s before")
+            server.answer = False
+            await until(
+                pilot,
+                lambda: log_text(app).count(f"waiting {FIRST_DELAY:g} s before") > first_waits,
+                "a reset backoff",
+                10,
+            )
     finally:
         server.close()
 
@@ -123,7 +133,10 @@ async def test_other_controllers_that_keep_dropping_are_not_hammered(
         async with app.run_test(size=(160, 40)) as pilot:
             await type_line(pilot, "watch I 0-49")
             await until(
-                pilot, lambda: app.core.backoff.delay >= 4.0, "the backoff to reach 4 s", 15
+                pilot,
+                lambda: "waiting 4 s before the next try" in log_text(app),
+                "the backoff to reach 4 s",
+                15,
             )
             assert len(server.peers) <= 6, len(server.peers)
     finally:

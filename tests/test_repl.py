@@ -15,10 +15,11 @@ from prompt_toolkit.document import Document
 from prompt_toolkit.input import create_pipe_input
 from prompt_toolkit.output import DummyOutput
 
-from rac_console.client import Frame
-from rac_console.core import ConsoleCore
-from rac_console.history import History
-from rac_console.render import make_console
+from tui_helpers import WIRE_RECORD, FrameTap
+
+from rac_console.engine import Engine
+from rac_console.present.history import History
+from rac_console.present.render import make_console
 from rac_console.repl.prompt_parts import RacCompleter
 from rac_console.repl.repl import Repl
 
@@ -46,23 +47,25 @@ def test_completer_offers_candidates_with_help() -> None:
 class Driver:
     """A REPL on a pipe: type lines, read what it printed, wait on conditions."""
 
-    def __init__(self, tmp_path: Path, host: str | None = None, **core_options: object) -> None:
+    def __init__(self, tmp_path: Path, host: str | None = None, **engine_options: object) -> None:
         self.out = io.StringIO()
         self.console = make_console(
             file=self.out, force_terminal=True, width=140, color_system=None
         )
-        self.core = ConsoleCore(host, **core_options)  # type: ignore[arg-type]
+        self.tmp_path = tmp_path
+        self.engine = self.make_engine(host, **engine_options)
         self.history = History(tmp_path / "history")
-        self.frames: list[Frame] = []
-        self.core.add_log_listener(
-            lambda e: self.frames.append(e) if isinstance(e, Frame) else None
-        )
+        self.tap = FrameTap(tmp_path)  # what really went on the wire (--record)
+
+    def make_engine(self, host: str | None, **options: object) -> Engine:
+        options.setdefault("record", str(self.tmp_path / WIRE_RECORD))
+        return Engine(host, **options)  # type: ignore[arg-type]
 
     async def run(self, steps: Callable[[Driver], object]) -> str:
         with create_pipe_input() as pipe:
             self.pipe = pipe
             self.repl = Repl(
-                self.core, self.history, self.console, input=pipe, output=DummyOutput()
+                self.engine, self.history, self.console, input=pipe, output=DummyOutput()
             )
             task = asyncio.create_task(self.repl.run())
             await steps(self)  # type: ignore[misc]
@@ -97,7 +100,7 @@ async def test_get_put_and_raw_exchanges_against_the_simulator(tmp_path: Path) -
     out = await driver.run(steps)
     assert "S_OK  VT_I4  42" in out
     assert "invalid command string" in out
-    assert [f.data for f in driver.frames if f.direction == "tx"] == [
+    assert driver.tap.sent == [
         b"PUT:RC8:7:I:3,42\r",
         b"GET:RC8:7:I:\r",
         b"GET:RC8:7:I:\r",
@@ -117,7 +120,7 @@ async def test_bad_input_is_answered_and_nothing_is_sent(tmp_path: Path) -> None
     assert "P needs 7 values: X Y Z Rx Ry Rz Fig, got 3" in out
     assert "unknown variable type 'X'" in out
     assert "IO needs on or off" in out
-    assert [f for f in driver.frames if f.direction == "tx"] == []
+    assert driver.tap.sent == []
 
 
 async def test_history_is_recalled_in_a_second_session(tmp_path: Path) -> None:
@@ -164,7 +167,7 @@ async def test_watch_updates_in_place_until_enter(tmp_path: Path) -> None:
         d.type("watch I 0 cycle every 0.05\r")
         await d.until(lambda out: len(counter_values(out)) >= 3, "the counter to move")
         d.type("\r")
-        await d.until(lambda out: not d.core.watch.rows, "the watch to end")
+        await d.until(lambda out: not d.repl.rows, "the watch to end")
         d.type("get S 1\r")
         await d.until(lambda out: "S1 = RC8 simulator" in out, "the prompt to come back")
 
@@ -195,7 +198,7 @@ async def test_a_lost_connection_is_one_line_and_the_next_command_reconnects(
     simulator = await SimulatorServer().start()
     port = simulator.port
     driver = Driver(tmp_path)
-    driver.core = ConsoleCore("127.0.0.1", port, timeout=0.5)
+    driver.engine = driver.make_engine("127.0.0.1", port=port, timeout=0.5)
     prompts: list[str] = []
 
     async def steps(d: Driver) -> None:
@@ -204,13 +207,13 @@ async def test_a_lost_connection_is_one_line_and_the_next_command_reconnects(
         await simulator.stop()
         d.type("get I 1\r")
         await d.until(lambda out: "the next command reconnects" in out, "the lost line")
-        repl_prompt = d.repl._prompt_message()
+        repl_prompt = d.repl.prompt_message()
         prompts.append("".join(text for _, text in repl_prompt))
         restarted = await SimulatorServer(port=port).start()
         try:
             d.type("get I 2\r")
             await d.until(lambda out: "I2 = 250" in out, "the reconnected get")
-            prompts.append("".join(text for _, text in d.repl._prompt_message()))
+            prompts.append("".join(text for _, text in d.repl.prompt_message()))
         finally:
             await restarted.stop()
 
@@ -229,4 +232,4 @@ async def test_latency_inside_the_repl(tmp_path: Path) -> None:
 
     out = await driver.run(steps)
     assert "p95" in out and "0 errors" in out
-    assert sum(1 for f in driver.frames if f.direction == "tx") == 50
+    assert len(driver.tap.sent) == 50

@@ -8,10 +8,10 @@ import sys
 from pathlib import Path
 
 import pytest
+from session_helpers import AsyncSession
 from tui_helpers import make_app, results_text, type_line, until
 
-from rac_console.client import Frame, RacSession
-from rac_console.history import History
+from rac_console.present.history import History
 from rac_console.protocol import (
     InputError,
     ProtocolError,
@@ -22,9 +22,10 @@ from rac_console.protocol import (
 )
 from rac_console.protocol.hresult import E_INVALIDARG
 from rac_console.protocol.variant import canonical_r4
+from rac_console.session import Frame
 from rac_console.sim.controller import SimulatedController
 from rac_console.tui.watch_table import WatchTable
-from rac_console.watchlist import load
+from rac_console.engine.watchlist import load
 
 
 async def _slow_echo_server(delay: float) -> tuple[asyncio.Server, int]:
@@ -44,8 +45,10 @@ async def _slow_echo_server(delay: float) -> tuple[asyncio.Server, int]:
 def test_a_cancelled_request_never_leaves_its_reply_for_the_next() -> None:
     async def scenario() -> int:
         server, port = await _slow_echo_server(0.2)
-        async with server, RacSession("127.0.0.1", port, timeout=2) as session:
+        async with server, AsyncSession("127.0.0.1", port, timeout=2) as session:
             with pytest.raises(TimeoutError):
+                # The await is given up; the GET itself still runs on the session's
+                # thread and takes its own reply, so the next request waits for it.
                 await asyncio.wait_for(session.get(kind_of("I"), 1), 0.05)
             reply = await session.get(kind_of("I"), 2)
             return reply.response.variant.value
@@ -57,7 +60,7 @@ def test_a_failing_frame_observer_does_not_break_the_session() -> None:
     from rac_console.sim.server import SimulatorServer
 
     async def scenario() -> list[int]:
-        async with SimulatorServer() as sim, RacSession(sim.host, sim.port) as session:
+        async with SimulatorServer() as sim, AsyncSession(sim.host, sim.port) as session:
 
             def broken(frame: Frame) -> None:
                 raise OSError(28, "No space left on device")
@@ -73,7 +76,14 @@ def test_a_failing_frame_observer_does_not_break_the_session() -> None:
 
 
 def test_zero_keeps_its_sign_and_r4_text_is_shortest() -> None:
-    parse_variant("4,-0")
+    import math
+
+    minus_zero = parse_variant("4,-0")
+    assert minus_zero.vt == 4
+    assert minus_zero.value == 0.0 and math.copysign(1.0, minus_zero.value) == -1.0
+    assert format_variant(minus_zero) == "4,-0"
+    plus_zero = parse_variant("4,0")
+    assert plus_zero.value == 0.0 and math.copysign(1.0, plus_zero.value) == 1.0
     assert format_variant(Variant(4, 0.0)) == "4,0"
     assert format_variant(Variant(8196, [0.0, 0.0])) == "8196,0,0"
     assert format_variant(Variant(4, canonical_r4(2.0**-96))) == "4,1.2621775e-29"
@@ -100,7 +110,7 @@ def test_cli_refuses_a_huge_index_without_a_traceback() -> None:
 
 def test_control_characters_from_the_controller_are_escaped_on_screen() -> None:
     from rac_console.commands.language import VarRef
-    from rac_console.render import value_text
+    from rac_console.present.render import value_text
 
     shown = value_text(VarRef(kind_of("S"), 5), Variant(8, "A\x1b]0;x\x07B")).plain
     assert "\x1b" not in shown and "\\x1b" in shown

@@ -11,7 +11,7 @@ from pathlib import Path
 
 import pytest
 
-from rac_console.history import History
+from rac_console.present.history import History
 from rac_console.sim.server import is_loopback
 
 

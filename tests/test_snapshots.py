@@ -10,10 +10,13 @@ import time
 from pathlib import Path
 
 import pytest
-from tui_helpers import make_app, type_line
 
-from rac_console.client import Frame
+from dataclasses import replace
+
+from tui_helpers import make_app, type_line, until
+
 from rac_console.protocol import kind_of
+from rac_console.session import Frame
 from rac_console.tui.app import RacConsoleApp
 
 STAGED_FRAMES = [
@@ -33,15 +36,30 @@ def utc(monkeypatch: pytest.MonkeyPatch) -> None:
     time.tzset()
 
 
+async def watch_then_pause(pilot, lines: tuple[str, ...], rows: int) -> None:
+    """Watch, wait for every row's first value from the simulator, then pause."""
+    app = pilot.app
+    for line in lines:
+        await type_line(pilot, line)
+    await until(
+        pilot,
+        lambda: len(app.rows) == rows and all(v.status == "OK" for v in app.rows.values()),
+        "every row's first value",
+    )
+    await type_line(pilot, "pause")
+    await until(pilot, lambda: app.status is not None and app.status.paused, "the pause")
+
+
 def stage(app: RacConsoleApp) -> None:
-    core = app.core
-    assert core.simulator is not None and core.session is not None
+    """Fix what moves with the clock: ages, the round trip, one row timed out."""
     now = time.monotonic()
-    for n, row in enumerate(core.watch.rows.values()):
-        row.update(core.simulator.controller.variant(row.var.kind, row.var.index), now - 5.5)
+    for n, (var, view) in enumerate(list(app.rows.items())):
+        view = replace(view, changed_at=now - 5.5)
         if n == 2:
-            row.fail("TIMEOUT", now)
-    core.session.last_rtt = 0.00025
+            view = replace(view, status="TIMEOUT", stale=True)
+        app.rows[var] = view
+    assert app.status is not None
+    app.status = replace(app.status, rtt=0.00025)
     app.frame_log.clear()
     for n, (direction, data, rtt) in enumerate(STAGED_FRAMES):
         app.frame_log.add(Frame(1_700_000_000.125 + n * 0.001, direction, data, rtt))  # type: ignore[arg-type]
@@ -52,19 +70,12 @@ def test_main_screen(snap_compare, tmp_path: Path, utc: None) -> None:
     app = make_app(tmp_path)
 
     async def run_before(pilot) -> None:
-        app.core_thread.call(app.core.set_paused, True)
-        for line in (
-            "watch P 1 pick",
-            "watch J 1 home",
-            "watch I 4 parts",
-            "watch IO 128-131",
-            "watch S 1",
-        ):
-            await type_line(pilot, line)
-        await pilot.pause(0.2)
+        lines = ("watch P 1 pick", "watch J 1 home", "watch I 4 parts", "watch IO 128-131")
+        await watch_then_pause(pilot, (*lines, "watch S 1"), rows=8)
+        # No frames/s figure (it depends on timing): wait for the rate to fall to 0.
+        await until(pilot, lambda: app.frames_per_second() == 0, "no frames flowing")
         stage(app)
         app.flush_log()
-        app._flushes.clear()  # no frames/s figure: it depends on timing
         app.refresh_table()
         await pilot.pause(0.1)
 
@@ -75,13 +86,11 @@ def test_main_screen_small_terminal(snap_compare, tmp_path: Path, utc: None) -> 
     app = make_app(tmp_path, read_only=True)
 
     async def run_before(pilot) -> None:
-        app.core_thread.call(app.core.set_paused, True)
-        await type_line(pilot, "watch IO 128-131")
+        await watch_then_pause(pilot, ("watch IO 128-131",), rows=4)
         await type_line(pilot, "put I 1 5")
-        await pilot.pause(0.2)
+        await until(pilot, lambda: app.frames_per_second() == 0, "no frames flowing")
         stage(app)
         app.flush_log()
-        app._flushes.clear()  # no frames/s figure: it depends on timing
         app.refresh_table()
         await type_line(pilot, "put P 10 ", enter=False)
         await pilot.pause(0.2)

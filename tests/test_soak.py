@@ -16,8 +16,10 @@ import time
 import tracemalloc
 from pathlib import Path
 
-from rac_console.core import ConsoleCore
+from rac_console.engine import Alert, Engine, Note, Result, RowView
+from rac_console.engine.backoff import MAX_DELAY
 from rac_console.protocol import RacError, Response, Variant, escape_bytes, parse_response
+from rac_console.session import Frame
 from rac_console.sim.faults import FaultSettings
 from rac_console.sim.server import SimulatorServer
 
@@ -53,34 +55,61 @@ async def soak(record: Path) -> dict:
     controller.value = lambda kind, index: index * 100_000 + controller.requests  # type: ignore[method-assign]
     await simulator.start()
     log: collections.deque = collections.deque(maxlen=5000)  # bounded, like the frame log
-    core = ConsoleCore(simulator.host, simulator.port, timeout=0.3, interval=0, record=str(record))
-    core.add_log_listener(log.append)
+    rows: dict = {}
+    answered: set[str] = set()
+    alerts: list[str] = []
+    polls = 0
+
+    def drain() -> int:
+        """Take what the engine published, as the console does on its tick; polls sent."""
+        batch = engine.outbox.drain()
+        rows.update(batch.rows)
+        log.extend(batch.events)
+        answered.update(e.line or "" for e in batch.events if isinstance(e, Result))
+        alerts.extend(e.text for e in batch.events if isinstance(e, Alert))
+        return sum(
+            1 for e in batch.events if isinstance(e, Frame) and e.poll and e.direction == "tx"
+        )
+
+    engine = Engine(simulator.host, simulator.port, timeout=0.3, interval=0, record=str(record))
     tracemalloc.start()
-    await core.start()
+    await asyncio.to_thread(engine.start)
     try:
-        await core.handle_line(f"watch I 0-{VARIABLES - 1}")
+        engine.submit(f"watch I 0-{VARIABLES - 1}")
         started = time.monotonic()
         while time.monotonic() - started < SECONDS / 3:
             await asyncio.sleep(0.1)
+            polls += drain()
         early = own_memory(tracemalloc.take_snapshot())
+        last_poll = time.monotonic()
         while time.monotonic() - started < SECONDS:
-            await asyncio.sleep(0.1)
-            assert core._poll_task is not None and not core._poll_task.done()
+            await asyncio.sleep(0.25)
+            new_polls = drain()
+            if new_polls:
+                last_poll = time.monotonic()
+            # The longest quiet stretch is a backoff (5 s at most) after a timeout.
+            assert time.monotonic() - last_poll < MAX_DELAY + 2, "polling stopped"
+            polls += new_polls
         late = own_memory(tracemalloc.take_snapshot())
-        core.set_paused(True)
-        await asyncio.sleep(0.5)  # let the cycle in flight end
-        rows = {var.index: row.variant for var, row in core.watch.rows.items()}
-        notes = [event for event in log if isinstance(event, str)]
+        engine.submit("pause")
+        deadline = time.monotonic() + 5
+        while "pause" not in answered:
+            assert time.monotonic() < deadline, "the pause was not answered"
+            await asyncio.sleep(0.05)
+            polls += drain()
+        notes = [event.text for event in log if isinstance(event, Note)]
     finally:
         tracemalloc.stop()
-        await core.stop()
+        await asyncio.to_thread(engine.stop)
         await simulator.stop()
+    views: dict[int, RowView] = {var.index: view for var, view in rows.items()}
     return {
         "early": early,
         "late": late,
-        "rows": rows,
+        "rows": {index: view.variant for index, view in views.items()},
         "notes": notes,
-        "polls": core.polls,
+        "alerts": alerts,
+        "polls": polls,
         "transcript": simulator.transcript,
     }
 
@@ -92,7 +121,7 @@ def test_soak(tmp_path: Path) -> None:
     transcript = [entry for entry in result["transcript"] if not entry[1].startswith(b"SIM:")]
 
     assert result["polls"] > 4 * VARIABLES
-    assert not [n for n in result["notes"] if "polling error" in n]
+    assert result["alerts"] == []  # the engine never stopped on an internal error
     growth = result["late"] - result["early"]
     assert growth < max(2_000_000, 0.2 * result["early"]), f"memory grew by {growth} bytes"
 

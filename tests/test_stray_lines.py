@@ -2,11 +2,12 @@
 
 RAC has no request ids: a stray line (a double reply, a late duplicate) that waits on
 the connection when the next request goes out would be read as that request's answer.
-Here the stray is put in the client's receive buffer before the next request, with the
-event loop held (a blocking wait inside the coroutine) so that the loop cannot read it
-first; the session must see it, log it as unsolicited, reconnect and answer right.
+Here the stray is put in the session's receive buffer before the next request (the
+blocking session reads only while a request waits, so it stays there); the session
+must see it, log it as unsolicited, reconnect and answer right.
 
-Peers are plain sockets in a thread on 127.0.0.1 port 0; every wait has a deadline.
+Peers are plain sockets in a thread on 127.0.0.1 port 0, and the session is the plain
+blocking one, driven by the test's thread; every wait has a deadline.
 """
 
 from __future__ import annotations
@@ -22,10 +23,9 @@ from typing import Any
 
 import pytest
 
-from rac_console import client
 from rac_console.cli.main import build_parser, main
-from rac_console.client import Frame, RacSession
 from rac_console.protocol import kind_of, parse_response
+from rac_console.session import Frame, Session, blocking
 from rac_console.sim.faults import EXTRA_LINE, FaultPlan, FaultSettings
 from rac_console.sim.server import SimulatorServer
 
@@ -89,7 +89,7 @@ class HostilePeer:
         self._gate.release()
 
     def wait_done(self, count: int) -> None:
-        """Block the calling thread (and its event loop) until ``after`` ran ``count`` times."""
+        """Block the calling thread until ``after`` ran ``count`` times."""
         with self._changed:
             assert self._changed.wait_for(lambda: self._done >= count, DEADLINE), (
                 f"the peer carried out {self._done} of {count}"
@@ -151,19 +151,7 @@ class HostilePeer:
         return True
 
 
-def waits_in_buffer(session: RacSession) -> bool:
-    """Block, loop included, until the session's socket has something to read.
-
-    The loop is held on purpose: it cannot read the stray before the next request, so
-    the stray is in the kernel's receive buffer when that request is made.
-    """
-    transport = session._transport
-    assert transport is not None, "the session already dropped its connection"
-    readable, _, _ = select.select([transport.get_extra_info("socket")], [], [], DEADLINE)
-    return bool(readable)
-
-
-def frames_of(session: RacSession) -> list[Frame]:
+def frames_of(session: Session) -> list[Frame]:
     frames: list[Frame] = []
     session.add_frame_observer(frames.append)
     return frames
@@ -178,34 +166,31 @@ def run(coro: Awaitable[Any]) -> Any:
 
 def test_many_gets_with_a_stray_after_every_reply_never_return_the_stray() -> None:
     """300 GETs; after each reply the peer sends a stray line in its own sendall: right
-    away after odd requests (it may come with the reply, be read while the client is
-    idle, or wait), only once the client has its reply after even ones (so it surely
-    waits). The loop is held until the stray was sent and, unless the client already
-    read it, waits in the receive buffer. No answer may be the stray."""
+    away after odd requests (it may come with the reply or wait), only once the session
+    has its reply after even ones (so it surely waits). The test waits until the stray
+    was sent and, unless the session already read it, waits in the receive buffer. No
+    answer may be the stray."""
     count = 300
 
-    async def scenario(peer: HostilePeer) -> tuple[list[tuple[int, object]], int, int]:
-        session = RacSession(HOST, peer.port, timeout=DEADLINE)
+    with HostilePeer(STRAY, gate_every=2) as peer:
+        session = Session(HOST, peer.port, timeout=DEADLINE)
         frames = frames_of(session)
         wrong: list[tuple[int, object]] = []
         waiting = 0
         for n in range(1, count + 1):
             index = n % 100
-            reply = await session.get(INT, index)
+            reply = session.get(INT, index)
             value = reply.response.variant.value if reply.response.variant else None
             if not reply.response.ok or value != value_of(index):
                 wrong.append((n, value))
             if n % 2 == 0:
                 peer.release()
-            peer.wait_done(n)  # blocks the loop: the stray is on its way or read
+            peer.wait_done(n)  # the stray is sent, or came with the reply
             if session.state == "connected":  # not read yet: it must wait in the buffer
-                assert waits_in_buffer(session)
+                assert session.has_unread(DEADLINE)
                 waiting += 1
-        await session.close()
-        return wrong, waiting, sum(f.unsolicited for f in frames)
-
-    with HostilePeer(STRAY, gate_every=2) as peer:
-        wrong, waiting, unsolicited = run(scenario(peer))
+        session.close()
+        unsolicited = sum(f.unsolicited for f in frames)
     assert wrong == [], f"{len(wrong)} answers were not the reply to their request: {wrong[:5]}"
     assert waiting >= count // 2  # at least every gated stray waited when a get was made
     assert unsolicited >= count - 1  # every stray but the last is logged
@@ -218,25 +203,21 @@ def test_many_gets_with_a_stray_after_every_reply_never_return_the_stray() -> No
     ids=["line", "two-lines", "fragment", "binary"],
 )
 def test_stray_waiting_before_the_next_request_is_logged_and_skipped(waiting: bytes) -> None:
-    async def scenario(peer: HostilePeer) -> tuple[int, list[Frame]]:
-        session = RacSession(HOST, peer.port, timeout=DEADLINE)
+    with HostilePeer(waiting, gate_every=1) as peer:
+        session = Session(HOST, peer.port, timeout=DEADLINE)
         frames = frames_of(session)
-        first = await session.get(INT, 1)
+        first = session.get(INT, 1)
         assert first.response.variant is not None
         assert first.response.variant.value == value_of(1)
         peer.release()
         peer.wait_done(1)  # reply and stray were both sent before the next get is made
-        assert waits_in_buffer(session)
-        second = await session.get(INT, 2)
+        assert session.has_unread(DEADLINE)
+        second = session.get(INT, 2)
         assert second.response.ok
         assert second.response.variant is not None
         assert second.response.variant.value == value_of(2)
-        await session.close()
-        return peer.connections, frames
-
-    with HostilePeer(waiting, gate_every=1) as peer:
-        connections, frames = run(scenario(peer))
-    assert connections == 2
+        session.close()
+    assert peer.connections == 2
     unsolicited = [f for f in frames if f.unsolicited]
     assert b"".join(f.data for f in unsolicited) == waiting
     assert all(f.direction == "rx" for f in unsolicited)
@@ -256,70 +237,37 @@ def test_stray_waiting_before_the_next_request_is_logged_and_skipped(waiting: by
 def test_peer_gone_before_the_next_request_means_a_reconnect_not_an_error(
     after: tuple[Action, ...],
 ) -> None:
-    async def scenario(peer: HostilePeer) -> tuple[int, list[bytes]]:
-        session = RacSession(HOST, peer.port, timeout=DEADLINE)
+    with HostilePeer(*after, gate_every=1) as peer:
+        session = Session(HOST, peer.port, timeout=DEADLINE)
         frames = frames_of(session)
-        await session.get(INT, 1)
+        session.get(INT, 1)
         peer.release()
         peer.wait_done(1)
-        assert waits_in_buffer(session)  # EOF and a reset make the socket readable too
-        second = await session.get(INT, 2)
+        assert session.has_unread(DEADLINE)  # EOF and a reset make the socket readable too
+        second = session.get(INT, 2)
         assert second.response.variant is not None
         assert second.response.variant.value == value_of(2)
-        await session.close()
-        return peer.connections, [f.data for f in frames if f.unsolicited]
-
-    with HostilePeer(*after, gate_every=1) as peer:
-        connections, unsolicited = run(scenario(peer))
-    assert connections == 2
+        session.close()
+        unsolicited = [f.data for f in frames if f.unsolicited]
+    assert peer.connections == 2
     sent = b"".join(a for a in after if isinstance(a, bytes))
     assert b"".join(unsolicited) == sent.lstrip(b"\n")  # a CRLF's LF is not logged
 
 
 def test_an_lf_of_a_crlf_peer_in_its_own_segment_is_not_a_stray() -> None:
-    async def scenario(peer: HostilePeer) -> tuple[int, list[Frame]]:
-        session = RacSession(HOST, peer.port, timeout=DEADLINE)
+    with HostilePeer(b"\n", gate_every=1) as peer:
+        session = Session(HOST, peer.port, timeout=DEADLINE)
         frames = frames_of(session)
         for index in range(1, 6):
-            reply = await session.get(INT, index)
+            reply = session.get(INT, index)
             assert reply.response.variant is not None
             assert reply.response.variant.value == value_of(index)
             peer.release()
             peer.wait_done(index)
-            assert waits_in_buffer(session)  # the LF waits when the next get is made
-        await session.close()
-        return peer.connections, frames
-
-    with HostilePeer(b"\n", gate_every=1) as peer:
-        connections, frames = run(scenario(peer))
-    assert connections == 1
+            assert session.has_unread(DEADLINE)  # the LF waits when the next get is made
+        session.close()
+    assert peer.connections == 1
     assert not any(f.unsolicited for f in frames)
-
-
-def test_without_a_pollable_socket_the_loop_is_let_read_before_sending(
-    monkeypatch: pytest.MonkeyPatch,
-) -> None:
-    """The fallback (Windows' proactor loop keeps a read posted, so the socket itself
-    shows nothing): the session lets the loop deliver what arrived before it sends."""
-    monkeypatch.setattr(client, "_pollable_socket", lambda transport, loop: None)
-
-    async def scenario(peer: HostilePeer) -> list[bytes]:
-        session = RacSession(HOST, peer.port, timeout=DEADLINE)
-        frames = frames_of(session)
-        await session.get(INT, 1)
-        peer.release()
-        peer.wait_done(1)
-        assert waits_in_buffer(session)
-        second = await session.get(INT, 2)
-        assert second.response.variant is not None
-        assert second.response.variant.value == value_of(2)
-        await session.close()
-        return [f.data for f in frames if f.unsolicited]
-
-    with HostilePeer(STRAY, gate_every=1) as peer:
-        unsolicited = run(scenario(peer))
-    assert unsolicited == [STRAY]
-    assert peer.connections == 2
 
 
 @pytest.mark.parametrize("after", [(STRAY,), (CLOSE,)], ids=["line", "eof"])
@@ -327,24 +275,31 @@ def test_select_serves_where_poll_is_missing(
     monkeypatch: pytest.MonkeyPatch, after: tuple[Action, ...]
 ) -> None:
     """Windows has no select.poll: the same check through select.select."""
-    monkeypatch.setattr(client, "_POLL", None)
+    monkeypatch.setattr(blocking, "_POLL", None)
+    checks: list[float] = []  # the timeouts select.select was asked with
+    real_select = select.select
 
-    async def scenario(peer: HostilePeer) -> list[bytes]:
-        session = RacSession(HOST, peer.port, timeout=DEADLINE)
-        frames = frames_of(session)
-        await session.get(INT, 1)
-        assert session._poll is None and session._fd >= 0
-        peer.release()
-        peer.wait_done(1)
-        assert waits_in_buffer(session)
-        second = await session.get(INT, 2)
-        assert second.response.variant is not None
-        assert second.response.variant.value == value_of(2)
-        await session.close()
-        return [f.data for f in frames if f.unsolicited]
+    def counting_select(*args: Any) -> Any:
+        checks.append(args[3] if len(args) > 3 else -1.0)
+        return real_select(*args)
+
+    monkeypatch.setattr(select, "select", counting_select)
 
     with HostilePeer(*after, gate_every=1) as peer:
-        unsolicited = run(scenario(peer))
+        session = Session(HOST, peer.port, timeout=DEADLINE)
+        frames = frames_of(session)
+        session.get(INT, 1)
+        peer.release()
+        peer.wait_done(1)
+        assert session.has_unread(DEADLINE)
+        checks.clear()
+        second = session.get(INT, 2)
+        assert second.response.variant is not None
+        assert second.response.variant.value == value_of(2)
+        assert session.state == "connected"
+        session.close()
+        unsolicited = [f.data for f in frames if f.unsolicited]
+    assert 0 in checks  # the check before the request was a select.select, not a poll
     assert b"".join(unsolicited) == b"".join(a for a in after if isinstance(a, bytes))
     assert peer.connections == 2
 

@@ -17,7 +17,7 @@ TERMINAL_CONTROLS = ("\x1b", "\x07", "\x08", "\x9b")
 
 
 def sent(driver: Driver) -> list[bytes]:
-    return [f.data for f in driver.frames if f.direction == "tx"]
+    return driver.tap.sent
 
 
 async def test_a_burst_of_lines_runs_each_once_in_order(tmp_path: Path) -> None:

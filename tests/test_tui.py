@@ -26,7 +26,7 @@ async def test_starts_on_the_simulator_and_says_so(tmp_path: Path) -> None:
 async def test_typed_get_put_raw_and_send_show_frames_and_decoding(tmp_path: Path) -> None:
     app = make_app(tmp_path)
     async with app.run_test(size=(120, 40)) as pilot:
-        tap = FrameTap(app)
+        tap = FrameTap(tmp_path)
         await type_line(pilot, "put I 7 42")
         await until(pilot, lambda: "← 0↵" in log_text(app), "the PUT reply in the log")
         await type_line(pilot, "get I[7]")
@@ -46,7 +46,7 @@ async def test_typed_get_put_raw_and_send_show_frames_and_decoding(tmp_path: Pat
 async def test_bad_input_is_answered_in_place_and_nothing_is_sent(tmp_path: Path) -> None:
     app = make_app(tmp_path, read_only=True)
     async with app.run_test(size=(120, 40)) as pilot:
-        tap = FrameTap(app)
+        tap = FrameTap(tmp_path)
         for line in (
             "put P 10 1 2 3",
             "get X 1",

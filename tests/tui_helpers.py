@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import time
 from collections.abc import Callable
 from pathlib import Path
@@ -9,9 +10,8 @@ from pathlib import Path
 from textual.pilot import Pilot
 from textual.widgets import RichLog
 
-from rac_console.client import Frame
-from rac_console.core import ConsoleCore
-from rac_console.history import History
+from rac_console.engine import Engine
+from rac_console.present.history import History
 from rac_console.tui.app import RacConsoleApp
 from rac_console.tui.frame_log import FrameLog
 
@@ -27,10 +27,20 @@ def make_app(
     watch_file: str | None = None,
     record: str | None = None,
 ) -> RacConsoleApp:
-    core = ConsoleCore(
-        host, port, timeout=timeout, read_only=read_only, interval=interval, record=record
+    """The console on a private history; it records the wire to ``wire.jsonl`` in
+    ``tmp_path`` (read by :class:`FrameTap`) unless given another ``record`` file."""
+    engine = Engine(
+        host,
+        port,
+        timeout=timeout,
+        read_only=read_only,
+        interval=interval,
+        record=record or str(tmp_path / WIRE_RECORD),
     )
-    return RacConsoleApp(core, History(tmp_path / "history"), watch_file)
+    return RacConsoleApp(engine, History(tmp_path / "history"), watch_file)
+
+
+WIRE_RECORD = "wire.jsonl"
 
 
 async def until(
@@ -66,16 +76,19 @@ def results_text(app: RacConsoleApp) -> str:
 
 
 class FrameTap:
-    """A frame observer on the core: what really went on the wire."""
+    """What really went on the wire: the ``--record`` file the app under test writes."""
 
-    def __init__(self, app: RacConsoleApp) -> None:
-        self.frames: list[Frame] = []
-        app.core.add_log_listener(self._add)
+    def __init__(self, tmp_path: Path) -> None:
+        self.path = tmp_path / WIRE_RECORD
 
-    def _add(self, event: object) -> None:
-        if isinstance(event, Frame):
-            self.frames.append(event)
+    def _records(self) -> list[dict[str, object]]:
+        if not self.path.exists():
+            return []
+        return [json.loads(line) for line in self.path.read_text().splitlines() if line]
 
     @property
     def sent(self) -> list[bytes]:
-        return [f.data for f in self.frames if f.direction == "tx"]
+        """Requests as sent (ASCII, CR included): the recorder escapes nothing in them."""
+        return [
+            str(r["text"]).encode("ascii") + b"\r" for r in self._records() if r["dir"] == "tx"
+        ]

@@ -401,8 +401,6 @@ def use_uvloop() -> bool:
 
 
 def _dispatch(args: argparse.Namespace) -> int:
-    import asyncio
-
     if getattr(args, "port", 5006) != 5006 and not getattr(args, "host", None):
         print(
             f"rac-console: -p {args.port} needs -H HOST: without -H every command talks "
@@ -410,41 +408,42 @@ def _dispatch(args: argparse.Namespace) -> int:
             file=sys.stderr,
         )
         return 2
-    use_uvloop()
-
     if args.command in ("get", "put", "send"):
         from .oneshot import one_command
 
-        return asyncio.run(one_command(args))
+        return one_command(args)
     if args.command == "latency":
         from .oneshot import latency
 
-        return asyncio.run(latency(args))
+        return latency(args)
     if args.command == "run":
         from .oneshot import run_script
 
-        return asyncio.run(run_script(args))
+        return run_script(args)
     if args.command == "repl" and not sys.stdin.isatty():
         from .oneshot import run_script
 
         args.file = "-"  # no terminal: the REPL reads a script, like run -
-        return asyncio.run(run_script(args))
+        return run_script(args)
     if args.command == "sim":
+        import asyncio
+
         from .simulator import serve
 
+        use_uvloop()
         return asyncio.run(serve(args))
     return _interactive(args)
 
 
 def _interactive(args: argparse.Namespace) -> int:
     """The full-screen console, or the REPL: one engine and history file for both."""
-    from ..core import ConsoleCore
-    from ..history import History, default_history_path
+    from ..engine import Engine
+    from ..present.history import History, default_history_path
     from ..protocol import InputError
     from ..protocol.text import terminal_safe
 
     try:
-        core = ConsoleCore(
+        engine = Engine(
             args.host,
             args.port,
             timeout=args.timeout,
@@ -456,7 +455,7 @@ def _interactive(args: argparse.Namespace) -> int:
         print(f"rac-console: {terminal_safe(str(exc))}", file=sys.stderr)
         return 2
     if args.command is None and args.watch:
-        from ..watchlist import load
+        from ..engine.watchlist import load
 
         try:
             load(args.watch)  # a broken list is one line now, not a console that starts half-set
@@ -474,10 +473,10 @@ def _interactive(args: argparse.Namespace) -> int:
     if args.command == "repl":
         from ..repl.repl import run_repl
 
-        return run_repl(core, history)
+        return run_repl(engine, history)
     from ..tui.app import run_console
 
-    return run_console(core, history, args.watch)
+    return run_console(engine, history, args.watch)
 
 
 def parse_args(words: Sequence[str]) -> argparse.Namespace:

@@ -8,13 +8,14 @@ import json
 import sys
 from collections.abc import Iterator
 
-from ..client import ConnectFailed, RacSession
 from ..commands.argv import exchange_from_words, input_line
-from ..commands.language import Get, Latency, Put, Raw, parse_command
+from ..commands.language import Get, Latency, Put, Raw
 from ..commands.outcome import ExitStatus, Outcome, refused, worst
-from ..execute import execute, measure_latency
+from ..commands.registry import parse_command
+from ..engine.execute import execute, measure_latency
+from ..present.render import error_text, make_console, notice_text, print_error, print_outcome
 from ..protocol import InputError
-from ..render import error_text, make_console, notice_text, print_error, print_outcome
+from ..session import ConnectFailed, Disconnected, Session
 from .target import open_session
 
 
@@ -56,7 +57,7 @@ def _exchange_line(args: argparse.Namespace) -> str:
     return input_line(args.command, args.words)
 
 
-async def one_command(args: argparse.Namespace) -> ExitStatus:
+def one_command(args: argparse.Namespace) -> ExitStatus:
     """``get``, ``put`` and ``send``: build from the words, refuse or send, show, exit status.
 
     The command is built from ``args.words`` as the shell passed them (see
@@ -68,8 +69,8 @@ async def one_command(args: argparse.Namespace) -> ExitStatus:
         if args.words_problem is not None:
             raise InputError(args.words_problem)
         command = exchange_from_words(args.command, args.words)
-        async with open_session(args, output.local_failure) as session:
-            outcome = await execute(session, command, read_only=args.read_only, line=line)
+        with open_session(args, output.local_failure) as session:
+            outcome = execute(session, command, read_only=args.read_only, line=line)
     except InputError as exc:
         outcome = refused(line, str(exc))
     output.show(outcome)
@@ -86,7 +87,7 @@ def _script_lines(source: str) -> Iterator[str]:
         yield from handle
 
 
-async def run_script(args: argparse.Namespace) -> ExitStatus:
+def run_script(args: argparse.Namespace) -> ExitStatus:
     """``run FILE|-``: every line over one session; the worst status is the exit status."""
     output = Output(args.json)
     statuses: list[ExitStatus] = []
@@ -97,10 +98,10 @@ async def run_script(args: argparse.Namespace) -> ExitStatus:
         print_error(output.err, f"cannot read {args.file}: {exc.strerror}")
         return ExitStatus.REFUSED
     try:
-        async with open_session(args, output.local_failure) as session:
+        with open_session(args, output.local_failure) as session:
             for number, raw_line in enumerate(itertools.chain([first] if first else [], lines), 1):
                 line = raw_line.rstrip("\r\n")
-                outcome = await _run_line(session, line, args.read_only)
+                outcome = _run_line(session, line, args.read_only)
                 if outcome is not None:
                     output.show(outcome, {"line": number}, prefix=f"line {number}: ")
                     statuses.append(outcome.status)
@@ -110,7 +111,7 @@ async def run_script(args: argparse.Namespace) -> ExitStatus:
     return output.status(worst(statuses))
 
 
-async def _run_line(session: RacSession, line: str, read_only: bool) -> Outcome | None:
+def _run_line(session: Session, line: str, read_only: bool) -> Outcome | None:
     try:
         command = parse_command(line)
     except InputError as exc:
@@ -123,23 +124,23 @@ async def _run_line(session: RacSession, line: str, read_only: bool) -> Outcome 
             f"{line.split()[0]!r} works in the console and the REPL; "
             "run takes get, put, send and GET:/PUT: lines",
         )
-    return await execute(session, command, read_only=read_only, line=line)
+    return execute(session, command, read_only=read_only, line=line)
 
 
-async def latency(args: argparse.Namespace) -> ExitStatus:
+def latency(args: argparse.Namespace) -> ExitStatus:
     """``latency``: one summary line (or JSON object); exit 3 when nothing answered."""
     output = Output(args.json)
     try:
         command = parse_command(f"latency {max(1, int(args.count))} {args.var}")
         assert isinstance(command, Latency)
-        async with open_session(args, output.local_failure) as session:
-            summary = await measure_latency(
+        with open_session(args, output.local_failure) as session:
+            summary = measure_latency(
                 session, command.var, command.count, args.latency_interval
             )
     except InputError as exc:
         print_error(output.err, str(exc))
         return ExitStatus.REFUSED
-    except ConnectFailed as exc:
+    except (ConnectFailed, Disconnected) as exc:
         print_error(output.err, str(exc))
         return ExitStatus.TRANSPORT
     if args.json:

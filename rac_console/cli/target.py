@@ -4,31 +4,33 @@ from __future__ import annotations
 
 import argparse
 import sys
-from collections.abc import AsyncIterator, Callable
-from contextlib import AsyncExitStack, asynccontextmanager
+from collections.abc import Callable, Iterator
+from contextlib import ExitStack, contextmanager
 
-from ..client import RacSession
-from ..core import SIMULATOR_NOTICE
-from ..recorder import FrameRecorder
-from ..sim.server import SimulatorServer
+from ..engine import SIMULATOR_NOTICE
+from ..engine.recorder import FrameRecorder
+from ..session import Session
 
 
-@asynccontextmanager
-async def open_session(
+@contextmanager
+def open_session(
     args: argparse.Namespace, on_record_failure: Callable[[str], None] | None = None
-) -> AsyncIterator[RacSession]:
-    """A session to ``args.host``, or to an in-process simulator when no host was given;
-    with ``--record``, a recorder that tells ``on_record_failure`` when it stops."""
-    async with AsyncExitStack() as stack:
+) -> Iterator[Session]:
+    """A session to ``args.host``, or to a simulator on a thread of this process when no
+    host was given; with ``--record``, a recorder that tells ``on_record_failure`` when
+    it stops."""
+    with ExitStack() as stack:
         if args.host:
-            session = RacSession(args.host, args.port, timeout=args.timeout)
+            session = Session(args.host, args.port, timeout=args.timeout)
         else:
-            sim = await stack.enter_async_context(SimulatorServer())
+            from ..sim.thread import SimulatorThread
+
+            sim = stack.enter_context(SimulatorThread())
             print(f"rac-console: {SIMULATOR_NOTICE} (at {sim.host}:{sim.port})", file=sys.stderr)
-            session = RacSession(sim.host, sim.port, timeout=args.timeout)
+            session = Session(sim.host, sim.port, timeout=args.timeout)
         if args.record:
             recorder = FrameRecorder(args.record, on_record_failure)
             stack.callback(recorder.close)
             session.add_frame_observer(recorder)
-        stack.push_async_callback(session.close)
+        stack.callback(session.close)
         yield session

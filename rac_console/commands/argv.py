@@ -15,7 +15,7 @@ import shlex
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
-from ..protocol import VT, InputError, Variant, encode_request, format_variant
+from ..protocol import VT, InputError, Variant, format_variant
 from ..protocol.variables import encode_value
 from .language import Exchange, Get, Put, Raw, VarRef, parse_var
 
@@ -180,8 +180,7 @@ def exchange_from_words(command: str, operands: Sequence[str]) -> Exchange:
         text = " ".join(operands)
         if not text:
             raise InputError("send needs the text to send: rac-console send GET:RC8:10:I:")
-        encode_request(text)
-        return Raw(text)
+        return Raw.of(text)
     usage = _USAGE[command]
     var, used = _variable(operands, usage)
     rest = operands[used:]
@@ -193,9 +192,8 @@ def exchange_from_words(command: str, operands: Sequence[str]) -> Exchange:
         put = _string_put(var, rest)
     else:
         variant, value_text = encode_value(var.kind, " ".join(rest))
-        put = Put(var, variant, value_text)
-    encode_request(put.wire)  # non-ASCII, or longer than a frame
-    return put
+        put = Put.of(var, variant, value_text)
+    return put  # Put.of refused a non-ASCII value or one longer than a frame
 
 
 def input_line(command: str, operands: Sequence[str]) -> str:
@@ -237,7 +235,7 @@ def _string_put(var: VarRef, words: Sequence[str]) -> Put:
             "RAC strings are printable ASCII"
         )
     variant = Variant(VT.BSTR, value)
-    return Put(var, variant, format_variant(variant))
+    return Put.of(var, variant, format_variant(variant))
 
 
 def _attached(word: str) -> str | None:

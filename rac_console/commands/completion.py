@@ -12,9 +12,8 @@ from dataclasses import dataclass
 
 from ..protocol import KINDS
 from .language import is_raw_line
-from .table import COMMANDS
+from .registry import COMMANDS, Completes
 
-_VARIABLE_COMMANDS = ("get", "put", "watch", "unwatch")
 _TYPE_HELP = {code: kind.title for code, kind in KINDS.items()}
 
 
@@ -62,11 +61,13 @@ def complete(text: str, seen: Iterable[tuple[str, int]] = ()) -> list[Candidate]
     if not done:
         return matching((name, spec.summary) for name, spec in COMMANDS.items())
     command = done[0].lower()
-    if command == "help" and len(done) == 1:
+    spec = COMMANDS.get(command)
+    completes = spec.completes if spec is not None else Completes.NOTHING
+    if completes is Completes.COMMAND and len(done) == 1:
         return matching((name, spec.summary) for name, spec in COMMANDS.items())
-    if command == "frames" and len(done) == 1:
+    if completes is Completes.ON_OFF and len(done) == 1:
         return matching([("on", "echo every frame"), ("off", "stop echoing frames")])
-    if command not in _VARIABLE_COMMANDS:
+    if completes is not Completes.VARIABLE:
         return []
     if len(done) == 1:
         options = [(code, _TYPE_HELP[code]) for code in KINDS]
@@ -97,7 +98,7 @@ def hint(text: str) -> str:
     if spec is None:
         return ""
     needs = spec.arguments.split()
-    if command in _VARIABLE_COMMANDS and len(done) >= 2:
+    if spec.takes_variable and len(done) >= 2:
         kind = KINDS.get(done[1].upper())
         if kind is None:
             return ""

@@ -1,27 +1,27 @@
-"""The command language shared by the console, the REPL and ``run``.
+"""The commands of the language and the parsers of their arguments.
 
-``parse_command(line)`` turns one typed line into a command object or raises
+Each parser turns the text after a command word into a command object or raises
 :class:`InputError` with what is wrong and how to write it; nothing here sends
-anything.
+anything. :mod:`.registry` ties each command word to its parser.
 """
 
 from __future__ import annotations
 
 import re
-from dataclasses import dataclass
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from enum import Enum
 
 from ..protocol import (
     KINDS,
     InputError,
     Variant,
     VarKind,
-    encode_request,
     kind_of,
     parse_index,
 )
-from ..protocol.messages import get_request, put_request
+from ..protocol.request import Request, get_for, put_for, raw_request
 from ..protocol.variables import encode_value
-from .table import COMMANDS
 
 
 @dataclass(frozen=True)
@@ -38,26 +38,46 @@ class Get:
     var: VarRef
 
     @property
+    def request(self) -> Request:
+        return get_for(self.var.kind, self.var.index)  # made once per variable
+
+    @property
     def wire(self) -> str:
-        return get_request(self.var.kind, self.var.index)
+        return self.request.text
 
 
 @dataclass(frozen=True)
 class Put:
+    """A typed write: the value, its RAC text and the request, all made at parse time
+    (so a value that cannot be sent is refused before anything goes out)."""
+
     var: VarRef
     value: Variant
     value_text: str
+    request: Request = field(repr=False, compare=False)
+
+    @classmethod
+    def of(cls, var: VarRef, value: Variant, value_text: str) -> Put:
+        return cls(var, value, value_text, put_for(var.kind, var.index, value_text))
 
     @property
     def wire(self) -> str:
-        return put_request(self.var.kind, self.var.index, self.value_text)
+        return self.request.text
 
 
 @dataclass(frozen=True)
 class Raw:
     """A line sent exactly as typed: ``GET:...``/``PUT:...`` or ``send TEXT``."""
 
-    wire: str
+    request: Request
+
+    @classmethod
+    def of(cls, text: str) -> Raw:
+        return cls(raw_request(text))
+
+    @property
+    def wire(self) -> str:
+        return self.request.text
 
 
 Exchange = Get | Put | Raw
@@ -111,11 +131,21 @@ class Frames:
     on: bool
 
 
+class Step(Enum):
+    """What a command without arguments asks for."""
+
+    PAUSE = "pause"
+    RESUME = "resume"
+    DISCONNECT = "disconnect"
+    CLEAR = "clear"
+    QUIT = "quit"
+
+
 @dataclass(frozen=True)
 class Simple:
     """A command with no argument: pause, resume, disconnect, clear, quit."""
 
-    name: str
+    step: Step
 
 
 Command = (
@@ -173,72 +203,74 @@ def parse_var(text: str, usage: str) -> tuple[VarRef, str]:
 def parse_exchange(line: str) -> Exchange | None:
     """Parse a get/put/send/raw line; None when the line is not one of those."""
     if is_raw_line(line):
-        encode_request(line)
-        return Raw(line)
+        return Raw.of(line)
     word, rest = split_word(line)
-    if word == "send":
-        if not rest:
-            raise InputError("send needs the text to send: send GET:RC8:10:I:")
-        encode_request(rest)
-        return Raw(rest)
-    if word == "get":
-        var, extra = parse_var(rest, "get TYPE INDEX, e.g. get I 10 or get P[3]")
-        if extra.strip():
-            raise InputError(f"get takes only a variable, not {extra.strip()!r}: get {var}")
-        return Get(var)
-    if word == "put":
-        var, value = parse_var(rest, "put TYPE INDEX VALUE..., e.g. put I 10 123")
-        variant, value_text = encode_value(var.kind, value)
-        command = Put(var, variant, value_text)
-        encode_request(command.wire)
-        return command
-    return None
+    parse = _EXCHANGES.get(word)
+    return parse(rest) if parse is not None else None
 
 
-def parse_command(line: str) -> Command | None:
-    """One line of the command language; None for a blank line or a ``#`` comment."""
-    stripped = line.strip()
-    if not stripped or stripped.startswith("#"):
-        return None
-    command = parse_exchange(line.rstrip("\r\n"))
-    if command is not None:
-        return command
-    word, rest = split_word(stripped)
-    rest = rest.strip()
-    if word not in COMMANDS:
-        raise InputError(
-            f"unknown command {word!r}: type help for the list, "
-            "or start a raw line with GET: or PUT:"
-        )
-    spec = COMMANDS[word]
-    if word == "watch":
-        return _parse_watch(rest)
-    if word == "unwatch":
-        if rest.lower() == "all":
-            return Unwatch(())
-        variables, extra, _ = _parse_var_list(rest, spec.usage)
-        if extra.strip():
-            raise InputError(f"unwatch takes variables only, not {extra.strip()!r}: {spec.usage}")
-        return Unwatch(variables)
-    if word == "interval":
-        return SetInterval(_parse_seconds(rest))
-    if word == "connect":
-        return _parse_connect(rest)
-    if word in ("save", "load"):
-        if not rest:
-            raise InputError(f"{word} needs a file name: {spec.example}")
-        return WatchFile(word, rest)
-    if word == "help":
-        return Help(rest.lower() or None)
-    if word == "latency":
-        return _parse_latency(rest)
-    if word == "frames":
-        if rest.lower() not in ("on", "off"):
-            raise InputError("frames needs on or off: frames on")
-        return Frames(rest.lower() == "on")
-    if rest:
-        raise InputError(f"{word} takes no argument")
-    return Simple(word)
+def parse_send(rest: str) -> Raw:
+    if not rest:
+        raise InputError("send needs the text to send: send GET:RC8:10:I:")
+    return Raw.of(rest)
+
+
+def parse_get(rest: str) -> Get:
+    var, extra = parse_var(rest, "get TYPE INDEX, e.g. get I 10 or get P[3]")
+    if extra.strip():
+        raise InputError(f"get takes only a variable, not {extra.strip()!r}: get {var}")
+    return Get(var)
+
+
+def parse_put(rest: str) -> Put:
+    var, value = parse_var(rest, "put TYPE INDEX VALUE..., e.g. put I 10 123")
+    variant, value_text = encode_value(var.kind, value)
+    return Put.of(var, variant, value_text)
+
+
+_EXCHANGES: dict[str, Callable[[str], Exchange]] = {
+    "get": parse_get,
+    "put": parse_put,
+    "send": parse_send,
+}
+
+UNWATCH_USAGE = "unwatch TYPE INDEX | all"
+WATCH_USAGE = "watch TYPE INDEX [LABEL] [every SECONDS], e.g. watch IO 128-135"
+
+
+def parse_unwatch(rest: str) -> Unwatch:
+    if rest.lower() == "all":
+        return Unwatch(())
+    variables, extra, _ = _parse_var_list(rest, UNWATCH_USAGE)
+    if extra.strip():
+        raise InputError(f"unwatch takes variables only, not {extra.strip()!r}: {UNWATCH_USAGE}")
+    return Unwatch(variables)
+
+
+def parse_interval(rest: str) -> SetInterval:
+    return SetInterval(_parse_seconds(rest))
+
+
+def parse_save(rest: str) -> WatchFile:
+    if not rest:
+        raise InputError("save needs a file name: save cell3.toml")
+    return WatchFile("save", rest)
+
+
+def parse_load(rest: str) -> WatchFile:
+    if not rest:
+        raise InputError("load needs a file name: load cell3.toml")
+    return WatchFile("load", rest)
+
+
+def parse_help(rest: str) -> Help:
+    return Help(rest.lower() or None)
+
+
+def parse_frames(rest: str) -> Frames:
+    if rest.lower() not in ("on", "off"):
+        raise InputError("frames needs on or off: frames on")
+    return Frames(rest.lower() == "on")
 
 
 def _parse_vars(text: str, usage: str) -> tuple[tuple[VarRef, ...], str]:
@@ -281,14 +313,13 @@ def _parse_var_list(
     return tuple(dict.fromkeys(variables)), rest, specs
 
 
-def _parse_watch(text: str) -> Watch:
+def parse_watch(text: str) -> Watch:
     """``watch P 0``, ``watch IO 128-135 gripper``, ``watch P 0 J 0``, ``... every 0.2``.
 
     Several variables are all watched; a label (quoted to keep it from being read
     as a variable) names one variable or range, never a list.
     """
-    usage = COMMANDS["watch"].usage + ", e.g. watch IO 128-135"
-    variables, rest, specs = _parse_var_list(text, usage, counted=True)
+    variables, rest, specs = _parse_var_list(text, WATCH_USAGE, counted=True)
     label, every, rest = "", None, rest.strip()
     if rest[:1] in ("'", '"'):  # a quoted label is taken whole, "every" inside it too
         close = rest.find(rest[0], 1)
@@ -309,7 +340,7 @@ def _parse_watch(text: str) -> Watch:
     return Watch(variables, label, every)
 
 
-def _parse_latency(text: str) -> Latency:
+def parse_latency(text: str) -> Latency:
     count_text, _, var_text = text.partition(" ")
     if count_text and not count_text.isdigit():
         count_text, var_text = "", text
@@ -336,7 +367,7 @@ def _parse_seconds(text: str, word: str = "interval") -> float:
     return seconds
 
 
-def _parse_connect(text: str) -> Connect:
+def parse_connect(text: str) -> Connect:
     if not text or " " in text:
         raise InputError("connect needs one address: connect HOST or connect HOST:PORT")
     if text.startswith("["):  # [IPv6]:PORT

@@ -6,9 +6,8 @@ import re
 
 from ..protocol import KINDS
 from .language import is_raw_line
-from .table import COMMANDS
+from .registry import COMMANDS
 
-_VARIABLE_COMMANDS = ("get", "put", "watch", "unwatch")
 _WORD_RE = re.compile(r"\s+|\S+", re.ASCII)
 _VAR_RE = re.compile(r"([A-Za-z]+)(\[?)(\d+(?:-\d+)?)?(\]?)", re.ASCII)
 
@@ -24,14 +23,17 @@ def tokenize(line: str) -> list[tuple[str, str]]:
     out: list[tuple[str, str]] = []
     position = 0  # words seen so far
     command = ""
+    variable = False  # the command takes a variable
     for piece in pieces:
         if piece.isspace():
             out.append(("space", piece))
             continue
         if position == 0:
             command = piece.lower()
+            spec = COMMANDS.get(command)
+            variable = spec is not None and spec.takes_variable
             out.append(("command" if command in COMMANDS else "error", piece))
-        elif command in _VARIABLE_COMMANDS and position == 1:
+        elif variable and position == 1:
             match = _VAR_RE.fullmatch(piece)
             if match and match.group(1).upper() in KINDS:
                 out.append(("type", match.group(1) + match.group(2)))
@@ -42,7 +44,7 @@ def tokenize(line: str) -> list[tuple[str, str]]:
                 out.append(("value", piece))
             else:
                 out.append(("error", piece))
-        elif command in _VARIABLE_COMMANDS and position == 2:
+        elif variable and position == 2:
             out.append(("index", piece))
         else:
             out.append(("value", piece))

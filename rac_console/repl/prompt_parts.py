@@ -18,7 +18,7 @@ from prompt_toolkit.styles import Style
 
 from ..commands.completion import complete, hint
 from ..commands.tokens import tokenize
-from ..history import History
+from ..present.history import History
 
 STYLE = Style.from_dict(
     {

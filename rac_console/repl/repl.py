@@ -17,40 +17,57 @@ from rich.live import Live
 from rich.table import Table
 from rich.text import Text
 
-from ..client import Frame
 from ..commands.completion import hint
-from ..commands.language import Watch, parse_command
+from ..commands.language import Unwatch, VarRef, Watch
 from ..commands.outcome import ExitStatus, Outcome
-from ..core import SIMULATOR_NOTICE, Action, Alert, ConsoleCore, LogEvent, Message
-from ..frames import frame_line
-from ..history import History
-from ..protocol import InputError
+from ..engine import (
+    SIMULATOR_NOTICE,
+    Alert,
+    Batch,
+    Engine,
+    Message,
+    Note,
+    Result,
+    RowView,
+    Status,
+    UiStep,
+)
+from ..present.cells import age_text, status_cell, value_cell
+from ..present.frames import frame_line
+from ..present.history import History
+from ..present.render import error_text, make_console, notice_text, outcome_text
 from ..protocol.text import terminal_safe
-from ..render import error_text, make_console, notice_text, outcome_text
-from ..watch import age_text
-from ..watch_cells import status_cell, value_cell
+from ..session import Frame
 from .prompt_parts import STYLE, HintProcessor, RacCompleter, RacLexer, SharedHistory
 
 STOP_KEYS = {Keys.Enter, Keys.ControlM, Keys.ControlJ, Keys.ControlC, Keys.ControlD, "q"}
 LIVE_REFRESH_SECONDS = 0.25
+#: How often the outbox is drained while nothing is awaited (alerts, frames, rows).
+DRAIN_SECONDS = 0.1
 
 
 class Repl:
+    """Runs typed lines on the engine and prints what the outbox brings back."""
+
     def __init__(
         self,
-        core: ConsoleCore,
+        engine: Engine,
         history: History,
         console: Console,
         *,
         input: Input | None = None,
         output: Output | None = None,
     ) -> None:
-        self.core = core
+        self.engine = engine
         self.console = console
         self.frames = False
         self.lost = False
+        self.status: Status | None = None
+        self.rows: dict[VarRef, RowView] = {}
+        self._waiting: dict[int, asyncio.Future[Result]] = {}
+        self._wake = asyncio.Event()
         self.prompt: PromptSession[str] = PromptSession(
-            message=self._prompt_message,
+            message=self.prompt_message,
             history=SharedHistory(history),
             auto_suggest=AutoSuggestFromHistory(),
             completer=RacCompleter(self._seen),
@@ -66,51 +83,93 @@ class Repl:
     # ------------------------------------------------------------- prompt
 
     def _seen(self) -> set[tuple[str, int]]:
-        return self.core.seen | {(v.kind.code, v.index) for v in self.core.watch.rows}
+        seen = set(self.status.seen) if self.status is not None else set()
+        return seen | {(v.kind.code, v.index) for v in self.rows}
 
-    def _prompt_message(self) -> FormattedText:
-        session = self.core.session
-        if session is None or (self.lost and session.state != "connected"):
+    def prompt_message(self) -> FormattedText:
+        status = self.status
+        if status is None or not status.has_session or (
+            self.lost and status.connection != "connected"
+        ):
             return FormattedText([("class:prompt.off", "not connected"), ("", "> ")])
-        if self.core.is_simulator:
+        if status.is_simulator:
             return FormattedText([("class:prompt.sim", "sim"), ("", "> ")])
-        return FormattedText(
-            [("class:prompt.live", f"{self.core.host}:{self.core.port}"), ("", "> ")]
-        )
+        return FormattedText([("class:prompt.live", f"{status.host}:{status.port}"), ("", "> ")])
 
     def _toolbar(self) -> FormattedText:
-        session = self.core.session
-        rtt = session.last_rtt if session is not None else None
-        parts = [
-            (
-                "",
-                f" {self.core.target}  rtt {rtt * 1000:.2f} ms "
-                if rtt is not None
-                else f" {self.core.target}  rtt – ",
-            )
-        ]
+        status = self.status
+        target = status.target if status is not None else "starting"
+        rtt = status.rtt if status is not None else None
+        rtt_text = f"rtt {rtt * 1000:.2f} ms" if rtt is not None else "rtt –"
+        parts = [("", f" {terminal_safe(target)}  {rtt_text} ")]
         if self.frames:
             parts.append(("", " frames on "))
         buffer = self.prompt.default_buffer
         needs = hint(buffer.text) if buffer.suggestion is not None else ""
         if needs:  # the history suggestion holds the grey text: the hint shows here
             parts.append(("class:toolbar.hint", f" needs: {needs} "))
-        if self.core.read_only:
+        if status is not None and status.read_only:
             parts.append(("class:toolbar.readonly", " READ-ONLY "))
         return FormattedText(parts)
+
+    # ------------------------------------------------------------- outbox
+
+    def drain(self) -> None:
+        """Take everything the engine published: state first, then events in order."""
+        batch: Batch = self.engine.outbox.drain()
+        if batch.status is not None:
+            self.status = batch.status
+        for var in batch.removed:
+            self.rows.pop(var, None)
+        self.rows.update(batch.rows)
+        for event in batch.events:
+            if isinstance(event, Result):
+                waiter = self._waiting.pop(event.seq, None)
+                if waiter is not None and not waiter.done():
+                    waiter.set_result(event)
+                else:
+                    self._show_result(event)
+            else:
+                self._echo(event)
+
+    async def _drain_forever(self) -> None:
+        while True:
+            with contextlib.suppress(TimeoutError):
+                await asyncio.wait_for(self._wake.wait(), DRAIN_SECONDS)
+            self._wake.clear()
+            self.drain()
+
+    def _notify(self, loop: asyncio.AbstractEventLoop) -> None:
+        """Called on the engine's thread: wake the drain only while a result is awaited
+        (polls alone are drained on the timer, so they cost the engine no wake-ups)."""
+        if self._waiting:
+            loop.call_soon_threadsafe(self._wake.set)
+
+    async def submit(self, line: str | Watch | Unwatch) -> Result:
+        """Run a line (or a command of the REPL's own) and wait for its result."""
+        loop = asyncio.get_running_loop()
+        future: asyncio.Future[Result] = loop.create_future()
+        engine = self.engine
+        seq = engine.submit(line) if isinstance(line, str) else engine.submit_command(line)
+        self._waiting[seq] = future
+        self._wake.set()
+        return await future
 
     # -------------------------------------------------------------- loop
 
     async def run(self) -> int:
-        await self.core.start()
-        self.core.add_log_listener(self._echo)
-        if self.core.is_simulator:
+        loop = asyncio.get_running_loop()
+        self.engine.outbox.notify = lambda: self._notify(loop)
+        await asyncio.to_thread(self.engine.start)
+        self.drain()
+        if self.status is not None and self.status.is_simulator:
             self.console.print(
                 Text.assemble(
                     ("sim", "bold yellow"),
                     f": {SIMULATOR_NOTICE}. help lists the commands; Ctrl-D leaves.",
                 )
             )
+        drainer = loop.create_task(self._drain_forever())
         try:
             while True:
                 try:
@@ -122,8 +181,14 @@ class Repl:
                 if not await self.handle(line):
                     break
         finally:
-            await self.core.stop()
+            drainer.cancel()
+            await asyncio.gather(drainer, return_exceptions=True)
+            await asyncio.to_thread(self.engine.stop)
+            self.drain()
         return 0
+
+    def exit_status(self, status: int) -> int:
+        return self.status.exit_status(status) if self.status is not None else status
 
     async def handle(self, text: str) -> bool:
         """Run what was entered, line by line (a paste may hold several); False when a
@@ -135,33 +200,33 @@ class Repl:
 
     async def _handle_line(self, line: str) -> bool:
         """Run one line; False when it asks to leave."""
-        try:
-            command = parse_command(line)
-        except InputError as exc:
-            self.console.print(notice_text(str(exc), error=True))
+        watched_before = set(self.rows)
+        result = await self.submit(line)
+        if isinstance(result.command, Watch) and not _failed(result):
+            await self.live_watch(result.command, watched_before)
             return True
-        if isinstance(command, Watch):
-            await self.live_watch(line, command)
-            return True
-        for feedback in await self.core.handle_line(line):
+        return self._show_result(result)
+
+    def _show_result(self, result: Result) -> bool:
+        """Print a result; False when it asks to leave."""
+        for feedback in result.feedback:
             if isinstance(feedback, Outcome):
                 self._show_outcome(feedback)
             elif isinstance(feedback, Message):
                 self.console.print(notice_text(feedback.text, error=feedback.level == "error"))
-            elif isinstance(feedback, Action):
-                if feedback.name == "quit":
-                    return False
-                if feedback.name == "clear":
-                    self.console.clear()
-                elif feedback.name == "frames":
-                    self.frames = feedback.on
-                    self.console.print(f"frames {'on' if feedback.on else 'off'}")
+            elif feedback is UiStep.QUIT:
+                return False
+            elif feedback is UiStep.CLEAR:
+                self.console.clear()
+            elif feedback in (UiStep.FRAMES_ON, UiStep.FRAMES_OFF):
+                self.frames = feedback is UiStep.FRAMES_ON
+                self.console.print(f"frames {'on' if self.frames else 'off'}")
         return True
 
     def _show_outcome(self, outcome: Outcome) -> None:
-        session = self.core.session
-        if outcome.status == ExitStatus.TRANSPORT and session is not None:
-            self.lost = session.state != "connected"
+        status = self.status
+        if outcome.status == ExitStatus.TRANSPORT and status is not None and status.has_session:
+            self.lost = status.connection != "connected"
             if self.lost:
                 self.console.print(
                     notice_text(f"{error_text(outcome)}: the next command reconnects", error=True)
@@ -174,25 +239,22 @@ class Repl:
         else:
             self.console.print(notice_text(error_text(outcome), error=True), soft_wrap=True)
 
-    def _echo(self, event: LogEvent) -> None:
+    def _echo(self, event: Frame | Note | Alert) -> None:
         """``frames on``: every frame, dimmed, as it crosses the wire (not during a watch);
         an alert (a recording stopped) always."""
         if isinstance(event, Alert):
             self.console.print(notice_text(event.text, error=True))
-        elif self.frames and isinstance(event, str):  # a gap or a failed request, marked
-            self.console.print(notice_text(f"── {event} ──", style="dim"), soft_wrap=True)
+        elif self.frames and isinstance(event, Note):  # a gap or a failed request, marked
+            self.console.print(notice_text(f"── {event.text} ──", style="dim"), soft_wrap=True)
         elif self.frames and isinstance(event, Frame) and not event.poll:
             self.console.print(Text(frame_line(event), style="dim"), soft_wrap=True)
 
     # ------------------------------------------------------------- watch
 
-    async def live_watch(self, line: str, command: Watch) -> None:
-        """A table updating in place until Enter, q or Ctrl-C; then back to the prompt."""
-        added = [v for v in command.vars if v not in self.core.watch.rows]
-        for feedback in await self.core.handle_line(line):
-            if isinstance(feedback, Message) and feedback.level == "error":
-                self.console.print(notice_text(feedback.text, error=True))
-                return
+    async def live_watch(self, command: Watch, watched_before: set[VarRef]) -> None:
+        """A table updating in place until Enter, q or Ctrl-C; then back to the prompt
+        (the rows this watch added go again)."""
+        added = [v for v in command.vars if v not in watched_before]
         stop = asyncio.Event()
         keys = self.prompt.input
 
@@ -200,9 +262,10 @@ class Repl:
             if any(press.key in STOP_KEYS for press in keys.read_keys()):
                 stop.set()
 
+        period = self.status.period if self.status is not None else 0.0
         self.console.print(
             Text(
-                f"watching every {self.core.period:g} s: Enter, q or Ctrl-C returns to the prompt",
+                f"watching every {period:g} s: Enter, q or Ctrl-C returns to the prompt",
                 style="dim",
             )
         )
@@ -220,9 +283,11 @@ class Repl:
                 while not stop.is_set():
                     with contextlib.suppress(TimeoutError):
                         await asyncio.wait_for(stop.wait(), LIVE_REFRESH_SECONDS)
+                    self.drain()
                     live.update(self._watch_table(command), refresh=True)
         finally:
-            self.core.watch.remove(tuple(added))
+            if added:
+                await self.submit(Unwatch(tuple(added)))
 
     def _watch_table(self, command: Watch) -> Table:
         table = Table(box=None, pad_edge=False, header_style="bold")
@@ -230,7 +295,7 @@ class Repl:
             table.add_column(title)
         now = time.monotonic()
         for var in command.vars:
-            row = self.core.watch.rows.get(var)
+            row = self.rows.get(var)
             if row is not None:
                 table.add_row(
                     str(var),
@@ -242,6 +307,11 @@ class Repl:
         return table
 
 
-def run_repl(core: ConsoleCore, history: History) -> int:
+def _failed(result: Result) -> bool:
+    return any(isinstance(f, Message) and f.level == "error" for f in result.feedback)
+
+
+def run_repl(engine: Engine, history: History) -> int:
     """``rac-console repl`` on a terminal."""
-    return core.exit_status(asyncio.run(Repl(core, history, make_console()).run()))
+    repl = Repl(engine, history, make_console())
+    return repl.exit_status(asyncio.run(repl.run()))

@@ -1,6 +1,9 @@
 """The simulated RC8: its variable store and its answer to each request line.
 
 Pure: time comes from an injected clock, so tests can drive the moving values.
+A client polling the same variables sends the same lines again and again, so the reply
+to a GET of a value that does not move by itself is kept, keyed by the line, until the
+next PUT: parsing and formatting were most of the simulator's time per request.
 """
 
 from __future__ import annotations
@@ -26,6 +29,7 @@ from ..protocol.vartypes import INTEGER_RANGES, NUMERIC_TYPES, VT, element_type,
 VARIABLE_COUNT = 100
 IO_COUNT = 512
 MAX_REQUEST = 256
+MAX_CACHED = 1024  # replies kept; a client sending ever new lines only empties it again
 
 #: Variables that change by themselves, so a live watch has something to show.
 #: They are read-only, like a robot's current position and its input ports.
@@ -72,6 +76,8 @@ class SimulatedController:
         self._start = clock()
         self._store = _initial_store()
         self.requests = 0
+        self._replies: dict[bytes, bytes] = {}  # GET line: its reply, until the next PUT
+        self._keep = False  # set by _answer: this line's reply may be kept
 
     # ---------------------------------------------------------------- values
 
@@ -126,16 +132,48 @@ class SimulatedController:
     def handle(self, line: bytes) -> tuple[bytes, bool]:
         """The reply frame (CR included) to one request line, and whether to close."""
         self.requests += 1
+        reply = self._replies.get(line)
+        if reply is not None:
+            return reply, False
         if len(line) + 1 > MAX_REQUEST:
             return _reply(E_INVALIDRCVPACKET), True
         try:
             text = line.decode("ascii")
         except UnicodeDecodeError:
             return _reply(E_INVALIDCOMMAND), False
+        self._keep = False
         try:
-            return self._answer(text.lstrip(" \t")).encode("ascii") + b"\r", False
+            reply = self._answer(text.lstrip(" \t")).encode("ascii") + b"\r"
         except Exception:  # a bug here must cost one answer, never the session
             return _reply(E_UNEXPECTED), False
+        if self._keep and self._own_values():
+            if len(self._replies) >= MAX_CACHED:
+                self._replies.clear()
+            self._replies[line] = reply
+        return reply, False
+
+    def known_reply(self, line: bytes) -> bytes | None:
+        """What ``handle(line)`` answers, if it is a reply kept from before (counted as a
+        request then); None otherwise. The server's fast path asks this first."""
+        reply = self._replies.get(line)
+        if reply is not None:
+            self.requests += 1
+        return reply
+
+    def _own_values(self) -> bool:
+        """False when a test replaced value() or variant() (its values may move): then
+        no reply is kept."""
+        cls, own = type(self), vars(self)
+        return (
+            "value" not in own
+            and "variant" not in own
+            and cls.value is SimulatedController.value
+            and cls.variant is SimulatedController.variant
+        )
+
+    def forget(self) -> None:
+        """Drop the kept replies: call it after changing the store other than by PUT."""
+        self._replies.clear()
 
     def _answer(self, text: str) -> str:
         fields = text.split(":", 4)
@@ -154,7 +192,9 @@ class SimulatedController:
         if command == "GET":
             if parameter.strip(" \t"):
                 return _code(E_INVALIDCOMMAND)
+            self._keep = (kind.code, index) not in MOVING  # same line, same reply until a PUT
             return "0," + format_variant(self.variant(kind, index))
+        self._replies.clear()
         return _code(self._put(kind, index, parameter))
 
     def _put(self, kind: VarKind, index: int, parameter: str) -> int:

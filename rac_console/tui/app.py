@@ -15,17 +15,30 @@ from textual.widgets import Footer, RichLog, Static
 from textual.worker import Worker, WorkerState
 
 from .. import __version__
+from ..commands.language import Simple, Step, VarRef, WatchFile
 from ..commands.outcome import Outcome
-from ..core import SIMULATOR_NOTICE, Action, Alert, ConsoleCore, Feedback, LogEvent, Message
-from ..core_thread import CoreThread
-from ..history import History
+from ..engine import (
+    SIMULATOR_NOTICE,
+    Alert,
+    Engine,
+    Feedback,
+    Message,
+    Result,
+    RowView,
+    Status,
+    UiStep,
+)
+from ..present.history import History
+from ..present.render import error_text, notice_text, outcome_text
+from ..present.status import status_text
 from ..protocol.text import terminal_safe
-from ..render import error_text, notice_text, outcome_text
 from .command_line import CommandLine
 from .frame_log import FrameLog
-from .status_bar import StatusBar, status_text
+from .status_bar import StatusBar
 from .watch_table import WatchTable
 
+#: The engine's outbox is drained this often: results, frames, rows, status.
+DRAIN_HZ = 20
 LOG_FLUSH_HZ = 10
 #: Candidates listed at most; the list says how many more there are.
 MAX_CANDIDATE_LINES = 7
@@ -43,15 +56,16 @@ class RacConsoleApp(App[int]):
         Binding("ctrl+l", "clear_log", "Clear log", id="clear-log"),
     ]
 
-    def __init__(self, core: ConsoleCore, history: History, watch_file: str | None = None) -> None:
+    def __init__(self, engine: Engine, history: History, watch_file: str | None = None) -> None:
         super().__init__()
-        self.core = core
-        self.core_thread = CoreThread(core)
+        self.engine = engine
         self.history = history
         self.watch_file = watch_file
+        self.status: Status | None = None
+        self.rows: dict[VarRef, RowView] = {}
+        self._removed: set[VarRef] = set()
         self._flushes: deque[tuple[float, int]] = deque(maxlen=LOG_FLUSH_HZ * 2)
-        self._status = Text()
-        self._entered: asyncio.Queue[str] = asyncio.Queue()
+        self._status_line = Text()
         # Kept as attributes: timers and workers never query a DOM being torn down.
         self.status_bar = StatusBar(id="status")
         self.table = WatchTable(id="watch")
@@ -81,42 +95,40 @@ class RacConsoleApp(App[int]):
     async def on_mount(self) -> None:
         self.table.border_title = "Watch"
         self.frame_log.border_title = "Frames (→ sent, ← received)"
-        self.core.add_log_listener(self.frame_log.add)
-        ui_loop = asyncio.get_running_loop()
-
-        def alert(event: LogEvent) -> None:  # on the session's thread: hand it to ours
-            if isinstance(event, Alert):
-                ui_loop.call_soon_threadsafe(self.show, Message(event.text, "error"))
-
-        self.core.add_log_listener(alert)
-        await self.core_thread.start()
-        self.sub_title = self.core.target
+        await asyncio.to_thread(self.engine.start)
+        self.drain_outbox()
         self._welcome()
         if self.watch_file:
-            await self.run_line(f"load {self.watch_file}", echo=False)
+            self.engine.submit_command(WatchFile("load", self.watch_file))
+        self.set_interval(1 / DRAIN_HZ, self.drain_outbox)
         self.set_interval(1 / LOG_FLUSH_HZ, self.flush_log)
         self.set_interval(1 / TABLE_REFRESH_HZ, self.refresh_table)
         self.refresh_table()
         self.command_line.focus()
-        self.run_worker(self._first_connect(), group="connect", exit_on_error=False)
-        self.run_worker(self._run_entered_lines(), group="commands", exit_on_error=False)
 
     async def on_unmount(self) -> None:
-        await self.core_thread.stop()
+        await asyncio.to_thread(self.engine.stop)
+        self.status = self.engine.outbox.drain().status or self.status
+
+    def exit_status(self, status: int) -> int:
+        """4 when the console would end with 0 but the recording stopped on the way."""
+        return self.status.exit_status(status) if self.status is not None else status
 
     def _welcome(self) -> None:
         results = self.results
-        if self.core.is_simulator:
+        status = self.status
+        if status is not None and status.is_simulator:
             results.write(
                 Text.assemble(
                     ("SIMULATOR", "bold black on yellow"),
                     f" {SIMULATOR_NOTICE}.",
                 )
             )
-        else:
+        elif status is not None:
             results.write(
                 Text.assemble(
-                    ("LIVE", "bold white on red"), f" controller {self.core.host}:{self.core.port}."
+                    ("LIVE", "bold white on red"),
+                    f" controller {terminal_safe(f'{status.host}:{status.port}')}.",
                 )
             )
         results.write(
@@ -126,15 +138,35 @@ class RacConsoleApp(App[int]):
             )
         )
 
-    async def _first_connect(self) -> None:
-        problem = await self.core_thread.submit(self.core.connect_now())
-        if problem is not None:
-            self.show(problem)
-
     def _completion_indices(self) -> set[tuple[str, int]]:
-        return self.core.seen | {(v.kind.code, v.index) for v in self.core.watch.rows}
+        seen = set(self.status.seen) if self.status is not None else set()
+        return seen | {(v.kind.code, v.index) for v in self.rows}
 
     # -------------------------------------------------------------- refresh
+
+    def drain_outbox(self) -> None:
+        """Take everything the engine published since the last tick, in order."""
+        batch = self.engine.outbox.drain()
+        if batch.status is not None:
+            if self.status is None or batch.status.target != self.status.target:
+                self.sub_title = terminal_safe(batch.status.target)
+            self.status = batch.status
+        for var in batch.removed:
+            self.rows.pop(var, None)
+        self._removed |= batch.removed
+        self._removed -= batch.rows.keys()
+        self.rows.update(batch.rows)
+        for event in batch.events:
+            if isinstance(event, Result):
+                self._show_result(event)
+            else:
+                self.frame_log.add(event)
+                if isinstance(event, Alert):
+                    self.show(Message(event.text, "error"))
+        if batch.frames_dropped:
+            self.frame_log.add(
+                Alert(f"{batch.frames_dropped} frames not shown: the screen fell behind")
+            )
 
     def flush_log(self) -> None:
         count = self.frame_log.flush()
@@ -148,31 +180,31 @@ class RacConsoleApp(App[int]):
         return total / span if span > 0 else 0.0
 
     def refresh_table(self) -> None:
-        _, removed = self.core.watch.take_changes()
-        self.table.refresh_rows(self.core.watch.rows, removed, time.monotonic())
-        status = status_text(self.core, self.frames_per_second())
-        if status != self._status:  # an unchanged line costs no repaint
-            self._status = status
-            self.status_bar.update(status)
+        removed, self._removed = self._removed, set()
+        self.table.refresh_rows(self.rows, removed, time.monotonic())
+        if self.status is None:
+            return
+        line = status_text(self.status, self.engine.outbox.waiting_since, self.frames_per_second())
+        if line != self._status_line:  # an unchanged line costs no repaint
+            self._status_line = line
+            self.status_bar.update(line)
 
     # ------------------------------------------------------------- commands
 
     @on(CommandLine.Entered)
     def entered(self, event: CommandLine.Entered) -> None:
-        """Queue the line: lines run one at a time, each once, in the order entered."""
+        """Hand the line to the engine: lines run one at a time, each once, in order."""
         self.completions.remove_class("-visible")
         if not event.line.strip():
             return
         self.command_line.remember(event.line)
-        self._entered.put_nowait(event.line)
+        self.engine.submit(event.line)
 
-    async def _run_entered_lines(self) -> None:
-        while True:
-            line = await self._entered.get()
-            try:
-                await self.run_line(line)
-            except Exception as exc:  # a bug must not end the session at the cell
-                self.show(Message(f"internal error: {exc!r}", "error"))
+    def _show_result(self, result: Result) -> None:
+        if result.line is not None:
+            self.results.write(Text(f"› {terminal_safe(result.line)}", style="bold cyan"))
+        for feedback in result.feedback:
+            self.show(feedback)
 
     @on(CommandLine.Completions)
     def list_completions(self, event: CommandLine.Completions) -> None:
@@ -212,13 +244,6 @@ class RacConsoleApp(App[int]):
         else:
             self.hint.remove_class("-visible")
 
-    async def run_line(self, line: str, echo: bool = True) -> None:
-        if echo:
-            self.results.write(Text(f"› {terminal_safe(line)}", style="bold cyan"))
-        for feedback in await self.core_thread.submit(self.core.handle_line(line)):
-            self.show(feedback)
-        self.refresh_table()
-
     def show(self, feedback: Feedback) -> None:
         results = self.results
         if isinstance(feedback, Outcome):
@@ -228,14 +253,14 @@ class RacConsoleApp(App[int]):
                 results.write(notice_text(error_text(feedback), error=True))
         elif isinstance(feedback, Message):
             results.write(notice_text(feedback.text, error=feedback.level == "error"))
-        elif isinstance(feedback, Action):
-            if feedback.name == "clear":
-                self.action_clear_log()
-            elif feedback.name == "quit":
-                self.exit(0)
-            elif feedback.name == "frames":
-                self.frame_log.show_polls = feedback.on
-                self.show(Message("poll frames shown" if feedback.on else "poll frames hidden"))
+        elif feedback is UiStep.CLEAR:
+            self.action_clear_log()
+        elif feedback is UiStep.QUIT:
+            self.exit(0)
+        elif feedback in (UiStep.FRAMES_ON, UiStep.FRAMES_OFF):
+            on = feedback is UiStep.FRAMES_ON
+            self.frame_log.show_polls = on
+            self.show(Message("poll frames shown" if on else "poll frames hidden"))
 
     @on(Worker.StateChanged)
     def worker_failed(self, event: Worker.StateChanged) -> None:
@@ -246,10 +271,8 @@ class RacConsoleApp(App[int]):
     # -------------------------------------------------------------- actions
 
     def action_toggle_polling(self) -> None:
-        paused = not self.core.paused
-        self.core_thread.call(self.core.set_paused, paused)
-        self.show(Message("polling paused (F2 resumes)" if paused else "polling resumed"))
-        self.refresh_table()
+        paused = not (self.status is not None and self.status.paused)
+        self.engine.submit_command(Simple(Step.PAUSE if paused else Step.RESUME))
 
     def action_toggle_poll_frames(self) -> None:
         log = self.frame_log
@@ -273,5 +296,6 @@ class RacConsoleApp(App[int]):
         self.frame_log.clear()
 
 
-def run_console(core: ConsoleCore, history: History, watch_file: str | None) -> int:
-    return core.exit_status(RacConsoleApp(core, history, watch_file).run() or 0)
+def run_console(engine: Engine, history: History, watch_file: str | None) -> int:
+    app = RacConsoleApp(engine, history, watch_file)
+    return app.exit_status(app.run() or 0)

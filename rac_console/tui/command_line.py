@@ -12,7 +12,7 @@ from textual.suggester import Suggester
 from textual.widgets import Input
 
 from ..commands.completion import Candidate, common_prefix, complete, hint
-from ..history import History
+from ..present.history import History
 
 
 class HintSuggester(Suggester):

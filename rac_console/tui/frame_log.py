@@ -10,10 +10,10 @@ from rich.cells import cell_len
 from textual import work
 from textual.widgets import Log
 
-from ..client import Frame
-from ..core import Alert, LogEvent
-from ..frames import clock_text, frame_line
+from ..engine import Alert, Note
+from ..present.frames import clock_text, frame_line
 from ..protocol.text import terminal_safe
+from ..session import Frame
 
 MAX_LINES = 5000
 MAX_PENDING = 50_000
@@ -27,23 +27,24 @@ class FrameLog(Log):
         super().__init__(max_lines=MAX_LINES, auto_scroll=True, **kwargs)  # type: ignore[arg-type]
         self._pending: deque[Frame | tuple[float, str]] = deque(maxlen=MAX_PENDING)
         self.show_polls = True
-        self.frames_seen = 0
 
     def on_resize(self) -> None:
         """A resize moves the end away from the view: bring it back while following."""
         if self.auto_scroll:
             self.call_after_refresh(self.scroll_end, animate=False, x_axis=False)
 
-    def add(self, event: LogEvent) -> None:
-        """Called for every frame; cheap, so the session never waits on the screen.
+    def add(self, event: Frame | Note | Alert) -> None:
+        """Queue one event drained from the engine's outbox; cheap, written at the next flush.
 
-        A note is stamped now, not when it is written, so it sits in time order
-        among the frames around it.
+        A note carries the time it happened, so it sits in time order among the frames
+        around it.
         """
         if isinstance(event, Frame):
             self._pending.append(event)
+        elif isinstance(event, Note):
+            self._pending.append((event.time, event.text))
         else:
-            self._pending.append((time.time(), event.text if isinstance(event, Alert) else event))
+            self._pending.append((time.time(), event.text))
 
     def flush(self) -> int:
         """Write what arrived since the last flush; returns the number of events."""
@@ -51,7 +52,6 @@ class FrameLog(Log):
             return 0
         events = list(self._pending)
         self._pending.clear()
-        self.frames_seen += len(events)
         shown = [e for e in events if not isinstance(e, Frame) or self.show_polls or not e.poll]
         lines = [_line(e) for e in shown[-MAX_LINES:]]
         if lines:

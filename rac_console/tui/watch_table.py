@@ -6,9 +6,9 @@ from rich.text import Text
 from textual.widgets import DataTable
 
 from ..commands.language import VarRef
+from ..engine import RowView
+from ..present.cells import age_text, status_cell, type_text, value_cell
 from ..protocol.text import terminal_safe
-from ..watch import WatchRow, age_text
-from ..watch_cells import status_cell, type_text, value_cell
 
 #: Status and age before the value, so they stay in view when a long P or J value is
 #: cut off on a narrow terminal.
@@ -23,7 +23,7 @@ COLUMNS = (
 
 
 class WatchTable(DataTable):
-    """Rows are keyed by variable name (``P10``); the app calls :meth:`refresh_rows` at ~10 Hz."""
+    """Rows are keyed by variable name (``P10``); the app calls :meth:`refresh_rows` at ~5 Hz."""
 
     def __init__(self, **kwargs: object) -> None:
         super().__init__(cursor_type="row", zebra_stripes=True, **kwargs)  # type: ignore[arg-type]
@@ -34,14 +34,15 @@ class WatchTable(DataTable):
         for key, label in COLUMNS:
             self.add_column(label, key=key)
 
-    def refresh_rows(self, rows: dict[VarRef, WatchRow], removed: set[VarRef], now: float) -> None:
-        """Bring the table in line with the rows; untouched cells are not redrawn."""
+    def refresh_rows(self, rows: dict[VarRef, RowView], removed: set[VarRef], now: float) -> None:
+        """Bring the table in line with the rows (every row, each time: ages and the
+        change highlight move with the clock); untouched cells are not redrawn."""
         for var in removed:
             key = str(var)
             if key in self._shown:
                 self.remove_row(key)
                 del self._shown[key]
-        for var, row in list(rows.items()):  # a snapshot: the session thread adds rows
+        for var, row in rows.items():
             key = str(var)
             cells = (
                 key,

@@ -1,42 +1,27 @@
-"""Run parsed commands over a session and turn every result into an Outcome.
+"""Run one exchange command over a session and turn every result into an Outcome.
 
-The one place where a command meets the client, shared by the CLI, ``run``,
-the REPL and the console.
+The one place where a command meets the session, shared by the CLI, ``run`` and the
+engine behind the console and the REPL.
 """
 
 from __future__ import annotations
 
-import asyncio
 import time
 
-from .client import (
-    PRIORITY_COMMAND,
-    BadReply,
-    ConnectFailed,
-    RacSession,
-    RequestTimeout,
-    TransportError,
-)
-from .commands.language import Exchange, Get, Put, Raw, VarRef
-from .commands.latency import LatencySummary, summarize
-from .commands.outcome import ExitStatus, Outcome, refused
-from .protocol import InputError, describe_hresult, escape_bytes
-from .protocol.messages import is_well_formed_get
-
-
-def is_write(command: Exchange) -> bool:
-    """True for a typed or raw PUT: a timeout then leaves its outcome unknown."""
-    if isinstance(command, Put):
-        return True
-    return isinstance(command, Raw) and command.wire.lstrip(" \t")[:3].upper() == "PUT"
+from ..commands.language import Exchange, Get, Put, VarRef
+from ..commands.latency import LatencySummary, summarize
+from ..commands.outcome import ExitStatus, Outcome, refused
+from ..protocol import describe_hresult, escape_bytes
+from ..session import BadReply, ConnectFailed, RequestTimeout, Session, TransportError
 
 
 def read_only_refusal(command: Exchange) -> str | None:
     """Why read-only keeps this off the wire; None for a well-formed GET, the only
     thing read-only lets out (in every front end, and for raw lines alike)."""
-    if is_well_formed_get(command.wire):
+    request = command.request
+    if request.read_only_safe:
         return None
-    if is_write(command):
+    if request.write:
         return "PUT refused: read-only mode is on (nothing was sent)"
     return (
         "refused: read-only mode sends only well-formed GET requests "
@@ -44,31 +29,24 @@ def read_only_refusal(command: Exchange) -> str | None:
     )
 
 
-async def execute(
-    session: RacSession,
+def execute(
+    session: Session,
     command: Exchange,
     *,
     read_only: bool = False,
     line: str | None = None,
-    priority: int = PRIORITY_COMMAND,
 ) -> Outcome:
     """Send one command and describe what came of it; never raises for I/O."""
-    wire = command.wire
-    var = command.var if isinstance(command, (Get, Put)) else None
+    request = command.request
+    wire = request.text
+    var = command.var if isinstance(command, Get | Put) else None
     if read_only and (refusal := read_only_refusal(command)) is not None:
         return refused(line, refusal, wire)
     try:
-        if isinstance(command, Get):
-            reply = await session.get(command.var.kind, command.var.index, priority=priority)
-        elif isinstance(command, Put):
-            reply = await session.put(command.var.kind, command.var.index, command.value)
-        else:
-            reply = await session.send_raw(wire)
-    except InputError as exc:
-        return refused(line, str(exc), wire)
+        reply = session.exchange(request)
     except RequestTimeout as exc:
         message = str(exc)
-        if is_write(command):
+        if request.write:
             message += ": outcome unknown, the PUT may have been applied"
         return Outcome(wire, ExitStatus.TRANSPORT, var, error=message, input_line=line, failure=exc)
     except TransportError as exc:
@@ -97,21 +75,20 @@ async def execute(
     )
 
 
-async def measure_latency(
-    session: RacSession, var: VarRef, count: int, interval: float
-) -> LatencySummary:
+def measure_latency(session: Session, var: VarRef, count: int, interval: float) -> LatencySummary:
     """GET one variable ``count`` times, ``interval`` seconds apart (0: back to back).
 
     Raises ConnectFailed when the controller cannot be reached at all.
     """
+    request = Get(var).request
     samples: list[float] = []
     errors = 0
     started = time.perf_counter()
     for n in range(count):
         if n and interval:
-            await asyncio.sleep(interval)
+            time.sleep(interval)
         try:
-            reply = await session.get(var.kind, var.index)
+            reply = session.exchange(request)
         except ConnectFailed:
             raise
         except TransportError:

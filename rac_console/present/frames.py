@@ -5,9 +5,9 @@ from __future__ import annotations
 import time
 from functools import lru_cache
 
-from .client import Frame
-from .protocol import ProtocolError, decode_frame, parse_response, wire_text
-from .protocol.text import describe_response
+from ..protocol import ProtocolError, decode_frame, parse_response, wire_text
+from ..protocol.text import describe_response
+from ..session import Frame
 
 ARROWS = {"tx": "→", "rx": "←"}
 
@@ -23,7 +23,15 @@ def clock_text(timestamp: float) -> str:
 
 
 def decoding(frame: Frame) -> str:
-    """A reply's short decoding: ``S_OK  VT_I4  123``, the HRESULT, or why it is garbled."""
+    """A reply's short decoding: ``S_OK  VT_I4  123``, the HRESULT, or why it is garbled.
+
+    A reply to a request comes parsed by the session; only a line nobody asked for
+    is parsed here."""
+    if frame.response is not None:
+        described = describe_response(frame.response)
+        return described if frame.problem is None else f"{described}  REFUSED: {frame.problem}"
+    if frame.problem is not None:
+        return f"garbled: {frame.problem}"
     return _decode(frame.data[:-1] if frame.data.endswith(b"\r") else frame.data)
 
 

@@ -6,8 +6,8 @@ import tomllib
 from collections.abc import Iterable
 from pathlib import Path
 
-from .commands.language import VarRef
-from .protocol import InputError, kind_of, parse_index
+from ..commands.language import VarRef
+from ..protocol import InputError, kind_of, parse_index
 
 #: A watch list larger than this is not a cell's list: refused before it is parsed.
 MAX_FILE_BYTES = 1024 * 1024

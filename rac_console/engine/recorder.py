@@ -14,8 +14,8 @@ import os
 from collections.abc import Callable
 from typing import TextIO
 
-from .client import Frame
-from .protocol import InputError, escape_bytes
+from ..protocol import InputError, escape_bytes
+from ..session import Frame
 
 
 def open_private(path: str, mode: str = "a") -> TextIO:

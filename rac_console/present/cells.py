@@ -1,12 +1,12 @@
-"""Cells of a watch table (values per type, statuses), for the console and the REPL."""
+"""Cells of a watch table (values per type, statuses, ages), for the console and the REPL."""
 
 from __future__ import annotations
 
 from rich.text import Text
 
-from .protocol import Variant, vt_name
-from .protocol.text import scalar_text
-from .watch import OK, WatchRow
+from ..engine.events import OK, RowView
+from ..protocol import Variant, vt_name
+from ..protocol.text import scalar_text
 
 HIGHLIGHT_SECONDS = 1.0
 
@@ -23,7 +23,7 @@ def number_text(value: object, width: int = NUMBER_WIDTH) -> str:
     return f"{scalar_text(value):>{width}}"
 
 
-def value_cell(row: WatchRow, now: float) -> Text:
+def value_cell(row: RowView, now: float) -> Text:
     variant = row.variant
     if variant is None:
         return Text("—", style="dim")
@@ -47,7 +47,7 @@ def value_cell(row: WatchRow, now: float) -> Text:
     return text
 
 
-def status_cell(row: WatchRow) -> Text:
+def status_cell(row: RowView) -> Text:
     if row.status == OK:
         return Text("OK", style="green", no_wrap=True)
     if row.stale:
@@ -55,6 +55,20 @@ def status_cell(row: WatchRow) -> Text:
     return Text(row.status, style="dim", no_wrap=True)
 
 
-def type_text(row: WatchRow) -> str:
+def type_text(row: RowView) -> str:
     variant: Variant | None = row.variant
     return vt_name(variant.vt if variant is not None else row.var.kind.vt)
+
+
+def age_text(row: RowView, now: float) -> str:
+    """How long ago the value changed: ``<1s``, ``42s``, ``3m07s``, ``2h05m``."""
+    if row.changed_at is None:
+        return ""
+    age = max(0.0, now - row.changed_at)
+    if age < 1:
+        return "<1s"
+    if age < 60:
+        return f"{int(age)}s"
+    if age < 3600:
+        return f"{int(age // 60)}m{int(age % 60):02d}s"
+    return f"{int(age // 3600)}h{int(age % 3600 // 60):02d}m"

@@ -12,10 +12,10 @@ from typing import Any
 from rich.console import Console
 from rich.text import Text
 
-from .commands.language import VarRef
-from .commands.outcome import Outcome
-from .protocol import Variant, vt_name
-from .protocol.text import describe_response, terminal_safe, terminal_safe_lines
+from ..commands.language import VarRef
+from ..commands.outcome import Outcome
+from ..protocol import Variant, vt_name
+from ..protocol.text import describe_response, terminal_safe, terminal_safe_lines
 
 #: Characters of a reply quoted in an error line.
 MAX_QUOTED_REPLY = 200

@@ -17,7 +17,7 @@ import time
 from collections.abc import Iterator
 from pathlib import Path
 
-from .recorder import open_private
+from ..engine.recorder import open_private
 
 DEFAULT_LIMIT = 1000
 

@@ -1,0 +1,203 @@
+"""Every command of the language, declared once.
+
+An entry holds the command's name, arguments, help, what completes after it, and
+its parser. ``help``, completion, hints, the lexer's colours and
+:func:`parse_command` all read this table; the engine runs the parsed command
+objects with ``match``, and front ends act on :class:`~.language.Step` values.
+Adding a command is one entry here, its parser, and its case in the engine.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from enum import Enum
+
+from ..protocol import InputError
+from .language import (
+    Command,
+    Simple,
+    Step,
+    is_raw_line,
+    parse_connect,
+    parse_exchange,
+    parse_frames,
+    parse_get,
+    parse_help,
+    parse_interval,
+    parse_latency,
+    parse_load,
+    parse_put,
+    parse_save,
+    parse_send,
+    parse_unwatch,
+    parse_watch,
+    split_word,
+)
+
+
+class Completes(Enum):
+    """What the word after the command name can be completed to."""
+
+    NOTHING = "nothing"
+    VARIABLE = "variable"  # TYPE, then an index seen before (then on|off for put IO)
+    COMMAND = "command"  # help TOPIC
+    ON_OFF = "on|off"
+
+
+@dataclass(frozen=True)
+class CommandSpec:
+    name: str
+    arguments: str
+    summary: str
+    parse: Callable[[str], Command]
+    example: str = ""
+    completes: Completes = Completes.NOTHING
+    notes: tuple[str, ...] = ()  # more lines for ``help NAME``
+
+    @property
+    def usage(self) -> str:
+        return f"{self.name} {self.arguments}".strip()
+
+    @property
+    def takes_variable(self) -> bool:
+        return self.completes is Completes.VARIABLE
+
+
+def _no_argument(step: Step) -> Callable[[str], Command]:
+    def parse(rest: str) -> Command:
+        if rest:
+            raise InputError(f"{step.value} takes no argument")
+        return Simple(step)
+
+    return parse
+
+
+_TYPE_NOTE = "TYPE: I F D S V P J T IO; I 10, I10 and I[10] name the same variable"
+
+COMMANDS: dict[str, CommandSpec] = {
+    spec.name: spec
+    for spec in (
+        CommandSpec(
+            "get",
+            "TYPE INDEX",
+            "read a variable",
+            parse_get,
+            "get P 10",
+            Completes.VARIABLE,
+            (_TYPE_NOTE,),
+        ),
+        CommandSpec(
+            "put",
+            "TYPE INDEX VALUE...",
+            "write a variable",
+            parse_put,
+            "put I 10 123",
+            Completes.VARIABLE,
+            (_TYPE_NOTE, "V/P/J/T take 3/7/8/10 numbers, IO takes on|off, S the rest of the line"),
+        ),
+        CommandSpec(
+            "send",
+            "TEXT",
+            "send TEXT exactly as typed, even malformed",
+            parse_send,
+            "send GET:RC8:10:I:",
+        ),
+        CommandSpec(
+            "watch",
+            "TYPE INDEX [LABEL] [every SECONDS]",
+            "add variables to the live table",
+            parse_watch,
+            "watch IO 128-135",
+            Completes.VARIABLE,
+            (_TYPE_NOTE,),
+        ),
+        CommandSpec(
+            "unwatch",
+            "TYPE INDEX | all",
+            "remove variables from the live table",
+            parse_unwatch,
+            "unwatch P 10",
+            Completes.VARIABLE,
+            (_TYPE_NOTE,),
+        ),
+        CommandSpec(
+            "interval", "SECONDS", "time between poll cycles", parse_interval, "interval 0.5"
+        ),
+        CommandSpec("pause", "", "stop polling the watched variables", _no_argument(Step.PAUSE)),
+        CommandSpec("resume", "", "start polling again", _no_argument(Step.RESUME)),
+        CommandSpec(
+            "connect",
+            "HOST[:PORT]",
+            "talk to a controller (port 5006 by default)",
+            parse_connect,
+            "connect 192.168.0.1",
+        ),
+        CommandSpec(
+            "disconnect", "", "close the session and stop polling", _no_argument(Step.DISCONNECT)
+        ),
+        CommandSpec("save", "FILE", "save the watch list as TOML", parse_save, "save cell3.toml"),
+        CommandSpec(
+            "load", "FILE", "add the watch list saved in FILE", parse_load, "load cell3.toml"
+        ),
+        CommandSpec(
+            "frames",
+            "on|off",
+            "echo every frame sent and received (REPL)",
+            parse_frames,
+            "frames on",
+            Completes.ON_OFF,
+        ),
+        CommandSpec(
+            "latency",
+            "[COUNT] [TYPE INDEX]",
+            "measure round trips: COUNT GETs back to back (default 100 of I 0)",
+            parse_latency,
+            "latency 1000",
+        ),
+        CommandSpec("clear", "", "clear the frame log", _no_argument(Step.CLEAR)),
+        CommandSpec(
+            "help",
+            "[COMMAND]",
+            "list commands, or explain one",
+            parse_help,
+            "help put",
+            Completes.COMMAND,
+        ),
+        CommandSpec("quit", "", "leave the console", _no_argument(Step.QUIT)),
+    )
+}
+
+RAW_HELP = "GET:... / PUT:... lines are sent exactly as typed (raw RAC entry)"
+
+
+def parse_command(line: str) -> Command | None:
+    """One line of the command language; None for a blank line or a ``#`` comment."""
+    stripped = line.strip()
+    if not stripped or stripped.startswith("#"):
+        return None
+    if is_raw_line(line):
+        return parse_exchange(line.rstrip("\r\n"))
+    word, rest = split_word(line.rstrip("\r\n"))
+    spec = COMMANDS.get(word)
+    if spec is None:
+        raise InputError(
+            f"unknown command {word!r}: type help for the list, "
+            "or start a raw line with GET: or PUT:"
+        )
+    return spec.parse(rest)
+
+
+def help_lines(topic: str | None = None) -> list[str]:
+    """The text of ``help`` or ``help COMMAND``."""
+    if topic:
+        spec = COMMANDS.get(topic.lower())
+        if spec is None:
+            return [f"no command {topic!r}: type help for the list"]
+        lines = [f"{spec.usage}  -  {spec.summary}"]
+        if spec.example:
+            lines.append(f"  e.g. {spec.example}")
+        lines.extend(f"  {note}" for note in spec.notes)
+        return lines
+    width = max(len(s.usage) for s in COMMANDS.values())
+    return [f"{s.usage:<{width}}  {s.summary}" for s in COMMANDS.values()] + [RAW_HELP]

@@ -1,0 +1,45 @@
+"""The engine: all mutable state of a console session, on a thread of its own.
+
+Thread rules (the only ones; nothing else is shared):
+
+- The engine's thread owns everything that changes: the target (and the built-in
+  simulator's thread), the one :class:`~rac_console.session.Session`, the watch list,
+  the poller, the recorder, the figures. Only that thread reads or writes them.
+- Any thread may call :meth:`Engine.submit` (lines go through a thread-safe queue and
+  run one at a time, in order, between polls) and :meth:`Engine.stop`.
+- The engine publishes immutable events (:mod:`.events`: frames with their parsed
+  reply, notes, alerts, results, row views, the status) to one :class:`Outbox`. A front
+  end drains it on its own thread and schedule, and never reads an engine attribute.
+  Row views and the status replace the ones not yet drained.
+- Nothing here imports Textual, prompt-toolkit or rich; the process-wide interpreter
+  settings (switch interval, signal handlers) are left alone.
+"""
+
+from .engine import DEFAULT_INTERVAL, SIMULATOR_NOTICE, Engine
+from .events import (
+    Alert,
+    Feedback,
+    Message,
+    Note,
+    Result,
+    RowView,
+    Status,
+    UiStep,
+)
+from .outbox import Batch, Outbox
+
+__all__ = [
+    "DEFAULT_INTERVAL",
+    "SIMULATOR_NOTICE",
+    "Alert",
+    "Batch",
+    "Engine",
+    "Feedback",
+    "Message",
+    "Note",
+    "Outbox",
+    "Result",
+    "RowView",
+    "Status",
+    "UiStep",
+]

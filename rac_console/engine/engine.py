@@ -1,0 +1,434 @@
+"""The engine: the target, the one session, the watch list and its poller, on one thread.
+
+See the package docstring for the thread rules. Lines come in through :meth:`submit`
+(any thread) and are run one at a time, in order, between polls: a typed command waits
+at most for the one poll in flight. Everything else goes out through the outbox.
+"""
+
+from __future__ import annotations
+
+import itertools
+import queue
+import threading
+import time
+from collections import deque
+
+from ..commands.language import Command, VarRef
+from ..protocol import describe_hresult, hresult_name
+from ..protocol.request import get_for
+from ..session import (
+    BadReply,
+    ConnectFailed,
+    Disconnected,
+    Frame,
+    RequestTimeout,
+    Session,
+    State,
+    TransportError,
+)
+from ..sim.thread import SimulatorThread
+from .backoff import Backoff
+from .events import Alert, Message, Note, Result, Status
+from .outbox import Outbox
+from .recorder import FrameRecorder
+from .watch import WatchList, WatchRow
+
+DEFAULT_INTERVAL = 0.5
+SIMULATOR_NOTICE = "no -H given: talking to the built-in RC8 simulator, not a controller"
+#: The status is published at most this often while polling flat out (and on every change
+#: a user causes).
+STATUS_EVERY = 0.1
+
+
+class Engine:
+    """Start it, submit lines, drain :attr:`outbox`, stop it."""
+
+    def __init__(
+        self,
+        host: str | None = None,
+        port: int = 5006,
+        *,
+        timeout: float = 2.0,
+        read_only: bool = False,
+        record: str | None = None,
+        interval: float = DEFAULT_INTERVAL,
+        outbox: Outbox | None = None,
+    ) -> None:
+        """Raises InputError when ``record`` cannot be opened (before any thread starts)."""
+        self.outbox = outbox if outbox is not None else Outbox()
+        self._target = (host, port)
+        self.timeout = timeout
+        self.read_only = read_only
+        self.interval = interval
+        self.watch = WatchList()
+        self.seen: set[tuple[str, int]] = set()
+        self._seen_frozen: frozenset[tuple[str, int]] = frozenset()
+        self.paused = False
+        self.session: Session | None = None
+        self.simulator: SimulatorThread | None = None
+        self.host: str | None = None
+        self.port = port
+        self.connection: str = "closed"
+        self.retry_at: float | None = None
+        self.cycle_seconds: float | None = None
+        self.polls_per_second: float | None = None
+        self.backoff = Backoff()
+        self.recorder = FrameRecorder(record, self.alert) if record else None
+        self._lost = False
+        self._early_drop = False
+        self._cycle: deque[VarRef] = deque()
+        self._cycle_started = 0.0  # perf_counter()
+        self._cycle_count = 0
+        self._last_cycle: tuple[float, int] | None = None  # start, polls: for polls/s
+        self._next_cycle_at = 0.0  # monotonic()
+        self._status_at = 0.0
+        self._status_dirty = True
+        self._inbox: queue.SimpleQueue[tuple[int, str | Command] | None] = queue.SimpleQueue()
+        self._seq = itertools.count(1)
+        self._connect_first = True
+        self._started = threading.Event()
+        self._thread = threading.Thread(target=self._run, name="rac-engine", daemon=True)
+
+    # ------------------------------------------------------- any thread
+
+    def start(self, connect: bool = True) -> None:
+        """Open the target (the simulator starts here when no host was given) and, with
+        ``connect``, the connection; returns once the first status is in the outbox."""
+        self._connect_first = connect
+        self._thread.start()
+        self._started.wait(15)
+
+    def submit(self, line: str) -> int:
+        """Queue a typed line; its :class:`Result` comes out with the number returned."""
+        seq = next(self._seq)
+        self._inbox.put((seq, line))
+        return seq
+
+    def submit_command(self, command: Command) -> int:
+        """Queue a command a front end made itself (F2's pause, the REPL's end of a
+        live watch): run like a typed line, with no line to echo."""
+        seq = next(self._seq)
+        self._inbox.put((seq, command))
+        return seq
+
+    def stop(self, timeout: float = 5.0) -> None:
+        """End the thread: a request in flight is cut short, the target closed."""
+        if not self._thread.is_alive():
+            return
+        self._inbox.put(None)  # stop
+        session = self.session
+        if session is not None:
+            session.interrupt()
+        self._thread.join(timeout)
+
+    # ---------------------------------------------------- engine thread
+
+    def _run(self) -> None:
+        from .handlers import handle
+
+        try:
+            self.open_target(*self._target)
+            self.publish_status(force=True)
+            self._started.set()
+            if self._connect_first:
+                self._connect_at_start()
+            while True:
+                wait = self._wait_time()
+                if wait != 0 and self._status_dirty:
+                    self.publish_status(force=True)
+                item = self._next(wait)
+                if item is None:
+                    break  # stop
+                if item:
+                    handle(self, *item)
+                    continue
+                self._poll_once()
+        except Exception as exc:  # a bug must not leave the front end waiting in silence
+            self.alert(f"the engine stopped on an internal error: {exc!r}")
+        finally:
+            self._started.set()
+            self.close_target()
+            if self.recorder is not None:
+                self.recorder.close()
+            self.publish_status(force=True)
+
+    def _next(self, wait: float | None) -> tuple[int, str | Command] | tuple[()] | None:
+        """The next line or command; ``()`` when none came in time; None: stop."""
+        try:
+            if wait == 0:
+                return self._inbox.get_nowait()
+            return self._inbox.get(timeout=wait)
+        except queue.Empty:
+            return ()
+
+    def _connect_at_start(self) -> None:
+        """Open the connection at start, so the status line tells the truth at once."""
+        if self.session is None:
+            return
+        try:
+            self.session.connect()
+        except (ConnectFailed, Disconnected) as exc:
+            self.outbox.put(Result(0, (Message(f"{exc}: commands will retry", "error"),)))
+
+    # ------------------------------------------------------------ target
+
+    def open_target(self, host: str | None, port: int) -> None:
+        if host is None:
+            self.simulator = SimulatorThread().start()
+            host, port = self.simulator.host, self.simulator.port
+        self.host, self.port = host, port
+        self.backoff, self._early_drop, self._lost = Backoff(), False, False
+        session = Session(host, port, timeout=self.timeout)
+        session.add_frame_observer(self._on_frame)
+        session.add_state_observer(self._on_state)
+        self.session = session
+        self.wake()
+
+    def close_target(self) -> None:
+        if self.session is not None:
+            self.session.close()
+            self.session = None
+        if self.simulator is not None:
+            self.simulator.stop()
+            self.simulator = None
+        self.connection = "closed"
+        self.retry_at = None
+        self._cycle.clear()
+        self._forget_figures()
+
+    @property
+    def target(self) -> str:
+        if self.session is None:
+            return "NOT CONNECTED"
+        if self.simulator is not None:
+            return "SIMULATOR (built-in)"
+        return f"LIVE {self.host}:{self.port}"
+
+    # ------------------------------------------------------------ events
+
+    def _on_frame(self, frame: Frame) -> None:
+        if self.recorder is not None:
+            self.recorder(frame)
+        self.outbox.put(frame)
+
+    def note(self, text: str) -> None:
+        self.outbox.put(Note(text, time.time()))
+
+    def alert(self, text: str) -> None:
+        self.outbox.put(Alert(text))
+
+    def show_row(self, row: WatchRow) -> None:
+        self.outbox.put_row(row.view())
+
+    def see(self, variables: tuple[VarRef, ...] | list[VarRef]) -> None:
+        """Indices used or watched, offered by completion."""
+        before = len(self.seen)
+        self.seen.update((v.kind.code, v.index) for v in variables)
+        if len(self.seen) != before:
+            self._seen_frozen = frozenset(self.seen)
+
+    def _on_state(self, state: State) -> None:
+        self.connection = state
+        if state != "connected":
+            self._forget_figures()
+        if state == "closed" and self.backoff.closed():
+            self._early_drop = True  # the poller waits before its next request
+        if state in ("connecting", "connected"):  # closed while connecting counts too
+            self.backoff.connected()
+            self.retry_at = None
+            if state == "connected" and self._lost:
+                self._lost = False
+                self.note(f"reconnected to {self.host}:{self.port}")
+        self._status_dirty = True
+
+    def _forget_figures(self) -> None:
+        """Round trips and poll rates measured on a connection that is gone say nothing now."""
+        self.cycle_seconds = self.polls_per_second = None
+        self._last_cycle = None
+        if self.session is not None:
+            self.session.last_rtt = None
+
+    def mark_failure(self, error: TransportError) -> None:
+        """One line in the log for each request that got no trustworthy reply."""
+        if isinstance(error, ConnectFailed):
+            return  # an outage is marked once, by the poller or the command's own result
+        if isinstance(error, Disconnected):
+            self.note(f"{error}: the next request reconnects")
+        else:
+            self.note(f"{error}: session reset")
+
+    def publish_status(self, force: bool = False) -> None:
+        now = time.monotonic()
+        if not force and now - self._status_at < STATUS_EVERY:
+            self._status_dirty = True
+            return
+        self._status_at, self._status_dirty = now, False
+        session = self.session
+        period = self.period
+        self.outbox.put_status(
+            Status(
+                target=self.target,
+                is_simulator=self.simulator is not None,
+                has_session=session is not None,
+                host=self.host,
+                port=self.port,
+                timeout=self.timeout,
+                read_only=self.read_only,
+                connection=self.connection,
+                retry_at=self.retry_at,
+                rtt=session.last_rtt if session is not None else None,
+                paused=self.paused,
+                watched=len(self.watch.rows),
+                interval=self.interval,
+                period=period,
+                cycle_seconds=self.cycle_seconds,
+                polls_per_second=self.polls_per_second,
+                interval_met=self._interval_met(period),
+                record_failure=self.recorder.failure if self.recorder is not None else None,
+                seen=self._seen_frozen,
+            )
+        )
+
+    # ------------------------------------------------------------ polling
+
+    @property
+    def period(self) -> float:
+        """Seconds between poll cycles: the interval, or a row's shorter ``every``."""
+        return self.watch.period(self.interval)
+
+    def _interval_met(self, period: float) -> bool:
+        """Period 0 asks for polls back to back: met by definition."""
+        if self.cycle_seconds is None or period == 0:
+            return True
+        return self.cycle_seconds <= period * 1.05 + 0.001
+
+    def wake(self) -> None:
+        """The watch list, interval, pause or target changed: poll (or retry) now."""
+        self._next_cycle_at = 0.0
+        if self.retry_at is not None:
+            self._end_retry()
+        self._status_dirty = True
+
+    def set_paused(self, paused: bool) -> None:
+        self.paused = paused
+        if paused:
+            self.cycle_seconds = self.polls_per_second = None
+            self._last_cycle = None
+            self._cycle.clear()
+        self.wake()
+
+    def _wait_time(self) -> float | None:
+        """How long the loop may wait for a line before it has a poll to make (None:
+        nothing to poll, wait for a line)."""
+        if self.session is None or self.paused or not self.watch.rows:
+            return None
+        now = time.monotonic()
+        if self.retry_at is not None:
+            return max(0.0, self.retry_at - now)
+        if self._cycle:
+            return 0
+        return max(0.0, self._next_cycle_at - now)
+
+    def _poll_once(self) -> None:
+        """One step of the poller: one row polled, or a cycle begun or ended."""
+        now = time.monotonic()
+        if self.retry_at is not None:
+            if now < self.retry_at:
+                return
+            self._end_retry()
+        if not self._cycle:
+            if now < self._next_cycle_at:
+                return
+            self._begin_cycle(now)
+            if not self._cycle:  # every row has its own, longer period
+                self._next_cycle_at = now + self.period
+                return
+        row = self.watch.rows.get(self._cycle[0])
+        if row is None:  # unwatched during the cycle
+            self._cycle.popleft()
+            self._end_cycle_if_done()
+            return
+        if self._early_drop:
+            # The last connection closed before it served a couple of exchanges: wait,
+            # then go on with this row (cutting the cycle would starve the rest).
+            self._early_drop = False
+            served = self.backoff.served
+            self.note(
+                f"the connection closed after {served} good exchange{'s' * (served != 1)}: "
+                f"waiting {self.backoff.delay:g} s before the next try"
+            )
+            self._begin_retry("dropped")
+            return
+        self._cycle.popleft()
+        try:
+            self._poll_row(row)
+        except ConnectFailed as exc:
+            if not self._lost:
+                self._lost = True
+                for failed in self.watch.mark_all("DISCONNECTED"):
+                    self.show_row(failed)
+                self.note(f"connection lost: {exc}")
+            self._cycle.clear()
+            self._early_drop = False  # this failure has its own wait
+            self._begin_retry("lost")
+            return
+        self._cycle_count += 1
+        self._end_cycle_if_done()
+
+    def _begin_cycle(self, now: float) -> None:
+        started = time.perf_counter()
+        if self._last_cycle is not None:
+            last_start, last_count = self._last_cycle
+            if last_count and started > last_start:
+                self.polls_per_second = last_count / (started - last_start)
+        interval = self.interval
+        self._cycle.extend(var for var, row in self.watch.rows.items() if row.due(now, interval))
+        self._cycle_started, self._cycle_count = started, 0
+        self._next_cycle_at = now + self.period
+
+    def _end_cycle_if_done(self) -> None:
+        if self._cycle:
+            return
+        if self._cycle_count:
+            self.cycle_seconds = time.perf_counter() - self._cycle_started
+            self._last_cycle = (self._cycle_started, self._cycle_count)
+        self.publish_status()
+
+    def _poll_row(self, row: WatchRow) -> None:
+        session = self.session
+        assert session is not None
+        var = row.var
+        outbox = self.outbox
+        outbox.waiting_since = time.perf_counter()
+        try:
+            reply = session.exchange(get_for(var.kind, var.index), poll=True)
+        except ConnectFailed:
+            raise
+        except TransportError as exc:
+            self.mark_failure(exc)
+            status = {RequestTimeout: "TIMEOUT", BadReply: "BAD REPLY"}.get(type(exc))
+            if row.fail(status or "DISCONNECTED", time.monotonic()):
+                self.show_row(row)
+            return
+        finally:
+            outbox.waiting_since = None
+        self.backoff.good()
+        response = reply.response
+        if response.ok and response.variant is not None:
+            changed = row.update(response.variant, time.monotonic())
+        else:
+            status = hresult_name(response.code) or describe_hresult(response.code)[:10]
+            changed = row.fail(status, time.monotonic())
+        if changed:
+            self.show_row(row)
+
+    def _begin_retry(self, state: str) -> None:
+        """Back off before the next try; the status line counts it down."""
+        self.connection = state
+        self.retry_at = time.monotonic() + self.backoff.next_delay()
+        self.publish_status(force=True)
+
+    def _end_retry(self) -> None:
+        self.retry_at = None
+        self.connection = self.session.state if self.session is not None else "closed"
+        self._status_dirty = True

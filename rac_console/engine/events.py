@@ -1,0 +1,113 @@
+"""What the engine publishes: immutable events, read by the front ends from the outbox.
+
+A front end never reads an engine attribute; everything it shows arrives as one of
+these. A :class:`~rac_console.session.Frame` (with its parsed reply) is an event too.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from enum import Enum
+
+from ..commands.language import Command, VarRef
+from ..commands.outcome import Outcome
+from ..protocol import Variant
+from ..session import Frame
+
+OK = "OK"
+WAITING = "…"
+
+
+@dataclass(frozen=True, slots=True)
+class Message:
+    """Feedback that is not an exchange: help text, a confirmation, an error."""
+
+    text: str
+    level: str = "info"  # info, error
+
+
+class UiStep(Enum):
+    """What only a front end can do."""
+
+    CLEAR = "clear"  # its log or screen
+    QUIT = "quit"
+    FRAMES_ON = "frames on"  # echo frames (REPL) / show poll frames (console)
+    FRAMES_OFF = "frames off"
+
+
+Feedback = Outcome | Message | UiStep
+
+
+@dataclass(frozen=True, slots=True)
+class Result:
+    """What came of the command submitted as ``seq``: shown in the order submitted."""
+
+    seq: int  # 0: not the answer to a submitted line (the first connection's failure)
+    feedback: tuple[Feedback, ...]
+    line: str | None = None
+    command: Command | None = None  # the line as parsed, once, by the engine
+
+
+@dataclass(frozen=True, slots=True)
+class Note:
+    """A mark in the frame log: a connection gap, a request that got no trustworthy reply."""
+
+    text: str
+    time: float
+
+
+@dataclass(frozen=True, slots=True)
+class Alert:
+    """Something to tell the user at once, whatever they are doing: a recording stopped."""
+
+    text: str
+
+
+@dataclass(frozen=True, slots=True)
+class RowView:
+    """One watched variable as it stands: what a table shows. Replaces the last one."""
+
+    var: VarRef
+    label: str
+    variant: Variant | None
+    status: str
+    stale: bool
+    changed_at: float | None
+    every: float | None
+
+    @property
+    def key(self) -> str:
+        return str(self.var)
+
+
+@dataclass(frozen=True, slots=True)
+class Status:
+    """The figures of the status line and prompt; each replaces the last one."""
+
+    target: str  # "SIMULATOR (built-in)", "LIVE host:port" or "NOT CONNECTED"
+    is_simulator: bool
+    has_session: bool
+    host: str | None
+    port: int
+    timeout: float
+    read_only: bool
+    connection: str  # closed, connecting, connected, lost, dropped
+    retry_at: float | None  # time.monotonic() of the next try, during a backoff
+    rtt: float | None
+    paused: bool
+    watched: int
+    interval: float
+    period: float
+    cycle_seconds: float | None
+    polls_per_second: float | None
+    interval_met: bool
+    record_failure: str | None
+    seen: frozenset[tuple[str, int]]
+
+    def exit_status(self, status: int) -> int:
+        """A front end's exit status: 4 (a local I/O error) when it would be 0 but the
+        recording stopped on the way."""
+        return 4 if status == 0 and self.record_failure is not None else status
+
+
+Event = Frame | Note | Alert | Result

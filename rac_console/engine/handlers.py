@@ -1,0 +1,183 @@
+"""What each command does, run on the engine's thread: one ``case`` per command.
+
+The registry (:mod:`rac_console.commands.registry`) declares a command and its
+parser; its behaviour is here. Every problem becomes feedback, never an exception.
+"""
+
+from __future__ import annotations
+
+import time
+
+from ..commands.language import (
+    Command,
+    Connect,
+    Frames,
+    Get,
+    Help,
+    Latency,
+    Put,
+    Raw,
+    SetInterval,
+    Simple,
+    Step,
+    Unwatch,
+    VarRef,
+    Watch,
+    WatchFile,
+)
+from ..commands.registry import help_lines, parse_command
+from ..protocol import InputError
+from ..session import ConnectFailed, Disconnected, TransportError
+from . import watchlist
+from .engine import Engine
+from .events import Feedback, Message, Result, UiStep
+from .execute import execute, measure_latency
+
+NOT_CONNECTED = "not connected: connect HOST[:PORT] first"
+
+
+def handle(engine: Engine, seq: int, what: str | Command) -> None:
+    """Parse (once) and run one submitted line or command; the status, then its Result,
+    go to the outbox (so a front end showing the result knows the state it left)."""
+    command: Command | None = None
+    line = what if isinstance(what, str) else None
+    try:
+        command = parse_command(what) if isinstance(what, str) else what
+        feedback = run(engine, command, line) if command is not None else []
+    except InputError as exc:
+        feedback = [Message(str(exc), "error")]
+    except Exception as exc:  # a bug must not end the session at the cell
+        feedback = [Message(f"internal error: {exc!r}", "error")]
+    engine.publish_status(force=True)
+    engine.outbox.put(Result(seq, tuple(feedback), line, command))
+
+
+def run(engine: Engine, command: Command, line: str | None) -> list[Feedback]:
+    match command:
+        case Get() | Put() | Raw():
+            session = engine.session
+            if session is None:
+                return [Message(NOT_CONNECTED, "error")]
+            if isinstance(command, Get | Put):
+                engine.see((command.var,))
+            engine.outbox.waiting_since = time.perf_counter()
+            try:
+                outcome = execute(session, command, read_only=engine.read_only, line=line)
+            finally:
+                engine.outbox.waiting_since = None
+            if isinstance(outcome.failure, TransportError):
+                engine.mark_failure(outcome.failure)
+            return [outcome]
+        case Frames(on=on):
+            return [UiStep.FRAMES_ON if on else UiStep.FRAMES_OFF]
+        case Latency(var=var, count=count, interval=interval):
+            if engine.session is None:
+                return [Message(NOT_CONNECTED, "error")]
+            try:
+                summary = measure_latency(engine.session, var, count, interval)
+            except (ConnectFailed, Disconnected) as exc:
+                return [Message(str(exc), "error")]
+            return [Message(summary.text(f"GET {var}"))]
+        case Watch(vars=variables, label=label, every=every):
+            return [_watch(engine, variables, label, every)]
+        case Unwatch(vars=variables):
+            return [_unwatch(engine, variables)]
+        case SetInterval(seconds=seconds):
+            engine.interval = seconds
+            engine.wake()
+            return [Message(f"poll interval {seconds:g} s")]
+        case Connect(host=host, port=port):
+            return [_connect(engine, host, port)]
+        case WatchFile():
+            return [_watch_file(engine, command)]
+        case Help(topic=topic):
+            return [Message("\n".join(help_lines(topic)))]
+        case Simple(step=step):
+            return [_step(engine, step)]
+    raise AssertionError(f"no handler for {command!r}")  # the registry and this match agree
+
+
+def _step(engine: Engine, step: Step) -> Feedback:
+    match step:
+        case Step.PAUSE | Step.RESUME:
+            engine.set_paused(step is Step.PAUSE)
+            return Message("polling paused" if engine.paused else "polling resumed")
+        case Step.DISCONNECT:
+            engine.close_target()
+            for row in engine.watch.mark_all("DISCONNECTED"):
+                engine.show_row(row)
+            engine.note("disconnected")
+            return Message("disconnected: connect HOST[:PORT] to talk to a controller")
+        case Step.CLEAR:
+            return UiStep.CLEAR
+        case Step.QUIT:
+            return UiStep.QUIT
+
+
+def _watch(
+    engine: Engine, variables: tuple[VarRef, ...], label: str, every: float | None
+) -> Message:
+    added = engine.watch.add(variables, label, every)
+    for var in variables:
+        engine.show_row(engine.watch.rows[var])
+    engine.see(variables)
+    engine.wake()
+    names = names_text(variables)
+    text = f"watching {names}" if added else f"{names} already watched"
+    if every is not None:
+        text += f", polled every {every:g} s (other rows: interval {engine.interval:g} s)"
+    return Message(text)
+
+
+def _unwatch(engine: Engine, variables: tuple[VarRef, ...]) -> Message:
+    absent = [v for v in variables if v not in engine.watch.rows]
+    if variables and len(absent) == len(variables):
+        return Message(f"{names_text(variables)} not watched: nothing to stop", "error")
+    removed = engine.watch.remove(variables)
+    engine.outbox.put_removed(removed)
+    text = f"stopped watching {len(removed)} variable{'s' * (len(removed) != 1)}"
+    if absent:
+        verb = "was" if len(absent) == 1 else "were"
+        text += f" ({names_text(tuple(absent))} {verb} not watched)"
+    return Message(text)
+
+
+def _connect(engine: Engine, host: str, port: int) -> Message:
+    engine.close_target()
+    engine.open_target(host, port)
+    assert engine.session is not None
+    try:
+        engine.session.connect()
+    except (ConnectFailed, Disconnected) as exc:
+        return Message(f"{exc}; will keep retrying while variables are watched", "error")
+    engine.note(f"connected to {host}:{port}")
+    return Message(f"connected to LIVE controller {host}:{port}")
+
+
+def _watch_file(engine: Engine, command: WatchFile) -> Message:
+    try:
+        if command.action == "save":
+            saved = [(row.var, row.label, row.every) for row in engine.watch.rows.values()]
+            watchlist.save(command.path, saved)
+            return Message(f"saved {len(saved)} watched variables to {command.path}")
+        rows = watchlist.load(command.path)
+    except InputError as exc:
+        return Message(str(exc), "error")
+    for var, label, every in rows:
+        engine.watch.add((var,), label, every)
+        engine.show_row(engine.watch.rows[var])
+    engine.see([var for var, _, _ in rows])
+    engine.wake()
+    return Message(f"loaded {len(rows)} watched variables from {command.path}")
+
+
+def names_text(variables: tuple[VarRef, ...]) -> str:
+    """``IO4``, ``IO4..IO7 (4 variables)`` for a range, else ``P0, J0``."""
+    if len(variables) == 1:
+        return str(variables[0])
+    first = variables[0]
+    if all(v.kind == first.kind and v.index == first.index + n for n, v in enumerate(variables)):
+        return f"{first}..{variables[-1]} ({len(variables)} variables)"
+    if len(variables) <= 6:
+        return ", ".join(str(v) for v in variables)
+    return f"{', '.join(str(v) for v in variables[:5])} and {len(variables) - 5} more"

@@ -1,0 +1,111 @@
+"""The one way from the engine's thread to a front end.
+
+The engine puts events; a front end drains them all at once on its own schedule (the
+console on its refresh tick, the REPL in its loop). Row views and the status replace
+the ones not yet drained, so a slow reader gets the latest state, not a backlog.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import threading
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+from ..commands.language import VarRef
+from ..session import Frame
+from .events import Event, RowView, Status
+
+#: Events kept for a reader that does not drain; past it the oldest frames go first.
+MAX_EVENTS = 100_000
+
+
+@dataclass
+class Batch:
+    """Everything published since the last drain, in order, plus the latest state."""
+
+    events: list[Event] = field(default_factory=list)
+    rows: dict[VarRef, RowView] = field(default_factory=dict)
+    removed: set[VarRef] = field(default_factory=set)
+    status: Status | None = None
+    frames_dropped: int = 0
+
+
+class Outbox:
+    """Thread-safe: ``put*`` from the engine's thread, :meth:`drain` from a front end's.
+
+    ``notify`` (if given) is called on the engine's thread when the outbox stops being
+    empty: a front end with an event loop wakes its drain from there.
+    """
+
+    def __init__(self, notify: Callable[[], None] | None = None) -> None:
+        self.notify = notify
+        self._lock = threading.Lock()
+        self._batch = Batch()
+        self._empty = True
+        #: ``time.perf_counter()`` when the request in flight left; one writer (the engine).
+        self.waiting_since: float | None = None
+
+    def put(self, event: Event) -> None:
+        with self._lock:
+            events = self._batch.events
+            events.append(event)
+            if len(events) > MAX_EVENTS:
+                self._shed_frames()
+            woke = self._wake()
+        if woke:
+            self._notify()
+
+    def put_row(self, view: RowView) -> None:
+        with self._lock:
+            self._batch.rows[view.var] = view
+            self._batch.removed.discard(view.var)
+            woke = self._wake()
+        if woke:
+            self._notify()
+
+    def put_removed(self, variables: list[VarRef]) -> None:
+        with self._lock:
+            for var in variables:
+                self._batch.rows.pop(var, None)
+                self._batch.removed.add(var)
+            woke = self._wake()
+        if woke:
+            self._notify()
+
+    def put_status(self, status: Status) -> None:
+        with self._lock:
+            self._batch.status = status
+            woke = self._wake()
+        if woke:
+            self._notify()
+
+    def drain(self) -> Batch:
+        with self._lock:
+            batch, self._batch = self._batch, Batch()
+            self._empty = True
+        return batch
+
+    def _wake(self) -> bool:
+        woke, self._empty = self._empty, False
+        return woke
+
+    def _notify(self) -> None:
+        notify = self.notify
+        if notify is not None:
+            with contextlib.suppress(RuntimeError):  # the reader's loop closed: nobody to wake
+                notify()
+
+    def _shed_frames(self) -> None:
+        """Drop the oldest half of the frames (never a result, note or alert)."""
+        events = self._batch.events
+        frames = sum(1 for event in events if isinstance(event, Frame))
+        shed = frames // 2
+        kept: list[Event] = []
+        for event in events:
+            if shed and isinstance(event, Frame):
+                shed -= 1
+                self._batch.frames_dropped += 1
+                continue
+            kept.append(event)
+        self._batch.events = kept

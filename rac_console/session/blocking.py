@@ -1,0 +1,391 @@
+"""The session driver: one blocking socket, driven by the thread that owns the session.
+
+The protocol allows one request in flight, so a request is ``sendall`` then ``recv``
+until the reply: no event loop between the bytes and the caller. The rules live in
+:class:`~.machine.SessionMachine`; this class only moves bytes, keeps time and tells
+its observers what crossed. Not thread-safe: one thread owns a session (the engine's,
+or the CLI's main thread); only :meth:`interrupt` may be called from another thread.
+
+The protocol has no request ids, so after a timeout, a reply that cannot belong to
+its request, or bytes that arrive while nothing waits, the connection is dropped and
+a fresh one opened for the next request: a late reply can never be taken for the
+answer to a later one. Before each request the socket is asked (one ``poll``, or
+``select`` where there is none) whether anything waits unread, for the same reason.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import logging
+import os
+import select
+import socket
+import time
+from typing import Any
+
+from ..protocol import Variant, VarKind, format_variant
+from ..protocol.request import Request, get_for, put_for, raw_request
+from ..protocol.text import escape_bytes
+from .machine import SessionMachine, Verdict, bad_reply_message
+from .types import (
+    DEFAULT_PORT,
+    DEFAULT_TIMEOUT,
+    MAX_REPLY_LINE,
+    BadReply,
+    ConnectFailed,
+    Disconnected,
+    Frame,
+    FrameObserver,
+    Reply,
+    RequestTimeout,
+    State,
+    StateObserver,
+)
+
+logger = logging.getLogger(__name__)
+
+_POLL = getattr(select, "poll", None)  # POSIX; select.select serves where it is missing
+READ_SIZE = 65536
+
+#: A request made this soon (seconds) after a reply first gives up the CPU once.
+YIELD_WINDOW = 0.001
+
+
+def _yield_cpu() -> None:
+    """Let another runnable process have the CPU: ``sched_yield`` where there is one
+    (POSIX), else ``sleep(0)``, which yields the rest of the time slice on Windows."""
+    sched_yield = getattr(os, "sched_yield", None)
+    if sched_yield is not None:
+        sched_yield()
+    else:
+        time.sleep(0)
+
+
+class Session:
+    """One session to a controller: ``get``, ``put``, ``send_raw`` or ``exchange``."""
+
+    def __init__(
+        self,
+        host: str,
+        port: int = DEFAULT_PORT,
+        *,
+        timeout: float = DEFAULT_TIMEOUT,
+        connect_timeout: float | None = None,
+        max_line: int = MAX_REPLY_LINE,
+    ) -> None:
+        self.host = host
+        self.port = port
+        self.timeout = timeout
+        self.connect_timeout = connect_timeout if connect_timeout is not None else timeout
+        self.last_rtt: float | None = None
+        self._machine = SessionMachine(max_line)
+        self._frame_observers: list[FrameObserver] = []
+        self._state_observers: list[StateObserver] = []
+        self._state: State = "closed"
+        self._sock: socket.socket | None = None
+        self._poll: Any = None
+        self._sent_at: float | None = None
+        self._replied_at = 0.0
+
+    # ------------------------------------------------------------ observers
+
+    @property
+    def address(self) -> str:
+        return f"{self.host}:{self.port}"
+
+    @property
+    def state(self) -> State:
+        return self._state
+
+    @property
+    def waiting_since(self) -> float | None:
+        """When (``time.perf_counter()``) the request in flight was sent; None when none is."""
+        return self._sent_at
+
+    def add_frame_observer(self, observer: FrameObserver) -> None:
+        self._frame_observers.append(observer)
+
+    def remove_frame_observer(self, observer: FrameObserver) -> None:
+        self._frame_observers.remove(observer)
+
+    def add_state_observer(self, observer: StateObserver) -> None:
+        self._state_observers.append(observer)
+
+    def _publish(self, frame: Frame) -> None:
+        for observer in self._frame_observers:
+            try:
+                observer(frame)
+            except Exception:  # an observer (a log, a recorder) must never break the session
+                logger.exception("frame observer failed")
+
+    def _set_state(self, state: State) -> None:
+        if state != self._state:
+            self._state = state
+            for observer in self._state_observers:
+                observer(state)
+
+    # ------------------------------------------------------------ requests
+
+    def get(self, kind: VarKind, index: int, *, poll: bool = False) -> Reply:
+        return self.exchange(get_for(kind, index), poll=poll)
+
+    def put(self, kind: VarKind, index: int, value: Variant) -> Reply:
+        return self.exchange(put_for(kind, index, format_variant(value)))
+
+    def send_raw(self, text: str) -> Reply:
+        return self.exchange(raw_request(text))
+
+    def exchange(self, request: Request, *, poll: bool = False) -> Reply:
+        """Send one request and wait for its reply.
+
+        Raises a TransportError when no trustworthy reply came; the connection is then
+        gone, and the next request opens a fresh one.
+        """
+        sock = self._connected()
+        if time.perf_counter() - self._replied_at < YIELD_WINDOW:
+            # A peer on this machine may be one write short of a stray line: let it run
+            # before asking the socket, or the stray would leave after this request.
+            _yield_cpu()
+        if self._peer_spoke(sock) and self._discard_waiting(sock):
+            sock = self._connected()
+        machine = self._machine
+        data = machine.begin(request)
+        sent_at = self._sent_at = time.perf_counter()
+        try:
+            try:
+                sock.sendall(data)
+            except ConnectionError:  # reset or broken pipe: the peer closed it
+                raise self._lost() from None
+            except OSError as exc:
+                self._drop()
+                raise Disconnected(f"the connection failed while sending: {_reason(exc)}") from None
+            observers = self._frame_observers
+            if observers:
+                self._publish(Frame(time.time(), "tx", data, poll=poll))
+            return self._await_reply(sock, sent_at, poll)
+        finally:
+            self._sent_at = None
+
+    def _await_reply(self, sock: socket.socket, sent_at: float, poll: bool) -> Reply:
+        machine = self._machine
+        deadline = sent_at + self.timeout
+        first = True
+        while True:
+            if not first:
+                remaining = deadline - time.perf_counter()
+                if remaining <= 0:
+                    raise self._timed_out()
+                sock.settimeout(remaining)
+            try:
+                chunk = sock.recv(READ_SIZE)
+            except TimeoutError:
+                raise self._timed_out() from None
+            except ConnectionError:  # a reset: the peer closed it
+                raise self._lost() from None
+            except OSError as exc:
+                raise self._lost(f"the connection failed: {_reason(exc)}") from None
+            finally:
+                if not first:
+                    sock.settimeout(self.timeout)
+            now = time.perf_counter()
+            first = False
+            if not chunk:
+                raise self._lost()
+            verdict = machine.feed(chunk)
+            if verdict.answer is None and not verdict.drop:
+                continue
+            return self._conclude(verdict, now - sent_at, poll, chunk)
+
+    def _conclude(self, verdict: Verdict, rtt: float, poll: bool, chunk: bytes) -> Reply:
+        observers = bool(self._frame_observers)
+        answer = verdict.answer
+        if answer is not None and observers:
+            self._publish(
+                Frame(
+                    time.time(),
+                    "rx",
+                    answer + b"\r",
+                    rtt,
+                    poll=poll,
+                    response=verdict.response,
+                    problem=verdict.problem,
+                )
+            )
+        for stray in verdict.strays:
+            self._publish(Frame(time.time(), "rx", stray, unsolicited=True))
+        if verdict.too_long is not None:
+            tail = verdict.too_long
+            self._publish(Frame(time.time(), "rx", tail, unsolicited=answer is not None))
+        if verdict.drop:
+            self._drop()
+        if verdict.problem is not None:
+            if answer is None:  # too long: the tail is in the log
+                raise BadReply(verdict.problem, verdict.too_long)
+            raise BadReply(bad_reply_message(answer, verdict.problem), answer)
+        if answer is None or verdict.response is None:
+            raise Disconnected("the connection was dropped: a line nobody asked for came")
+        self._replied_at = time.perf_counter()
+        self.last_rtt = rtt
+        return Reply(answer, verdict.response, rtt)
+
+    def _timed_out(self) -> RequestTimeout:
+        self._drop()
+        return RequestTimeout(f"no reply within {self.timeout:g} s")
+
+    def _lost(self, message: str = "the controller closed the connection") -> Disconnected:
+        fragment = self._machine.pending
+        if fragment:
+            self._publish(Frame(time.time(), "rx", fragment))
+        self._drop()
+        detail = f" after '{escape_bytes(fragment)}'" if fragment else ""
+        return Disconnected(f"{message}{detail}", fragment or None)
+
+    # ---------------------------------------------------------- stray bytes
+
+    def has_unread(self, timeout: float = 0.0) -> bool:
+        """True when bytes, EOF or an error wait unread on the open connection, after
+        waiting up to ``timeout`` seconds for them (a diagnostic: tests use it to know a
+        stray line has landed before the next request)."""
+        sock = self._sock
+        if sock is None:
+            return False
+        try:
+            return bool(select.select((sock,), (), (), timeout)[0])
+        except (OSError, ValueError):
+            return True
+
+    def _peer_spoke(self, sock: socket.socket) -> bool:
+        """True when bytes, EOF or an error wait on the connection: one syscall, no wait."""
+        if self._machine.holds_stray():
+            return True
+        try:
+            if self._poll is not None:
+                return bool(self._poll.poll(0))
+            return bool(select.select((sock,), (), (), 0)[0])
+        except (OSError, ValueError):
+            return True  # a socket that cannot be asked cannot be trusted
+
+    def _discard_waiting(self, sock: socket.socket) -> bool:
+        """Log what waits as unsolicited and drop the connection; False when it was only
+        the LF of a CRLF peer's last reply, consumed here, and the connection is kept."""
+        data, still_open = _read_waiting(sock)
+        verdict = self._machine.waiting_verdict(data, still_open)
+        if not verdict.drop:
+            return False
+        for line in verdict.strays:
+            self._publish(Frame(time.time(), "rx", line, unsolicited=True))
+        self._drop()
+        return True
+
+    # ---------------------------------------------------------- connection
+
+    def connect(self) -> None:
+        """Open the connection now rather than at the first request."""
+        self._connected()
+
+    def _connected(self) -> socket.socket:
+        sock = self._sock
+        if sock is not None:
+            return sock
+        self._set_state("connecting")
+        try:
+            sock = socket.create_connection((self.host, self.port), self.connect_timeout)
+        except (OSError, UnicodeError, ValueError) as exc:  # TimeoutError is an OSError
+            self._set_state("closed")
+            raise ConnectFailed(f"cannot connect to {self.address}: {_reason(exc)}") from None
+        try:
+            sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+            sock.settimeout(self.timeout)
+        except OSError:
+            pass
+        self._sock = sock
+        self._machine.reset()
+        if _POLL is not None:
+            self._poll = _POLL()
+            self._poll.register(sock, select.POLLIN)
+        if self._peer_spoke(sock) and _closed_at_once(sock):
+            # Closed by the peer as soon as it was made: say so now rather than send into it.
+            self._drop()
+            raise Disconnected("the controller closed the connection as soon as it was made")
+        self._set_state("connected")
+        return sock
+
+    def _drop(self) -> None:
+        """Close the connection so nothing more it carries can be read."""
+        sock, self._sock, self._poll = self._sock, None, None
+        self._machine.reset()
+        if sock is not None:
+            with contextlib.suppress(OSError):
+                sock.close()
+        self._set_state("closed")
+
+    def interrupt(self) -> None:
+        """Wake a request blocked on this session from another thread (it then fails
+        with Disconnected); the owning thread closes the socket."""
+        sock = self._sock
+        if sock is not None:
+            with contextlib.suppress(OSError):
+                sock.shutdown(socket.SHUT_RDWR)
+
+    def close(self) -> None:
+        self._drop()
+
+    def __enter__(self) -> Session:
+        return self
+
+    def __exit__(self, *exc_info: object) -> None:
+        self.close()
+
+
+def _closed_at_once(sock: socket.socket) -> bool:
+    """True when a fresh connection already reads EOF or an error (peeked, not taken)."""
+    try:
+        sock.setblocking(False)
+        try:
+            return sock.recv(1, socket.MSG_PEEK) == b""
+        finally:
+            sock.settimeout(sock.gettimeout() or None)
+    except BlockingIOError:
+        return False
+    except OSError:
+        return True
+
+
+def _read_waiting(sock: socket.socket) -> tuple[bytes, bool]:
+    """What waits on ``sock``, read without blocking for the log, and whether the
+    connection is still open (the read stopped for want of bytes, not at EOF or error)."""
+    chunks: list[bytes] = []
+    limit = MAX_REPLY_LINE
+    still_open = False
+    timeout = sock.gettimeout()
+    try:
+        sock.setblocking(False)
+        size = 0
+        while size < limit:
+            chunk = sock.recv(min(READ_SIZE, limit - size))
+            if not chunk:
+                break  # EOF
+            chunks.append(chunk)
+            size += len(chunk)
+    except BlockingIOError:
+        still_open = True  # all read
+    except OSError:
+        pass  # reset: drop it all the same
+    finally:
+        with contextlib.suppress(OSError):
+            sock.settimeout(timeout)
+    return b"".join(chunks), still_open
+
+
+def _reason(exc: BaseException) -> str:
+    """Why a connection failed, in words: never 'Unknown error -2'."""
+    if isinstance(exc, TimeoutError):
+        return "timed out"
+    if isinstance(exc, OSError):
+        if exc.errno and exc.errno > 0:
+            return os.strerror(exc.errno)
+        if exc.strerror:
+            return exc.strerror  # getaddrinfo: "Name or service not known"
+    if isinstance(exc, UnicodeError | ValueError):
+        return "not a valid host name"
+    return str(exc) or type(exc).__name__

@@ -1,0 +1,153 @@
+"""The session's protocol logic without I/O: what to send, and what bytes received mean.
+
+A driver owns the socket; it asks :meth:`SessionMachine.begin` for the bytes of a
+request, hands every read to :meth:`feed`, and acts on the :class:`Verdict`: return
+the reply, or drop the connection. The rules (one request in flight; a line nobody
+asked for, a line too long or a reply that cannot answer its request ends the
+connection) live here once, and tests drive them without sockets.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from ..protocol import FrameTooLong, LineDecoder, ProtocolError, Response
+from ..protocol.messages import decode_frame, parse_response
+from ..protocol.request import Request
+from ..protocol.text import escape_bytes
+
+#: Bytes of a bad reply quoted in a message; the whole reply is in the log and --record.
+QUOTED_BYTES = 120
+
+
+@dataclass(slots=True)
+class Verdict:
+    """What one read meant.
+
+    ``answer`` is the reply line (no CR) to the request in flight, when it came;
+    ``response`` its parse, or ``problem`` why it cannot answer the request.
+    ``strays`` are lines (with CR) or fragments nobody asked for; ``too_long`` the
+    tail of a line that never ended. ``drop``: the connection cannot be trusted now.
+    """
+
+    answer: bytes | None = None
+    response: Response | None = None
+    problem: str | None = None
+    strays: list[bytes] = field(default_factory=list)
+    too_long: bytes | None = None
+    drop: bool = False
+
+
+class SessionMachine:
+    """One connection's protocol state: the request in flight and the bytes held."""
+
+    __slots__ = ("_after_cr", "_decoder", "_request")
+
+    def __init__(self, max_line: int) -> None:
+        self._decoder = LineDecoder(max_line)
+        self._request: Request | None = None
+        self._after_cr = False
+
+    @property
+    def in_flight(self) -> Request | None:
+        return self._request
+
+    @property
+    def pending(self) -> bytes:
+        """Bytes of a line begun but not ended."""
+        return self._decoder.pending
+
+    def reset(self) -> None:
+        """A new connection: nothing in flight, nothing held."""
+        self._decoder.clear()
+        self._request = None
+        self._after_cr = False
+
+    def begin(self, request: Request) -> bytes:
+        """The bytes to send for ``request``, now in flight."""
+        self._request = request
+        return request.data
+
+    def abandon(self) -> None:
+        """The request in flight will get no answer (timeout, closed connection)."""
+        self._request = None
+
+    def holds_stray(self) -> bool:
+        """True when bytes of a line nobody asked for are held (an LF after a CR is not)."""
+        pending = self._decoder.pending
+        return bool(pending) and pending != b"\n"
+
+    def feed(self, data: bytes) -> Verdict:
+        """Take one read; the verdict says whether the request was answered."""
+        verdict = Verdict()
+        if data == b"\n" and self._after_cr:
+            return verdict  # the LF of a CRLF peer's reply, read on its own
+        self._after_cr = data.endswith(b"\r")
+        try:
+            lines = self._decoder.feed(data)
+        except FrameTooLong as exc:
+            lines = exc.lines
+            verdict.too_long = data[-256:]
+            verdict.drop = True
+        for line in lines:
+            request = self._request
+            if request is not None and verdict.answer is None:
+                self._request = None
+                verdict.answer = line
+                verdict.response, verdict.problem = judge(request, line)
+                verdict.drop = verdict.drop or verdict.problem is not None
+            else:
+                verdict.strays.append(line + b"\r")
+                verdict.drop = True
+        if verdict.too_long is not None and verdict.answer is None and self._request is not None:
+            self._request = None
+            verdict.problem = f"reply too long: no CR within {self._decoder.max_line} bytes"
+        if self._request is None and self.holds_stray() and not verdict.drop:
+            # Bytes of a line nobody asked for: never let them prefix the next reply.
+            verdict.strays.append(self._decoder.pending)
+            verdict.drop = True
+        return verdict
+
+    def waiting_verdict(self, data: bytes, still_open: bool) -> Verdict:
+        """What waited unread before a request went out (``data``, with what is held):
+        nothing harmful only when it is the LF of a CRLF reply on an open connection."""
+        waiting = self._decoder.pending + data
+        if waiting == b"\n" and still_open:
+            self._decoder.clear()
+            self._after_cr = False
+            return Verdict()
+        return Verdict(strays=as_lines(waiting), drop=True)
+
+
+def judge(request: Request, line: bytes) -> tuple[Response | None, str | None]:
+    """Parse a reply once and check that it can answer ``request``: the response (None
+    when it cannot be parsed) and the problem (None when it can answer)."""
+    try:
+        response = parse_response(decode_frame(line))
+    except ProtocolError as exc:
+        return None, str(exc)
+    problem = request.check(response) if request.check is not None else None
+    return response, problem or None
+
+
+def bad_reply_message(line: bytes, problem: str) -> str:
+    if len(problem) > QUOTED_BYTES:  # a parser's message may quote the reply too
+        problem = problem[:QUOTED_BYTES] + "…"
+    return f"bad reply '{quoted(line)}': {problem}"
+
+
+def quoted(frame: bytes) -> str:
+    """A reply as a message quotes it: escaped, and cut when long (a 64 KiB line of
+    garbage must not fill a screen)."""
+    if len(frame) <= QUOTED_BYTES:
+        return escape_bytes(frame)
+    return f"{escape_bytes(frame[:QUOTED_BYTES])}… ({len(frame)} bytes)"
+
+
+def as_lines(data: bytes) -> list[bytes]:
+    r"""``a\rb\rc`` -> ``[a\r, b\r, c]``: waiting bytes as frames, as the log shows lines."""
+    *lines, rest = data.split(b"\r")
+    frames = [line[1:] + b"\r" if line[:1] == b"\n" else line + b"\r" for line in lines]
+    if rest and rest != b"\n":
+        frames.append(rest)
+    return frames

@@ -1,0 +1,77 @@
+"""What a session hands out: frames, replies, states and the ways an exchange fails."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Literal
+
+from ..protocol import RacError, Response
+
+DEFAULT_PORT = 5006
+DEFAULT_TIMEOUT = 2.0
+MAX_REPLY_LINE = 64 * 1024
+
+Direction = Literal["tx", "rx"]
+State = Literal["closed", "connecting", "connected"]
+
+
+class TransportError(RacError):
+    """The exchange failed on the way: no trustworthy reply came."""
+
+    def __init__(self, message: str, raw: bytes | None = None) -> None:
+        super().__init__(message)
+        self.raw = raw
+
+
+class ConnectFailed(TransportError):
+    pass
+
+
+class RequestTimeout(TransportError):
+    pass
+
+
+class Disconnected(TransportError):
+    pass
+
+
+class BadReply(TransportError):
+    """A reply came but cannot be parsed or cannot belong to the request."""
+
+
+@dataclass(frozen=True, slots=True)
+class Frame:
+    """One frame that crossed the wire, for logs and recorders.
+
+    ``data`` holds the bytes as they crossed, CR included; a fragment cut off by a
+    closed connection has no CR. A reply to a request carries its ``rtt`` and what
+    the session made of it: the parsed ``response``, or the ``problem`` that made it
+    refuse the reply. Nobody parses a reply again.
+    """
+
+    time: float
+    direction: Direction
+    data: bytes
+    rtt: float | None = None
+    unsolicited: bool = False
+    poll: bool = False
+    response: Response | None = None
+    problem: str | None = None
+
+
+@dataclass(frozen=True, slots=True)
+class Reply:
+    """The reply that answered a request, parsed and checked."""
+
+    raw: bytes
+    response: Response
+    rtt: float
+
+    @property
+    def text(self) -> str:
+        return self.raw.decode("ascii")
+
+
+FrameObserver = Callable[[Frame], None]
+StateObserver = Callable[[State], None]
