@@ -367,12 +367,6 @@ def test_close_before_any_reply_raises_disconnected() -> None:
 # ------------------------------------------- bytes on a fresh connection
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="session/blocking.py _closed_at_once restores the socket's timeout after "
-    "setblocking(False) as `sock.gettimeout() or None`, i.e. None: a connection whose "
-    "peer spoke before the check (an LF, kept as harmless) then waits for a reply forever",
-)
 def test_a_byte_waiting_on_a_fresh_connection_keeps_the_request_timeout(
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:

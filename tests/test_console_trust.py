@@ -14,6 +14,7 @@ from textual import events
 from textual.pilot import Pilot
 from tui_helpers import FrameTap, log_text, make_app, results_text, type_line, until
 
+from rac_console.tui.app import RacConsoleApp
 from rac_console.tui.command_line import CommandLine
 from rac_console.tui.frame_log import FrameLog
 from rac_console.tui.status_bar import StatusBar
@@ -39,6 +40,10 @@ def _key_name(char: str) -> str:
     return _character_to_key(char)
 
 
+def connected(app: RacConsoleApp) -> bool:
+    return app.status is not None and app.status.connection == "connected"
+
+
 def sent_lines(tap: FrameTap) -> list[bytes]:
     return [data.rstrip(b"\r") for data in tap.sent if not data.startswith(b"GET:RC8:0:")]
 
@@ -47,7 +52,11 @@ async def test_a_burst_of_typed_lines_runs_each_line_once_in_order(tmp_path: Pat
     app = make_app(tmp_path)
     async with app.run_test(size=(120, 40)) as pilot:
         tap = FrameTap(tmp_path)
-        await until(pilot, lambda: app.status is not None and app.status.connection == "connected", "the first connection")
+        await until(
+            pilot,
+            lambda: app.status is not None and app.status.connection == "connected",
+            "the first connection",
+        )
         burst(pilot, "put I 10 1\n5\nget I 1\nget I 2\nget I 3\n")
         await until(pilot, lambda: len(tap.sent) >= 4, "the burst to run")
         await until(pilot, lambda: "I3 = " in results_text(app), "the last line's result")
@@ -81,8 +90,7 @@ async def test_a_line_typed_right_after_enter_is_kept(tmp_path: Path) -> None:
         tap = FrameTap(tmp_path)
         burst(pilot, "get I 4\nget I 5")  # the second line is typed, not yet entered
         await until(pilot, lambda: "I4 = " in results_text(app), "the first line's result")
-        await pilot.pause(0.1)
-        assert app.query_one(CommandLine).value == "get I 5"
+        await until(pilot, lambda: app.query_one(CommandLine).value == "get I 5", "the line kept")
         await pilot.press("enter")
         await until(pilot, lambda: "I5 = " in results_text(app), "the second line's result")
         assert sent_lines(tap) == [b"GET:RC8:4:I:", b"GET:RC8:5:I:"]
@@ -99,14 +107,14 @@ async def test_the_frame_log_follows_after_layout_changes(tmp_path: Path) -> Non
         # The palette open and shut, a resize that shrinks the log, Tab candidates
         # left on screen (they take the log's rows): each moved the log off its end.
         await pilot.press("ctrl+p")
-        await pilot.pause(0.2)
+        await until(pilot, lambda: len(app.screen_stack) > 1, "the command palette")
         await pilot.press("escape")
-        await pilot.pause(0.1)
+        await until(pilot, lambda: len(app.screen_stack) == 1, "the palette to close")
         await pilot.resize_terminal(80, 24)
-        await pilot.pause(0.1)
+        await until(pilot, lambda: tuple(app.size) == (80, 24), "the resize")
         await type_line(pilot, "get ", enter=False, keys=True)
         await pilot.press("tab")
-        await pilot.pause(0.1)
+        await until(pilot, lambda: app.completions.has_class("-visible"), "the candidates")
         await pilot.press("ctrl+u")
         for n in range(30, 60):
             await type_line(pilot, f"get I {n}")
@@ -118,9 +126,9 @@ async def test_the_frame_log_follows_after_layout_changes(tmp_path: Path) -> Non
         assert "FROZEN" in str(log.border_title)
         frozen_at = log.scroll_y
         for n in range(3):
-            await type_line(pilot, f"get I {n}")
+            await type_line(pilot, f"get S {n + 1}")
         await until(pilot, lambda: log.max_scroll_y > frozen_at, "frames past the view")
-        await pilot.pause(0.2)
+        await until(pilot, lambda: "GET:RC8:3:S:" in log_text(app), "the last frame written")
         assert log.scroll_y == frozen_at
 
 
@@ -180,11 +188,13 @@ async def test_status_line_never_says_not_met_with_interval_zero(tmp_path: Path)
         status = app.query_one(StatusBar)
         await type_line(pilot, "watch I 1-20")
         await until(pilot, lambda: "polls/s" in str(status.render()), "polling figures")
-        await pilot.pause(0.5)
-        assert "NOT MET" not in str(status.render())
+        shown: set[str] = set()
+        while len(shown) < 5:  # five different status lines while polling flat out
+            await until(pilot, lambda: str(status.render()) not in shown, "a new status line")
+            shown.add(str(status.render()))
+        assert not [line for line in shown if "NOT MET" in line]
         await type_line(pilot, "disconnect")
         await until(pilot, lambda: "disconnected" in str(status.render()), "disconnected")
-        await pilot.pause(0.5)
         text = str(status.render())
         assert "polls/s" not in text and "cycle" not in text
 

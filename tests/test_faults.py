@@ -14,8 +14,9 @@ import time
 import pytest
 from session_helpers import AsyncSession
 
+from rac_console.engine import Alert, Engine, Result, RowView
 from rac_console.protocol import kind_of, parse_response
-from rac_console.session import BadReply, Disconnected, RequestTimeout
+from rac_console.session import BadReply, Disconnected, Frame, RequestTimeout
 from rac_console.sim.faults import GARBAGE, FaultPlan, FaultSettings
 from rac_console.sim.server import SimulatorServer
 
@@ -137,35 +138,57 @@ def test_a_garbled_reply_is_reported_with_its_bytes_escaped() -> None:
 
 
 def test_the_console_marks_failed_rows_stale_and_keeps_good_values_right() -> None:
-    # Still on the asyncio console (ConsoleCore, gone with the engine rewrite): its port
-    # belongs with the engine tests. Imported here so that the rest of the file runs.
-    from rac_console.core import ConsoleCore
-
     async def scenario() -> tuple[dict[str, tuple[str, bool, object]], list[str]]:
         simulator = await faulty_simulator(
             seed=3, drop_every=9, stall_every=11, garble_every=13, error_rate=0.05, split=True
         )
-        notes: list[str] = []
-        core = ConsoleCore(simulator.host, simulator.port, timeout=0.3, interval=0)
-        core.add_log_listener(lambda e: notes.append(e) if isinstance(e, str) else None)
-        await core.start()
-        try:
-            await core.handle_line(f"watch I 0-{COUNT - 1}")
-            await until(lambda: core.polls > 3 * COUNT, "three poll cycles", timeout=20)
-            assert core._poll_task is not None and not core._poll_task.done()
-            core.set_paused(True)
-            await asyncio.sleep(0.1)
-            rows = {
-                str(var): (row.status, row.stale, row.variant.value if row.variant else None)
-                for var, row in core.watch.rows.items()
-            }
-        finally:
-            await core.stop()
-            await simulator.stop()
-        return rows, notes
+        engine = Engine(simulator.host, simulator.port, timeout=0.3, interval=0)
+        rows: dict[str, RowView] = {}
+        alerts: list[str] = []
+        polls = 0
+        answered: set[str] = set()
 
-    rows, notes = asyncio.run(scenario())
-    assert not [n for n in notes if "polling error" in n]
+        def drain() -> None:
+            nonlocal polls
+            batch = engine.outbox.drain()
+            rows.update({str(var): view for var, view in batch.rows.items()})
+            for event in batch.events:
+                if isinstance(event, Frame) and event.poll and event.direction == "tx":
+                    polls += 1
+                elif isinstance(event, Alert):
+                    alerts.append(event.text)
+                elif isinstance(event, Result):
+                    answered.add(event.line or "")
+
+        await asyncio.to_thread(engine.start)
+        try:
+            engine.submit(f"watch I 0-{COUNT - 1}")
+
+            def polled() -> bool:
+                drain()
+                return polls > 3 * COUNT
+
+            await until(polled, "three poll cycles", timeout=20)
+            engine.submit("pause")
+
+            def paused() -> bool:
+                drain()
+                return "pause" in answered
+
+            await until(paused, "the pause")
+        finally:
+            await asyncio.to_thread(engine.stop)
+            await simulator.stop()
+        drain()
+        shown = {
+            name: (view.status, view.stale, view.variant.value if view.variant else None)
+            for name, view in rows.items()
+        }
+        return shown, alerts
+
+    rows, alerts = asyncio.run(scenario())
+    assert alerts == []  # the engine never stopped on an internal error
+    assert len(rows) == COUNT
     for name, (status, stale, value) in rows.items():
         index = int(name[1:])
         assert value in (None, expected(index)), name

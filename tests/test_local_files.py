@@ -248,8 +248,8 @@ def test_history_writers_in_two_processes_lose_nothing(tmp_path: Path) -> None:
 def test_a_watch_list_is_taken_as_written_or_refused(
     tmp_path: Path, content: str, message: str
 ) -> None:
-    from rac_console.protocol import InputError
     from rac_console.engine.watchlist import load
+    from rac_console.protocol import InputError
 
     path = tmp_path / "cell.toml"
     path.write_text(content)

@@ -9,7 +9,13 @@ import pytest
 from servers import CLOSE, RecordingServer
 from tui_helpers import log_text, make_app, type_line, until
 
-from rac_console.engine.backoff import EARLY_EXCHANGES, FIRST_DELAY, GOOD_STRETCH, MAX_DELAY, Backoff
+from rac_console.engine.backoff import (
+    EARLY_EXCHANGES,
+    FIRST_DELAY,
+    GOOD_STRETCH,
+    MAX_DELAY,
+    Backoff,
+)
 from rac_console.tui.status_bar import StatusBar
 
 

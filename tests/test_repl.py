@@ -14,7 +14,6 @@ from pathlib import Path
 from prompt_toolkit.document import Document
 from prompt_toolkit.input import create_pipe_input
 from prompt_toolkit.output import DummyOutput
-
 from tui_helpers import WIRE_RECORD, FrameTap
 
 from rac_console.engine import Engine

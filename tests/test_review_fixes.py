@@ -11,6 +11,7 @@ import pytest
 from session_helpers import AsyncSession
 from tui_helpers import make_app, results_text, type_line, until
 
+from rac_console.engine.watchlist import load
 from rac_console.present.history import History
 from rac_console.protocol import (
     InputError,
@@ -25,7 +26,6 @@ from rac_console.protocol.variant import canonical_r4
 from rac_console.session import Frame
 from rac_console.sim.controller import SimulatedController
 from rac_console.tui.watch_table import WatchTable
-from rac_console.engine.watchlist import load
 
 
 async def _slow_echo_server(delay: float) -> tuple[asyncio.Server, int]:

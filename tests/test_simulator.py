@@ -202,3 +202,89 @@ def test_some_variables_move_by_themselves() -> None:
     assert all(a != b for a, b in zip(before, after, strict=True))
     assert inputs_before != inputs_after
     assert controller.value(kind_of("P"), 1) == [350.0, 0.0, 450.0, 180.0, 0.0, 180.0, 5.0]
+
+
+# ------------------------------------------- kept replies (the fast path's own fast path)
+
+
+class _Reference(SimulatedController):
+    """Computes every reply afresh: a value() of its own means nothing is kept."""
+
+    def value(self, kind, index):  # type: ignore[no-untyped-def]
+        return super().value(kind, index)
+
+
+def test_kept_replies_are_the_bytes_computed_afresh() -> None:
+    """One request in flight (each read one whole request: the kept-reply path), GETs
+    repeated around PUTs, errors and moving values: the same bytes as computing each."""
+    lines = [
+        f"GET:RC8:{n}:{t}:".encode() for n in (1, 2, 10, 99, 100) for t in ("I", "P", "S", "IO")
+    ]
+    lines += [
+        b"GET:RC8:0:I:",
+        b"GET:RC8:0:P:",
+        b" \tGET:RC8:2:P:",
+        b"get:rc8:3:f:",
+        b"GET:RC8:x:I:",
+    ]
+    puts = [b"PUT:RC8:10:I:3,7", b"PUT:RC8:1:P:bad", b"PUT:RC8:2:S:8,changed", b"PUT:RC8:0:I:3,1"]
+    script = [*lines, puts[0], *lines, puts[1], *lines, puts[2], *lines, puts[3], *lines]
+    reference = _Reference(clock=lambda: 0.0)
+    expected = [reference.handle(line)[0].decode("ascii")[:-1] for line in script]
+
+    async def scenario(sim: SimulatorServer) -> list[str]:
+        line = await connect(sim)
+        return [await line.ask(request + b"\r") for request in script]
+
+    controller = SimulatedController(clock=lambda: 0.0)
+    assert run(scenario, controller) == expected
+    assert controller.known_frames  # the path under test was taken
+    assert controller.requests == len(script)
+
+
+def test_a_kept_request_after_half_a_line_is_part_of_that_line() -> None:
+    async def scenario(sim: SimulatorServer) -> list[str]:
+        line = await connect(sim)
+        first = await line.ask(b"GET:RC8:10:I:\r")  # now kept
+        line.writer.write(b"GET:RC8:10:I:")
+        await line.writer.drain()
+        await asyncio.sleep(0.05)  # two reads: the second alone is a kept request
+        return [first, await line.ask(b"GET:RC8:10:I:\r"), await line.ask(b"GET:RC8:10:I:\r")]
+
+    first, joined, again = run(scenario)
+    assert first == again == "0,3,0"
+    assert code(joined) == hresult.E_INVALIDCOMMAND
+
+
+def test_kept_replies_give_way_to_faults_turned_on_and_to_a_value_of_a_test() -> None:
+    async def scenario(sim: SimulatorServer) -> list[str]:
+        line = await connect(sim)
+        replies = [await line.ask(b"GET:RC8:1:S:\r"), await line.ask(b"GET:RC8:1:S:\r")]
+        replies.append(await line.ask(b"SIM:SET:error_rate=1\r"))
+        replies += [await line.ask(b"GET:RC8:1:S:\r") for _ in range(2)]
+        other = await connect(sim)  # a session that never had a fault queue of its own
+        replies += [await other.ask(b"GET:RC8:1:S:\r") for _ in range(2)]
+        return replies
+
+    replies = run(scenario)
+    assert replies[:3] == ["0,8,RC8 simulator", "0,8,RC8 simulator", "0"]
+    assert all(code(reply) != 0 for reply in replies[3:])
+
+    counting = SimulatedController()
+    counting.value = lambda kind, index: counting.requests  # type: ignore[method-assign]
+
+    async def counted(sim: SimulatorServer) -> list[str]:
+        line = await connect(sim)
+        return [await line.ask(b"GET:RC8:10:I:\r") for _ in range(3)]
+
+    assert run(counted, counting) == ["0,3,1", "0,3,2", "0,3,3"]
+    assert not counting.known_frames
+
+
+def test_kept_replies_stay_bounded() -> None:
+    from rac_console.sim.controller import MAX_CACHED
+
+    controller = SimulatedController()
+    for n in range(3 * MAX_CACHED):
+        controller.handle(f"GET:RC8:{n % 100}:{'IFDS'[n // 100 % 4]}:{' ' * (n // 400)}".encode())
+    assert 0 < len(controller.known_frames) <= MAX_CACHED

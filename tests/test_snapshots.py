@@ -7,12 +7,10 @@ from the simulator's own values, frames with fixed timestamps.
 from __future__ import annotations
 
 import time
+from dataclasses import replace
 from pathlib import Path
 
 import pytest
-
-from dataclasses import replace
-
 from tui_helpers import make_app, type_line, until
 
 from rac_console.protocol import kind_of

@@ -16,6 +16,7 @@ answer to a later one. Before each request the socket is asked (one ``poll``, or
 from __future__ import annotations
 
 import contextlib
+import ipaddress
 import logging
 import os
 import select
@@ -86,6 +87,7 @@ class Session:
         self._poll: Any = None
         self._sent_at: float | None = None
         self._replied_at = 0.0
+        self._peer_is_local = False
 
     # ------------------------------------------------------------ observers
 
@@ -142,9 +144,10 @@ class Session:
         gone, and the next request opens a fresh one.
         """
         sock = self._connected()
-        if time.perf_counter() - self._replied_at < YIELD_WINDOW:
+        if self._peer_is_local and time.perf_counter() - self._replied_at < YIELD_WINDOW:
             # A peer on this machine may be one write short of a stray line: let it run
             # before asking the socket, or the stray would leave after this request.
+            # (A remote peer's stray comes over the network: yielding cannot help there.)
             _yield_cpu()
         if self._peer_spoke(sock) and self._discard_waiting(sock):
             sock = self._connected()
@@ -299,6 +302,7 @@ class Session:
         except OSError:
             pass
         self._sock = sock
+        self._peer_is_local = _is_loopback(sock)
         self._machine.reset()
         if _POLL is not None:
             self._poll = _POLL()
@@ -337,14 +341,24 @@ class Session:
         self.close()
 
 
+def _is_loopback(sock: socket.socket) -> bool:
+    """True when the peer is this machine (127.0.0.0/8 or ::1)."""
+    try:
+        address = sock.getpeername()[0]
+    except OSError:
+        return False
+    return ipaddress.ip_address(address.split("%")[0]).is_loopback
+
+
 def _closed_at_once(sock: socket.socket) -> bool:
     """True when a fresh connection already reads EOF or an error (peeked, not taken)."""
+    timeout = sock.gettimeout()
     try:
         sock.setblocking(False)
         try:
             return sock.recv(1, socket.MSG_PEEK) == b""
         finally:
-            sock.settimeout(sock.gettimeout() or None)
+            sock.settimeout(timeout)
     except BlockingIOError:
         return False
     except OSError:
