@@ -639,3 +639,34 @@ def test_latency_against_nothing_is_exit_3_with_one_line() -> None:
     assert result.stderr.strip().splitlines() == [
         f"rac-console: cannot connect to 127.0.0.1:{port}: Connection refused"
     ]
+
+
+def test_cli_refuses_a_huge_index_without_a_traceback() -> None:
+    result = subprocess.run(
+        [sys.executable, "-m", "rac_console", "get", "I", "9" * 5000],
+        capture_output=True,
+        text=True,
+        timeout=30,
+    )
+    assert result.returncode == 2
+    assert "Traceback" not in result.stderr and "index" in result.stderr
+
+
+def test_record_file_that_cannot_be_opened_is_a_clear_error(tmp_path: Path) -> None:
+    result = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "rac_console",
+            "--record",
+            str(tmp_path / "no" / "x.jsonl"),
+            "get",
+            "I",
+            "1",
+        ],
+        capture_output=True,
+        text=True,
+        timeout=30,
+    )
+    assert result.returncode == 2
+    assert "cannot write the record file" in result.stderr and "Traceback" not in result.stderr

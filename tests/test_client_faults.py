@@ -19,7 +19,7 @@ from pathlib import Path
 import pytest
 from session_helpers import AsyncSession
 
-from rac_console.protocol import KINDS, Variant
+from rac_console.protocol import KINDS, Variant, kind_of
 from rac_console.protocol.vartypes import VT
 from rac_console.session import BadReply, Disconnected, Frame, RequestTimeout, blocking
 from rac_console.sim.server import SimulatorServer
@@ -862,3 +862,50 @@ def test_each_exchange_publishes_a_tx_and_an_rx_frame() -> None:
             assert len(frames) == 8
 
     run(main())
+
+
+async def _slow_echo_server(delay: float) -> tuple[asyncio.Server, int]:
+    async def serve(reader: asyncio.StreamReader, writer: asyncio.StreamWriter) -> None:
+        try:
+            while line := await reader.readuntil(b"\r"):
+                index = line.split(b":")[2]
+                await asyncio.sleep(delay)
+                writer.write(b"0,3," + index + b"\r")
+        except (asyncio.IncompleteReadError, ConnectionError):
+            pass
+
+    server = await asyncio.start_server(serve, "127.0.0.1", 0)
+    return server, server.sockets[0].getsockname()[1]
+
+
+def test_a_cancelled_request_never_leaves_its_reply_for_the_next() -> None:
+    async def scenario() -> int:
+        server, port = await _slow_echo_server(0.2)
+        async with server, AsyncSession("127.0.0.1", port, timeout=2) as session:
+            with pytest.raises(TimeoutError):
+                # The await is given up; the GET itself still runs on the session's
+                # thread and takes its own reply, so the next request waits for it.
+                await asyncio.wait_for(session.get(kind_of("I"), 1), 0.05)
+            reply = await session.get(kind_of("I"), 2)
+            return reply.response.variant.value
+
+    assert asyncio.run(scenario()) == 2
+
+
+def test_a_failing_frame_observer_does_not_break_the_session() -> None:
+    from rac_console.sim.server import SimulatorServer
+
+    async def scenario() -> list[int]:
+        async with SimulatorServer() as sim, AsyncSession(sim.host, sim.port) as session:
+
+            def broken(frame: Frame) -> None:
+                raise OSError(28, "No space left on device")
+
+            session.add_frame_observer(broken)
+            await session.put(kind_of("I"), 1, Variant(3, 11))
+            await session.put(kind_of("I"), 2, Variant(3, 22))
+            first = await session.get(kind_of("I"), 1)
+            second = await session.get(kind_of("I"), 2)
+            return [first.response.variant.value, second.response.variant.value]
+
+    assert asyncio.run(scenario()) == [11, 22]

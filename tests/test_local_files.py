@@ -16,7 +16,9 @@ from test_cli import cli, env  # noqa: F401 (fixture)
 from test_repl import Driver
 from tui_helpers import log_text, make_app, results_text, type_line, until
 
+from rac_console.engine.watchlist import load
 from rac_console.present.history import History
+from rac_console.protocol import InputError
 from rac_console.tui.status_bar import StatusBar
 
 needs_dev_full = pytest.mark.skipif(
@@ -275,3 +277,25 @@ async def test_save_and_load_keep_labels_and_every(tmp_path: Path) -> None:
             "IO128": ("gripper", None),
             "IO129": ("gripper", None),
         }
+
+
+@pytest.mark.parametrize("content", ["watch = 5", "\xff\xfe", "[watch]\ntype = 'P'\n"])
+def test_bad_watch_list_files_give_a_message(tmp_path: Path, content: str) -> None:
+    path = tmp_path / "cell.toml"
+    path.write_bytes(content.encode("latin-1"))
+    if "index" not in content and "type" in content:
+        with pytest.raises(InputError, match="no 'index'"):
+            load(path)
+    else:
+        with pytest.raises(InputError):
+            load(path)
+
+
+def test_history_rewrite_ignores_a_stale_temporary_file(tmp_path: Path) -> None:
+    path = tmp_path / "history"
+    (tmp_path / "history.tmp").write_text("stale1\nstale2\n")
+    history = History(path, limit=2)
+    for n in range(6):
+        history.append(f"cmd{n}")
+    assert path.read_text().splitlines()[-2:] == ["cmd4", "cmd5"]
+    assert "stale1" not in path.read_text()

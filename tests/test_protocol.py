@@ -26,6 +26,7 @@ from rac_console.protocol import (
 )
 from rac_console.protocol.errors import FrameTooLong
 from rac_console.protocol.text import describe_response, wire_text
+from rac_console.protocol.variant import canonical_r4
 
 
 @pytest.mark.parametrize("sample", VECTORS["variants"], ids=lambda s: s["text"])
@@ -264,3 +265,25 @@ def test_latency_summary_uses_nearest_rank_percentiles() -> None:
     assert summary.avg_ms == pytest.approx(50.5)
     assert summary.requests_per_s == 102
     assert summarize([], 3, 1.0).count == 0
+
+
+def test_zero_keeps_its_sign_and_r4_text_is_shortest() -> None:
+    import math
+
+    minus_zero = parse_variant("4,-0")
+    assert minus_zero.vt == 4
+    assert minus_zero.value == 0.0 and math.copysign(1.0, minus_zero.value) == -1.0
+    assert format_variant(minus_zero) == "4,-0"
+    plus_zero = parse_variant("4,0")
+    assert plus_zero.value == 0.0 and math.copysign(1.0, plus_zero.value) == 1.0
+    assert format_variant(Variant(4, 0.0)) == "4,0"
+    assert format_variant(Variant(8196, [0.0, 0.0])) == "8196,0,0"
+    assert format_variant(Variant(4, canonical_r4(2.0**-96))) == "4,1.2621775e-29"
+
+
+def test_huge_numbers_and_deep_nesting_are_protocol_errors() -> None:
+    for text in ("3," + "9" * 5000, "9" * 5000 + ",1", "12," + "(12," * 5000 + "(3,1)"):
+        with pytest.raises(ProtocolError):
+            parse_variant(text)
+    with pytest.raises(InputError):
+        kind_of("I").value_from_text("9" * 5000)

@@ -12,6 +12,7 @@ from pathlib import Path
 import pytest
 
 from rac_console.present.history import History
+from rac_console.protocol import Variant, kind_of
 from rac_console.sim.server import is_loopback
 
 
@@ -79,3 +80,11 @@ def test_read_only_refuses_puts_in_every_front_end(tmp_path: Path) -> None:
     assert [o["ok"] for o in objects] == [False, False, False, True]
     assert all("read-only" in o["error"] for o in objects[:3])
     assert objects[3]["value"] == 1
+
+
+def test_control_characters_from_the_controller_are_escaped_on_screen() -> None:
+    from rac_console.commands.language import VarRef
+    from rac_console.present.render import value_text
+
+    shown = value_text(VarRef(kind_of("S"), 5), Variant(8, "A\x1b]0;x\x07B")).plain
+    assert "\x1b" not in shown and "\\x1b" in shown

@@ -7,6 +7,7 @@ import asyncio
 import pytest
 
 from rac_console.protocol import hresult, parse_response
+from rac_console.protocol.hresult import E_INVALIDARG
 from rac_console.sim.controller import SimulatedController
 from rac_console.sim.server import SimulatorServer
 
@@ -288,3 +289,10 @@ def test_kept_replies_stay_bounded() -> None:
     for n in range(3 * MAX_CACHED):
         controller.handle(f"GET:RC8:{n % 100}:{'IFDS'[n // 100 % 4]}:{' ' * (n // 400)}".encode())
     assert 0 < len(controller.known_frames) <= MAX_CACHED
+
+
+def test_simulator_refuses_strings_it_could_not_send_back() -> None:
+    controller = SimulatedController()
+    reply, _ = controller.handle(b"PUT:RC8:5:S:8,a\nb")
+    assert reply == f"{E_INVALIDARG - 2**32}\r".encode()
+    assert controller.handle(b"GET:RC8:5:S:")[0] == b"0,8,\r"

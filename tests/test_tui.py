@@ -164,3 +164,13 @@ async def test_lost_connection_marks_rows_stale_and_recovers(tmp_path: Path) -> 
             assert "reconnected" in log_text(app)
         finally:
             await restarted.stop()
+
+
+async def test_a_label_is_shown_as_typed_never_as_markup(tmp_path: Path) -> None:
+    app = make_app(tmp_path)
+    async with app.run_test(size=(120, 30)) as pilot:
+        await type_line(pilot, "watch I 1 [/x] [red]tool")
+        table = app.query_one(WatchTable)
+        await until(pilot, lambda: table.row_count == 1, "the row")
+        assert table.get_cell("I1", "label").plain == "[/x] [red]tool"
+        assert app.is_running and "watching I1" in results_text(app)
