@@ -11,6 +11,7 @@ import contextlib
 import os
 import queue
 import re
+import signal
 import socket
 import subprocess
 import sys
@@ -84,8 +85,9 @@ def hostile(port: int, n: int) -> None:
 class SimulatorProcess:
     """``python -m rac_console sim --port 0 ARGS``, stderr to a file or to a pipe nobody
     reads; killed on exit. It runs in a scratch folder, so ``pythonpath`` (or the
-    environment's PYTHONPATH) decides which copy of the package runs. RSS, descriptors
-    and CPU are read from /proc (Linux)."""
+    environment's PYTHONPATH) decides which copy of the package runs. ``profile``: it
+    runs under cProfile, interrupted (not killed) on exit so the profile is written
+    there. RSS, descriptors and CPU are read from /proc (Linux)."""
 
     def __init__(
         self,
@@ -93,6 +95,7 @@ class SimulatorProcess:
         stderr_pipe: bool = False,
         preexec: Callable[[], None] | None = None,
         pythonpath: str | None = None,
+        profile: Path | None = None,
     ) -> None:
         self._scratch = tempfile.TemporaryDirectory()
         self.err_path = Path(self._scratch.name) / "stderr"
@@ -100,8 +103,10 @@ class SimulatorProcess:
         env = dict(os.environ)
         if pythonpath:
             env["PYTHONPATH"] = os.pathsep.join(filter(None, [pythonpath, env.get("PYTHONPATH")]))
+        self._profile = profile
+        profiler = ["-m", "cProfile", "-o", str(Path(profile).resolve())] if profile else []
         self.process = subprocess.Popen(
-            [sys.executable, "-m", "rac_console", "sim", "--port", "0", *args],
+            [sys.executable, *profiler, "-m", "rac_console", "sim", "--port", "0", *args],
             stdout=subprocess.PIPE,
             stderr=subprocess.PIPE if stderr_pipe else self._err,
             cwd=self._scratch.name,
@@ -146,6 +151,10 @@ class SimulatorProcess:
         return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
 
     def stop(self) -> None:
+        if self._profile is not None and self.process.poll() is None:
+            self.process.send_signal(signal.SIGINT)  # Ctrl-C: cProfile writes its file
+            with contextlib.suppress(subprocess.TimeoutExpired):
+                self.process.wait(30)
         if self.process.poll() is None:
             self.process.kill()
         self.process.wait(10)

@@ -1,9 +1,12 @@
 """The simulator's asyncio TCP server: many sessions over one SimulatedController.
 
-Without faults every reply is written as its request is read (the fast path). With
-faults configured, each session's requests go through a bounded queue served by one
-task, so replies can be delayed, split, dropped or garbled in order. An extra line with
-a gap is sent by a timer of its own, so it can land while later requests are in flight.
+Without faults every reply is written as its request is read (the fast path). A read
+that is one GET answered before, with no PUT since, is answered from the controller's
+kept replies without being split or parsed: that is what a polling client sends, and
+then asyncio itself is most of what a request costs. With faults configured, each
+session's requests go through a bounded queue served by one task, so replies can be
+delayed, split, dropped or garbled in order. An extra line with a gap is sent by a
+timer of its own, so it can land while later requests are in flight.
 
 What a client can cost the simulator is bounded, whatever it does (README, Reliability):
 
@@ -76,6 +79,7 @@ class _SimSession(asyncio.BufferedProtocol):
         self._server = server
         self.number = next(server._numbers)
         self._decoder = LineDecoder(MAX_REQUEST - 1)
+        self._partial = False  # the decoder holds the start of a line
         self._transport: asyncio.Transport | None = None
         self._view: memoryview | None = None  # the read buffer, made on the first read
         self._queue: asyncio.Queue[tuple[bytes | None, int]] | None = None
@@ -127,29 +131,30 @@ class _SimSession(asyncio.BufferedProtocol):
         return self._view
 
     def buffer_updated(self, nbytes: int) -> None:
-        transport = self._transport
-        if transport is None or self._view is None or transport.is_closing():
+        transport, view = self._transport, self._view
+        if transport is None or view is None or transport.is_closing():
             return
         self.last_active = time.monotonic()
-        data = bytes(self._view[:nbytes])
-        server = self._server
-        if (  # the fast path's fast path: one whole request, its reply known already
-            data[-1:] == CR
+        data = view[:nbytes].tobytes()
+        # The fast path's own fast path: this read is one whole request whose reply is
+        # kept (a kept GET line holds no CR or LF), and nothing came before it that waits
+        # or is half read. It answers as _take would, without splitting or parsing.
+        reply = self._server.fast_frames.get(data)
+        if (
+            reply is not None
+            and not self._partial
             and self._held is None
             and self._queue is None
             and not self._writing_paused
-            and server.transcript is None
-            and not server.plan.active
-            and not self._decoder.pending
         ):
-            reply = server.controller.known_reply(data[:-1])  # a kept GET: no CR, no LF first
-            if reply is not None:
-                transport.write(reply)
-                return
+            self._server.controller.requests += 1
+            transport.write(reply)
+            return
         try:
             lines, too_long = self._decoder.feed(data), False
         except FrameTooLong as exc:
             lines, too_long = exc.lines, True
+        self._partial = bool(self._decoder.pending)
         self._take(lines, too_long)
 
     def _take(self, lines: list[bytes], too_long: bool) -> None:
@@ -383,7 +388,8 @@ class SimulatorServer:
 
     ``transcript=True`` keeps every (session, request, reply sent) for tests that
     check what crossed the wire, in the order requests arrived; a reply never sent
-    (dropped, stalled, or its connection closed first) is ``None``.
+    (dropped, stalled, or its connection closed first) is ``None``. The controller and
+    the transcript are fixed once made; faults change through ``plan`` or ``set_faults``.
     ``idle_timeout`` (seconds, 0: never) closes sessions idle that long; ``control=False``
     answers ``SIM:`` lines like any unknown command; ``notify`` receives the lines a
     user should read (rate-limited; none are shown without it).
@@ -404,6 +410,10 @@ class SimulatorServer:
         self.host = host
         self.port = port
         self.controller = controller or SimulatedController()
+        self.transcript: list[tuple[int, bytes, bytes | None]] | None = [] if transcript else None
+        #: Request frames the sessions answer at once, from the controller's kept replies:
+        #: none while faults are on or a transcript is kept (both need each request seen).
+        self.fast_frames: dict[bytes, bytes] = {}
         self.plan = FaultPlan(faults or FaultSettings())
         self.sessions: set[_SimSession] = set()
         self.refused = 0
@@ -411,7 +421,6 @@ class SimulatorServer:
         self.timed_out = 0  # sessions closed by idle_timeout
         self.idle_timeout = idle_timeout
         self.control_lines = control
-        self.transcript: list[tuple[int, bytes, bytes | None]] | None = [] if transcript else None
         self.notices = Notices(notify or _nobody, schedule=self._later)
         self._numbers = itertools.count(1)
         self._sockets: list[socket.socket] = []
@@ -420,6 +429,16 @@ class SimulatorServer:
         self._timers: set[asyncio.TimerHandle] = set()
         self._shedding: set[_SimSession] = set()
         self._stopped: asyncio.Event | None = None
+
+    @property
+    def plan(self) -> FaultPlan:
+        return self._plan
+
+    @plan.setter
+    def plan(self, plan: FaultPlan) -> None:
+        self._plan = plan
+        plain = self.transcript is None and not plan.active
+        self.fast_frames = self.controller.known_frames if plain else {}
 
     def set_faults(self, settings: FaultSettings) -> None:
         settings.check()
