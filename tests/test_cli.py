@@ -21,6 +21,10 @@ from pathlib import Path
 import pytest
 from servers import RecordingServer, Reply
 
+#: Over half a second each (a terminal app, a subprocess, a timed server):
+#: `pytest -m "not slow"` skips them.
+pytestmark = pytest.mark.slow
+
 SAMPLES = json.loads((Path(__file__).parent / "rac-samples.json").read_text(encoding="utf-8"))
 GET_SAMPLES = {s["request"].encode("ascii"): s["response"].encode("ascii") for s in SAMPLES["get"]}
 JSON_KEYS = {"request", "response", "ok", "result", "result_name", "vt", "value", "rtt_ms"}

@@ -132,6 +132,7 @@ WIRE_CASES: list[tuple[list[str], bytes]] = [
 ]
 
 
+@pytest.mark.slow
 def test_wire_bytes(run_all: Runner) -> None:
     failures = []
     for run, (_, wire) in zip(run_all([c[0] for c in WIRE_CASES]), WIRE_CASES, strict=True):
@@ -163,6 +164,7 @@ REFUSED_CASES: list[tuple[list[str], str]] = [
 ]
 
 
+@pytest.mark.slow
 def test_refused_before_sending(run_all: Runner) -> None:
     failures = []
     for run, (_, expected) in zip(
@@ -197,6 +199,7 @@ def test_stray_option_says_how_to_write_it(run_all: Runner) -> None:
 # ------------------------------------------------------------ CLI: --json anywhere
 
 
+@pytest.mark.slow
 def test_json_after_the_value(run_all: Runner) -> None:
     runs = run_all(
         [

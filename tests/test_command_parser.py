@@ -407,11 +407,6 @@ def test_a_bad_address_is_refused(line: str, fragment: str) -> None:
     assert fragment in refused(line)
 
 
-@pytest.mark.xfail(
-    reason="bug: text after ']' that is not ':PORT' is dropped, and a '[' left open is "
-    "accepted: 'connect [::1]x' and 'connect [::1' connect to ::1 port 5006",
-    strict=True,
-)
 @pytest.mark.parametrize("line", ["connect [::1]x", "connect [::1"])
 def test_a_bracketed_address_with_stray_text_is_refused(line: str) -> None:
     refused(line)
@@ -479,12 +474,6 @@ def test_a_bad_latency_is_refused(line: str, fragment: str) -> None:
     assert fragment in refused(line)
 
 
-@pytest.mark.xfail(
-    reason="bug: a count written with a digit str.isdigit() accepts but int() does not "
-    "(superscript two) raises ValueError, not InputError",
-    raises=ValueError,
-    strict=True,
-)
 def test_latency_with_a_superscript_count_is_an_input_error() -> None:
     assert "latency" in refused("latency \u00b2")
 

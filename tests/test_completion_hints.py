@@ -221,12 +221,6 @@ def test_no_hint_while_a_word_is_typed_or_for_unknown_words(text: str) -> None:
     assert hint(text) == ""
 
 
-@pytest.mark.xfail(
-    reason="bug: latency's hint counts words against '[COUNT] [TYPE INDEX]' by position: "
-    "'latency 100 I ' and 'latency I 5 ' show a dangling 'INDEX]', 'latency I ' shows "
-    "'[TYPE INDEX]' though the type is typed",
-    strict=True,
-)
 @pytest.mark.parametrize(
     ("text", "expected"),
     [("latency 100 I ", "INDEX"), ("latency I ", "INDEX"), ("latency I 5 ", "")],
@@ -235,11 +229,6 @@ def test_latency_hint_follows_the_typed_variable(text: str, expected: str) -> No
     assert hint(text) == expected
 
 
-@pytest.mark.xfail(
-    reason="bug: after 'watch I 1 every 2 ' the hint still shows 'SECONDS]', and after "
-    "'watch I 1 every ' it shows '[every SECONDS]' again",
-    strict=True,
-)
 @pytest.mark.parametrize(
     ("text", "expected"), [("watch I 1 every 2 ", ""), ("watch I 1 every ", "SECONDS")]
 )

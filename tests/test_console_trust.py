@@ -9,6 +9,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import pytest
 from servers import CLOSE, Answering, RecordingServer
 from textual import events
 from textual.pilot import Pilot
@@ -18,6 +19,10 @@ from rac_console.tui.app import RacConsoleApp
 from rac_console.tui.command_line import CommandLine
 from rac_console.tui.frame_log import FrameLog
 from rac_console.tui.status_bar import StatusBar
+
+#: Over half a second each (a terminal app, a subprocess, a timed server):
+#: `pytest -m "not slow"` skips them.
+pytestmark = pytest.mark.slow
 
 
 def burst(pilot: Pilot, text: str) -> None:

@@ -20,6 +20,10 @@ from rac_console.session import BadReply, Disconnected, Frame, RequestTimeout
 from rac_console.sim.faults import GARBAGE, FaultPlan, FaultSettings
 from rac_console.sim.server import SimulatorServer
 
+#: Over half a second each (a terminal app, a subprocess, a timed server):
+#: `pytest -m "not slow"` skips them.
+pytestmark = pytest.mark.slow
+
 INT = kind_of("I")
 COUNT = 60  # distinct variables I0..I59 hold 1000+index, so any value names its request
 

@@ -10,6 +10,10 @@ from pathlib import Path
 
 import pytest
 
+#: Over half a second each (a terminal app, a subprocess, a timed server):
+#: `pytest -m "not slow"` skips them.
+pytestmark = pytest.mark.slow
+
 PACKAGE = Path(__file__).parent.parent / "rac_console"
 PURE_MODULES = [
     "rac_console.protocol",

@@ -21,6 +21,10 @@ from rac_console.present.history import History
 from rac_console.protocol import InputError
 from rac_console.tui.status_bar import StatusBar
 
+#: Over half a second each (a terminal app, a subprocess, a timed server):
+#: `pytest -m "not slow"` skips them.
+pytestmark = pytest.mark.slow
+
 needs_dev_full = pytest.mark.skipif(
     not Path("/dev/full").exists(), reason="a device that is always full (Linux)"
 )

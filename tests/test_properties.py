@@ -7,6 +7,7 @@ import string
 import struct
 from decimal import Decimal
 
+import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -92,6 +93,7 @@ def variants(depth: int = 2, where: str = "top") -> st.SearchStrategy[Variant]:
     return st.one_of(options)
 
 
+@pytest.mark.slow
 @given(variants())
 @settings(max_examples=400)
 def test_parse_of_format_gives_the_value_back(variant: Variant) -> None:

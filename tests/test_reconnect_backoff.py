@@ -18,6 +18,10 @@ from rac_console.engine.backoff import (
 )
 from rac_console.tui.status_bar import StatusBar
 
+#: Over half a second each (a terminal app, a subprocess, a timed server):
+#: `pytest -m "not slow"` skips them.
+pytestmark = pytest.mark.slow
+
 
 class DropAfterOneRequest(RecordingServer):
     """Accepts, reads one request, and closes without answering. With ``answer`` set it

@@ -29,6 +29,10 @@ from rac_console.sim.controller import SimulatedController
 from rac_console.sim.faults import FaultSettings
 from rac_console.sim.server import SimulatorServer
 
+#: Over half a second each (a terminal app, a subprocess, a timed server):
+#: `pytest -m "not slow"` skips them.
+pytestmark = pytest.mark.slow
+
 try:
     import resource
 except ImportError:  # not POSIX

@@ -17,6 +17,10 @@ from rac_console.protocol import kind_of
 from rac_console.session import Frame
 from rac_console.tui.app import RacConsoleApp
 
+#: Over half a second each (a terminal app, a subprocess, a timed server):
+#: `pytest -m "not slow"` skips them.
+pytestmark = pytest.mark.slow
+
 STAGED_FRAMES = [
     ("tx", b"GET:RC8:1:P:\r", None),
     ("rx", b"0,8196,350,0,450,180,0,180,5\r", 0.00031),

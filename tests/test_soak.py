@@ -16,12 +16,18 @@ import time
 import tracemalloc
 from pathlib import Path
 
+import pytest
+
 from rac_console.engine import Alert, Engine, Note, Result, RowView
 from rac_console.engine.backoff import MAX_DELAY
 from rac_console.protocol import RacError, Response, Variant, escape_bytes, parse_response
 from rac_console.session import Frame
 from rac_console.sim.faults import FaultSettings
 from rac_console.sim.server import SimulatorServer
+
+#: Over half a second each (a terminal app, a subprocess, a timed server):
+#: `pytest -m "not slow"` skips them.
+pytestmark = pytest.mark.slow
 
 SECONDS = float(os.environ.get("RAC_SOAK_SECONDS", "15"))
 VARIABLES = 100

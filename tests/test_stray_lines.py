@@ -29,6 +29,10 @@ from rac_console.session import Frame, Session, blocking
 from rac_console.sim.faults import EXTRA_LINE, FaultPlan, FaultSettings
 from rac_console.sim.server import SimulatorServer
 
+#: Over half a second each (a terminal app, a subprocess, a timed server):
+#: `pytest -m "not slow"` skips them.
+pytestmark = pytest.mark.slow
+
 HOST = "127.0.0.1"
 DEADLINE = 5.0
 INT = kind_of("I")

@@ -14,6 +14,10 @@ from collections.abc import Callable
 import pytest
 from test_cli import RecordingServer, cli, env, recording  # noqa: F401 (fixtures)
 
+#: Over half a second each (a terminal app, a subprocess, a timed server):
+#: `pytest -m "not slow"` skips them.
+pytestmark = pytest.mark.slow
+
 #: Bytes that would act on a terminal: ESC, BEL, BS, and the C1 CSI byte.
 TERMINAL_CONTROLS = ("\x1b", "\x07", "\x08", "\x9b")
 

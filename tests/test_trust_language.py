@@ -74,6 +74,7 @@ def test_watch_takes_several_variables() -> None:
             parse_command(bad)
 
 
+@pytest.mark.slow
 async def test_watch_every_polls_those_rows_only_and_leaves_the_interval(tmp_path: Path) -> None:
     app = make_app(tmp_path, interval=0.05)
     async with app.run_test(size=(120, 40)) as pilot:
@@ -86,6 +87,7 @@ async def test_watch_every_polls_those_rows_only_and_leaves_the_interval(tmp_pat
         assert tap.sent.count(b"GET:RC8:3:IO:\r") == 1  # once, then not for a minute
 
 
+@pytest.mark.slow
 async def test_unwatch_of_an_unwatched_variable_says_so(tmp_path: Path) -> None:
     app = make_app(tmp_path)
     async with app.run_test(size=(120, 40)) as pilot:

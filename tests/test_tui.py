@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import pytest
 from textual.widgets import Static
 from tui_helpers import FrameTap, log_text, make_app, results_text, type_line, until
 
@@ -11,6 +12,10 @@ from rac_console.sim.server import SimulatorServer
 from rac_console.tui.command_line import CommandLine
 from rac_console.tui.status_bar import StatusBar
 from rac_console.tui.watch_table import WatchTable
+
+#: Over half a second each (a terminal app, a subprocess, a timed server):
+#: `pytest -m "not slow"` skips them.
+pytestmark = pytest.mark.slow
 
 
 async def test_starts_on_the_simulator_and_says_so(tmp_path: Path) -> None:

@@ -89,6 +89,4 @@ class FrameTap:
     @property
     def sent(self) -> list[bytes]:
         """Requests as sent (ASCII, CR included): the recorder escapes nothing in them."""
-        return [
-            str(r["text"]).encode("ascii") + b"\r" for r in self._records() if r["dir"] == "tx"
-        ]
+        return [str(r["text"]).encode("ascii") + b"\r" for r in self._records() if r["dir"] == "tx"]

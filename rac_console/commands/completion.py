@@ -106,8 +106,24 @@ def hint(text: str) -> str:
             needs = ["TYPE", "INDEX", *kind.value_hint.split()]
             if kind.code == "S":
                 needs = ["TYPE", "INDEX", "TEXT"]
+    if command == "latency":
+        return _latency_hint(done[1:])
+    if command == "watch" and any(word.lower() == "every" for word in done[3:]):
+        return "SECONDS" if done[-1].lower() == "every" else ""
     remaining = needs[len(done) - 1 :]
     return " ".join(remaining)
+
+
+def _latency_hint(words: list[str]) -> str:
+    """``latency [COUNT] [TYPE INDEX]``: a count is a number, so after one (or none) the
+    variable follows."""
+    if not words:
+        return "[COUNT] [TYPE INDEX]"
+    if words[0].isascii() and words[0].isdigit():
+        words = words[1:]
+        if not words:
+            return "[TYPE INDEX]"
+    return {1: "INDEX"}.get(len(_split_var(["latency", *words])) - 1, "")
 
 
 def common_prefix(candidates: list[Candidate]) -> str:

@@ -342,7 +342,7 @@ def parse_watch(text: str) -> Watch:
 
 def parse_latency(text: str) -> Latency:
     count_text, _, var_text = text.partition(" ")
-    if count_text and not count_text.isdigit():
+    if count_text and not (count_text.isascii() and count_text.isdigit()):
         count_text, var_text = "", text
     count = int(count_text) if count_text else 100
     if not 1 <= count <= MAX_LATENCY_COUNT:
@@ -371,7 +371,9 @@ def parse_connect(text: str) -> Connect:
     if not text or " " in text:
         raise InputError("connect needs one address: connect HOST or connect HOST:PORT")
     if text.startswith("["):  # [IPv6]:PORT
-        host, _, port_part = text[1:].partition("]")
+        host, closed, port_part = text[1:].partition("]")
+        if not closed or (port_part and not port_part.startswith(":")):
+            raise InputError("write an IPv6 address in brackets: connect [::1] or [::1]:5006")
         sep, port_text = (":", port_part[1:]) if port_part.startswith(":") else ("", "")
     elif text.count(":") == 1:
         host, sep, port_text = text.partition(":")
