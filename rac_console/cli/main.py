@@ -46,7 +46,7 @@ def _seconds(allow_zero: bool) -> Callable[[str], float]:
     return parse
 
 
-def _count(kind: type) -> Callable[[str], float]:
+def _count(kind: Callable[[str], float]) -> Callable[[str], float]:
     """An argparse type for a number that cannot be negative."""
 
     def parse(text: str) -> float:

@@ -22,7 +22,7 @@ COLUMNS = (
 )
 
 
-class WatchTable(DataTable):
+class WatchTable(DataTable[object]):
     """Rows are keyed by variable name (``P10``); the app calls :meth:`refresh_rows` at ~5 Hz."""
 
     def __init__(self, **kwargs: object) -> None:
