@@ -98,7 +98,7 @@ def test_a_reply_is_answered_however_it_is_split(
     assert last.response.ok
     assert last.response.variant == value
     assert last.problem is None
-    assert last.strays == []
+    assert last.strays == ()
     assert last.too_long is None
     assert not last.drop
     assert session.in_flight is None
@@ -134,7 +134,7 @@ def test_a_stray_line_in_the_same_read_as_the_reply_keeps_the_answer_and_drops()
     assert verdict.answer == b"0,3,1"
     assert verdict.response is not None and verdict.response.variant == Variant(VT.I4, 1)
     assert verdict.problem is None
-    assert verdict.strays == [b"0,3,999\r"]
+    assert verdict.strays == (b"0,3,999\r",)
     assert verdict.drop
 
 
@@ -143,7 +143,10 @@ def test_two_replies_to_one_request_only_the_first_answers() -> None:
     session.begin(get_for(INT, 1))
     verdict = session.feed(b"0,3,1\r0,3,1\r0,3,2\r")
     assert verdict.answer == b"0,3,1"
-    assert verdict.strays == [b"0,3,1\r", b"0,3,2\r"]
+    assert verdict.strays == (
+        b"0,3,1\r",
+        b"0,3,2\r",
+    )
     assert verdict.drop
 
 
@@ -153,7 +156,7 @@ def test_a_partial_line_left_after_the_answer_is_a_stray() -> None:
     verdict = session.feed(b"0,3,1\r0,3,9")
     assert verdict.answer == b"0,3,1"
     assert verdict.problem is None
-    assert verdict.strays == [b"0,3,9"]  # never let it prefix the next reply
+    assert verdict.strays == (b"0,3,9",)  # never let it prefix the next reply
     assert verdict.drop
 
 
@@ -172,7 +175,7 @@ def test_bytes_with_nothing_in_flight_are_strays(data: bytes, strays: list[bytes
     verdict = session.feed(data)
     assert verdict.answer is None
     assert verdict.response is None and verdict.problem is None
-    assert verdict.strays == strays
+    assert list(verdict.strays) == strays
     assert verdict.drop
 
 
@@ -182,7 +185,7 @@ def test_a_stray_after_an_answered_request_is_a_stray() -> None:
     assert session.feed(b"0,3,1\r").answer == b"0,3,1"
     verdict = session.feed(b"0,3,1\r")  # the same answer again, in a later read
     assert verdict.answer is None
-    assert verdict.strays == [b"0,3,1\r"]
+    assert verdict.strays == (b"0,3,1\r",)
     assert verdict.drop
 
 
@@ -193,7 +196,7 @@ def test_an_abandoned_request_takes_no_answer() -> None:
     assert session.in_flight is None
     verdict = session.feed(b"0,3,1\r")
     assert verdict.answer is None
-    assert verdict.strays == [b"0,3,1\r"]
+    assert verdict.strays == (b"0,3,1\r",)
     assert verdict.drop
 
 
@@ -209,7 +212,7 @@ def test_reset_forgets_the_request_and_the_bytes_held() -> None:
     assert not session.holds_stray()
     verdict = session.feed(b"5\r")  # the old connection's rest cannot answer anything
     assert verdict.answer is None
-    assert verdict.strays == [b"5\r"]
+    assert verdict.strays == (b"5\r",)
     assert verdict.drop
 
 
@@ -221,7 +224,7 @@ def test_a_crlf_reply_in_one_read_is_answered_and_its_lf_is_harmless() -> None:
     session.begin(get_for(INT, 1))
     verdict = session.feed(b"0,3,1\r\n")
     assert verdict.answer == b"0,3,1"
-    assert verdict.strays == [] and not verdict.drop
+    assert verdict.strays == () and not verdict.drop
     assert session.pending == b"\n"
     assert not session.holds_stray()  # an LF after a CR is not a stray
     session.begin(get_for(INT, 2))
@@ -277,7 +280,7 @@ def test_a_line_too_long_with_a_request_in_flight_is_a_problem() -> None:
     assert verdict.response is None
     assert verdict.problem is not None and "no CR within 16 bytes" in verdict.problem
     assert verdict.too_long == b"A" * 4  # the tail of this read, for the log
-    assert verdict.strays == []
+    assert verdict.strays == ()
     assert verdict.drop
     assert session.in_flight is None
     assert session.pending == b""  # nothing of it is held
@@ -335,7 +338,7 @@ def test_a_reply_that_fails_its_check_is_a_problem(
     assert verdict.problem
     if problem is not None:
         assert verdict.problem == problem
-    assert verdict.strays == []
+    assert verdict.strays == ()
     assert verdict.drop
     assert session.in_flight is None
 
@@ -391,7 +394,7 @@ def test_anything_else_waiting_drops(data: bytes, still_open: bool, strays: list
     session = machine()
     verdict = session.waiting_verdict(data, still_open)
     assert verdict.answer is None
-    assert verdict.strays == strays
+    assert list(verdict.strays) == strays
     assert verdict.drop
 
 
@@ -400,7 +403,7 @@ def test_what_waits_is_read_after_what_is_held() -> None:
     session.begin(get_for(INT, 1))
     session.feed(b"0,3,1\r\n")
     verdict = session.waiting_verdict(b"0,3,2\r", still_open=True)
-    assert verdict.strays == [b"0,3,2\r"]
+    assert verdict.strays == (b"0,3,2\r",)
     assert verdict.drop
 
 

@@ -21,6 +21,8 @@ import logging
 import os
 import select
 import socket
+import struct
+import sys
 import time
 from typing import Any
 
@@ -88,6 +90,7 @@ class Session:
         self._sent_at: float | None = None
         self._replied_at = 0.0
         self._peer_is_local = False
+        self._kernel_timeout = False
 
     # ------------------------------------------------------------ observers
 
@@ -157,6 +160,8 @@ class Session:
         try:
             try:
                 sock.sendall(data)
+            except (TimeoutError, BlockingIOError):  # the peer has not read for a timeout
+                raise self._timed_out() from None
             except ConnectionError:  # reset or broken pipe: the peer closed it
                 raise self._lost() from None
             except OSError as exc:
@@ -178,18 +183,18 @@ class Session:
                 remaining = deadline - time.perf_counter()
                 if remaining <= 0:
                     raise self._timed_out()
-                sock.settimeout(remaining)
+                self._set_timeout(sock, remaining)
             try:
                 chunk = sock.recv(READ_SIZE)
-            except TimeoutError:
+            except (TimeoutError, BlockingIOError):  # BlockingIOError: SO_RCVTIMEO ran out
                 raise self._timed_out() from None
             except ConnectionError:  # a reset: the peer closed it
                 raise self._lost() from None
             except OSError as exc:
                 raise self._lost(f"the connection failed: {_reason(exc)}") from None
             finally:
-                if not first:
-                    sock.settimeout(self.timeout)
+                if not first and self._sock is sock:
+                    self._set_timeout(sock, self.timeout)
             now = time.perf_counter()
             first = False
             if not chunk:
@@ -230,6 +235,10 @@ class Session:
         self._replied_at = time.perf_counter()
         self.last_rtt = rtt
         return Reply(answer, verdict.response, rtt)
+
+    def _set_timeout(self, sock: socket.socket, seconds: float) -> None:
+        if not (self._kernel_timeout and _set_kernel_timeout(sock, seconds)):
+            sock.settimeout(seconds)
 
     def _timed_out(self) -> RequestTimeout:
         self._drop()
@@ -296,11 +305,10 @@ class Session:
         except (OSError, UnicodeError, ValueError) as exc:  # TimeoutError is an OSError
             self._set_state("closed")
             raise ConnectFailed(f"cannot connect to {self.address}: {_reason(exc)}") from None
-        try:
+        with contextlib.suppress(OSError):
             sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
-            sock.settimeout(self.timeout)
-        except OSError:
-            pass
+        self._kernel_timeout = _set_kernel_timeout(sock, self.timeout)
+        sock.settimeout(None if self._kernel_timeout else self.timeout)
         self._sock = sock
         self._peer_is_local = _is_loopback(sock)
         self._machine.reset()
@@ -339,6 +347,23 @@ class Session:
 
     def __exit__(self, *exc_info: object) -> None:
         self.close()
+
+
+def _set_kernel_timeout(sock: socket.socket, seconds: float) -> bool:
+    """Put the send and receive timeouts in the kernel (SO_SNDTIMEO, SO_RCVTIMEO), so a
+    blocking ``recv`` is one system call instead of Python's poll-then-recv. False where
+    the options cannot be set: the caller then uses Python's socket timeout."""
+    try:
+        if sys.platform == "win32":
+            value = struct.pack("=L", max(1, round(seconds * 1000)))  # a DWORD of ms
+        else:
+            whole = int(seconds)
+            value = struct.pack("@ll", whole, max(1, int((seconds - whole) * 1e6)))
+        sock.setsockopt(socket.SOL_SOCKET, socket.SO_RCVTIMEO, value)
+        sock.setsockopt(socket.SOL_SOCKET, socket.SO_SNDTIMEO, value)
+    except (OSError, AttributeError, struct.error, OverflowError):
+        return False
+    return True
 
 
 def _is_loopback(sock: socket.socket) -> bool:

@@ -9,15 +9,19 @@ connection) live here once, and tests drive them without sockets.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 from ..protocol import FrameTooLong, LineDecoder, ProtocolError, Response
 from ..protocol.messages import decode_frame, parse_response
-from ..protocol.request import Request
+from ..protocol.request import ReplyCheck, Request
 from ..protocol.text import escape_bytes
 
 #: Bytes of a bad reply quoted in a message; the whole reply is in the log and --record.
 QUOTED_BYTES = 120
+#: Judged replies kept per connection (then forgotten all at once).
+JUDGED_KEPT = 512
+
+Judgement = tuple[Response | None, str | None]
 
 
 @dataclass(slots=True)
@@ -33,7 +37,7 @@ class Verdict:
     answer: bytes | None = None
     response: Response | None = None
     problem: str | None = None
-    strays: list[bytes] = field(default_factory=list)
+    strays: tuple[bytes, ...] = ()
     too_long: bytes | None = None
     drop: bool = False
 
@@ -41,12 +45,15 @@ class Verdict:
 class SessionMachine:
     """One connection's protocol state: the request in flight and the bytes held."""
 
-    __slots__ = ("_after_cr", "_decoder", "_request")
+    __slots__ = ("_after_cr", "_decoder", "_judged", "_request")
 
     def __init__(self, max_line: int) -> None:
         self._decoder = LineDecoder(max_line)
         self._request: Request | None = None
         self._after_cr = False
+        # Polled replies repeat: a line already judged for the same check is not parsed
+        # again (responses are immutable).
+        self._judged: dict[tuple[bytes, ReplyCheck | None], Judgement] = {}
 
     @property
     def in_flight(self) -> Request | None:
@@ -79,7 +86,24 @@ class SessionMachine:
 
     def feed(self, data: bytes) -> Verdict:
         """Take one read; the verdict says whether the request was answered."""
+        request = self._request
+        if (
+            request is not None
+            and data.find(b"\r") == len(data) - 1
+            and not self._decoder.pending
+            and data[:1] != b"\n"
+        ):
+            # The usual read: exactly the reply line, whole. (The rules below, done fast.)
+            self._after_cr = True
+            self._request = None
+            line = data[:-1]
+            response, problem = self._judge(request, line)
+            return Verdict(line, response, problem, drop=problem is not None)
+        return self._feed(data)
+
+    def _feed(self, data: bytes) -> Verdict:
         verdict = Verdict()
+        strays: list[bytes] = []
         if data == b"\n" and self._after_cr:
             return verdict  # the LF of a CRLF peer's reply, read on its own
         self._after_cr = data.endswith(b"\r")
@@ -94,19 +118,30 @@ class SessionMachine:
             if request is not None and verdict.answer is None:
                 self._request = None
                 verdict.answer = line
-                verdict.response, verdict.problem = judge(request, line)
+                verdict.response, verdict.problem = self._judge(request, line)
                 verdict.drop = verdict.drop or verdict.problem is not None
             else:
-                verdict.strays.append(line + b"\r")
+                strays.append(line + b"\r")
                 verdict.drop = True
         if verdict.too_long is not None and verdict.answer is None and self._request is not None:
             self._request = None
             verdict.problem = f"reply too long: no CR within {self._decoder.max_line} bytes"
         if self._request is None and self.holds_stray() and not verdict.drop:
             # Bytes of a line nobody asked for: never let them prefix the next reply.
-            verdict.strays.append(self._decoder.pending)
+            strays.append(self._decoder.pending)
             verdict.drop = True
+        verdict.strays = tuple(strays)
         return verdict
+
+    def _judge(self, request: Request, line: bytes) -> Judgement:
+        key = (line, request.check)
+        judged = self._judged.get(key)
+        if judged is None:
+            judged = judge(request, line)
+            if len(self._judged) >= JUDGED_KEPT:
+                self._judged.clear()
+            self._judged[key] = judged
+        return judged
 
     def waiting_verdict(self, data: bytes, still_open: bool) -> Verdict:
         """What waited unread before a request went out (``data``, with what is held):
@@ -116,10 +151,10 @@ class SessionMachine:
             self._decoder.clear()
             self._after_cr = False
             return Verdict()
-        return Verdict(strays=as_lines(waiting), drop=True)
+        return Verdict(strays=tuple(as_lines(waiting)), drop=True)
 
 
-def judge(request: Request, line: bytes) -> tuple[Response | None, str | None]:
+def judge(request: Request, line: bytes) -> Judgement:
     """Parse a reply once and check that it can answer ``request``: the response (None
     when it cannot be parsed) and the problem (None when it can answer)."""
     try:
