@@ -10,9 +10,10 @@ followed by the stray line ``0,3,424242``:
   - gap 0:       the stray as a write of its own, straight after the reply;
   - 5 ms later:  the stray as a write of its own 5 ms after the reply.
 
-One RacSession then makes COUNT GETs of I10 (set to 123 beforehand, never the stray's
-value) back to back, and the script counts answers that are right, answers reported OK
-with a wrong value, connection resets, and errors. It prints figures; it asserts nothing.
+One blocking :class:`rac_console.session.Session` then makes COUNT GETs of I10 (set
+to 123 beforehand, never the stray's value) back to back, and the script counts
+answers that are right, answers reported OK with a wrong value, connection resets,
+and errors. It prints figures; it asserts nothing.
 
 Each mode runs under up to three CPU placements (Linux, two CPUs or more): wherever
 the scheduler puts the two processes; the client and the simulator on different CPUs
@@ -28,17 +29,19 @@ placement, show.
 from __future__ import annotations
 
 import argparse
-import asyncio
 import json
 import os
-import select
-import subprocess
 import sys
 from collections import Counter
 from dataclasses import asdict, dataclass, field
+from pathlib import Path
 
-from rac_console.client import Frame, RacSession, TransportError
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+from sim_harness import SimulatorProcess
+
 from rac_console.protocol import Variant, kind_of
+from rac_console.session import Frame, Session, TransportError
 
 INT = kind_of("I")
 INDEX, VALUE = 10, 123
@@ -73,35 +76,23 @@ def available_placements() -> list[str]:
     return list(PLACEMENTS) if pinnable else ["scheduler"]
 
 
-def start_simulator(gap: float | None, cpu: int | None) -> tuple[subprocess.Popen[str], int]:
-    command = [sys.executable, "-m", "rac_console", "sim", "--port", "0", "--extra-every", "1"]
+def start_simulator(gap: float | None, cpu: int | None) -> SimulatorProcess:
+    """``rac-console sim --port 0 --extra-every 1 [--extra-gap MS]``, pinned to ``cpu``."""
+    args = ["--extra-every", "1"]
     if gap is not None:
-        command += ["--extra-gap", f"{gap:g}"]
-    process = subprocess.Popen(command, stdout=subprocess.PIPE, text=True)
-    if cpu is not None:
-        os.sched_setaffinity(process.pid, {cpu})
-    assert process.stdout is not None
-    line = process.stdout.readline()  # "RC8 simulator listening on 127.0.0.1:PORT (...)"
-    return process, int(line.split(":")[1].split()[0])
+        args += ["--extra-gap", f"{gap:g}"]
+    pin = None if cpu is None else (lambda: os.sched_setaffinity(0, {cpu}))
+    return SimulatorProcess(*args, preexec=pin)
 
 
-def something_waiting(session: RacSession) -> bool:
-    """Peek (without reading) whether the session's socket holds bytes before a GET."""
-    transport = session._transport
-    if transport is None:
-        return False
-    sock = transport.get_extra_info("socket")
-    return sock is not None and bool(select.select([sock], [], [], 0)[0])
-
-
-async def measure(mode: str, placement: str, port: int, count: int) -> Tally:
+def measure(mode: str, placement: str, port: int, count: int) -> Tally:
     tally = Tally(mode, placement)
     errors: Counter[str] = Counter()
-    async with RacSession("127.0.0.1", port) as session:
+    with Session("127.0.0.1", port) as session:
         # The stray is switched off while the variable is set, then on again.
-        await session.send_raw("SIM:SET:extra_every=0")
-        await session.put(INT, INDEX, Variant(3, VALUE))
-        await session.send_raw("SIM:SET:extra_every=1")
+        session.send_raw("SIM:SET:extra_every=0")
+        session.put(INT, INDEX, Variant(3, VALUE))
+        session.send_raw("SIM:SET:extra_every=1")
         frames: list[Frame] = []
         opened: list[str] = []
         session.add_frame_observer(frames.append)
@@ -110,9 +101,10 @@ async def measure(mode: str, placement: str, port: int, count: int) -> Tally:
         )
         for _ in range(count):
             tally.gets += 1
-            tally.waiting_at_send += something_waiting(session)
+            # Peeked without reading: did bytes already wait before this GET?
+            tally.waiting_at_send += session.has_unread()
             try:
-                reply = await session.get(INT, INDEX)
+                reply = session.get(INT, INDEX)
             except TransportError as exc:
                 errors[type(exc).__name__] += 1
                 continue
@@ -131,16 +123,15 @@ async def measure(mode: str, placement: str, port: int, count: int) -> Tally:
 def run_mode(mode: str, gap: float | None, placement: str, count: int) -> Tally:
     cpus = cpus_for(placement)
     everywhere = os.sched_getaffinity(0) if cpus is not None else None
-    process, port = start_simulator(gap, cpus[1] if cpus else None)
+    simulator = start_simulator(gap, cpus[1] if cpus else None)
     try:
         if cpus is not None:
             os.sched_setaffinity(0, {cpus[0]})
-        return asyncio.run(measure(mode, placement, port, count))
+        return measure(mode, placement, simulator.port, count)
     finally:
         if everywhere is not None:
             os.sched_setaffinity(0, everywhere)
-        process.terminate()
-        process.wait(10)
+        simulator.stop()
 
 
 def main() -> int:

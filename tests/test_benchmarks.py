@@ -1,4 +1,8 @@
-"""The benchmark suite runs, with tiny sizes, and reports every figure it promises."""
+"""The benchmark suite runs, with tiny sizes, and reports every figure it promises.
+
+It checks that each figure is there and positive and that the table prints; never a
+timing threshold (a shared CI machine cannot promise one).
+"""
 
 from __future__ import annotations
 
@@ -15,6 +19,47 @@ pytestmark = pytest.mark.slow
 
 BENCHMARKS = Path(__file__).resolve().parent.parent / "benchmarks"
 
+FIGURES = (
+    # one session against the responder, side by side, with CPU per request
+    "bare_loop_rps",
+    "bare_loop_cpu_us",
+    "session_rps",
+    "session_cpu_us",
+    "session_to_bare_ratio",
+    "engine_polls_per_s",
+    "engine_cpu_us",
+    "engine_to_session_ratio",
+    "console_polls_per_s",
+    "console_cpu_us",
+    "console_to_session_ratio",
+    "key_median_ms",
+    "key_p95_ms",
+    "cpu_ms_per_1000_frames",
+    # 50 sessions: the simulator against the responder, the server's CPU per request
+    "simulator_50_sessions_rps",
+    "simulator_50_sessions_cpu_us",
+    "responder_50_sessions_rps",
+    "responder_50_sessions_cpu_us",
+    "simulator_to_responder_50_ratio",
+    # the console's memory and start-up
+    "memory_10k_frames_mb",
+    "memory_after_mb",
+    "memory_growth",
+    "first_paint_s",
+    "version_s",
+)
+#: Measured only when a C compiler built the C programs.
+C_FIGURES = ("c_client_rps", "c_client_cpu_us", "bare_to_c_ratio", "session_to_c_ratio")
+
+ROWS = (
+    "bare Python socket loop",
+    "session client: Session.get",
+    "engine: watch I 0-99, interval 0",
+    "console: 100 watched, headless",
+    "console: key to screen, p95",
+    "simulator, 50 sessions",
+)
+
 
 def test_benchmark_smoke_run_reports_every_figure(tmp_path: Path) -> None:
     out = tmp_path / "figures.json"
@@ -26,19 +71,12 @@ def test_benchmark_smoke_run_reports_every_figure(tmp_path: Path) -> None:
     )
     assert result.returncode == 0, result.stderr[-2000:]
     figures = json.loads(out.read_text())
-    for key in (
-        "client_to_bare_ratio",
-        "responder_bare_python_rps",
-        "simulator_client_rps",
-        "simulator_50_sessions_rps",
-        "watch_to_bare_ratio",
-        "console_to_bare_ratio",
-        "key_median_ms",
-        "key_p95_ms",
-        "cpu_ms_per_1000_frames",
-        "memory_growth",
-        "first_paint_s",
-        "version_s",
-    ):
+    expected = FIGURES + (C_FIGURES if figures["meta"]["c_compiled"] else ())
+    for key in expected:
         assert figures[key] > 0, key
-    assert "session client / bare Python socket loop" in result.stdout
+    header = next(line for line in result.stdout.splitlines() if line.startswith("| path"))
+    cells = [cell.strip() for cell in header.strip("|").split("|")]
+    assert cells == ["path", "req/s", "µs CPU/request", "ratio", "target", "met?"]
+    for row in ROWS:
+        assert row in result.stdout, row
+    assert "session client under cProfile" in result.stdout
