@@ -155,8 +155,8 @@ class Engine:
     def _next(self, wait: float | None) -> tuple[int, str | Command] | tuple[()] | None:
         """The next line or command; ``()`` when none came in time; None: stop."""
         try:
-            if wait == 0:
-                return self._inbox.get_nowait()
+            if wait == 0:  # between polls: ask without raising when nothing came
+                return self._inbox.get_nowait() if not self._inbox.empty() else ()
             return self._inbox.get(timeout=wait)
         except queue.Empty:
             return ()

@@ -16,7 +16,6 @@ answer to a later one. Before each request the socket is asked (one ``poll``, or
 from __future__ import annotations
 
 import contextlib
-import ipaddress
 import logging
 import os
 import select
@@ -50,18 +49,11 @@ logger = logging.getLogger(__name__)
 _POLL = getattr(select, "poll", None)  # POSIX; select.select serves where it is missing
 READ_SIZE = 65536
 
-#: A request made this soon (seconds) after a reply first gives up the CPU once.
-YIELD_WINDOW = 0.001
-
-
-def _yield_cpu() -> None:
-    """Let another runnable process have the CPU: ``sched_yield`` where there is one
-    (POSIX), else ``sleep(0)``, which yields the rest of the time slice on Windows."""
-    sched_yield = getattr(os, "sched_yield", None)
-    if sched_yield is not None:
-        sched_yield()
-    else:
-        time.sleep(0)
+#: Once a peer has sent a line nobody asked for, each request first waits this long
+#: (seconds) after the last reply for the socket to stay quiet; each further stray doubles
+#: the wait, up to MAX_SETTLE. A well-behaved controller never pays it.
+SETTLE = 0.002
+MAX_SETTLE = 0.05
 
 
 class Session:
@@ -89,7 +81,7 @@ class Session:
         self._poll: Any = None
         self._sent_at: float | None = None
         self._replied_at = 0.0
-        self._peer_is_local = False
+        self._settle = 0.0  # the peer has sent lines nobody asked for: settle this long first
         self._kernel_timeout = False
 
     # ------------------------------------------------------------ observers
@@ -147,11 +139,12 @@ class Session:
         gone, and the next request opens a fresh one.
         """
         sock = self._connected()
-        if self._peer_is_local and time.perf_counter() - self._replied_at < YIELD_WINDOW:
-            # A peer on this machine may be one write short of a stray line: let it run
-            # before asking the socket, or the stray would leave after this request.
-            # (A remote peer's stray comes over the network: yielding cannot help there.)
-            _yield_cpu()
+        if self._settle:
+            # This peer has sent lines nobody asked for: leave it a moment after each
+            # reply to finish, so a stray lands before the next request, not as its answer.
+            wait = self._settle - (time.perf_counter() - self._replied_at)
+            if wait > 0:
+                self.has_unread(wait)
         if self._peer_spoke(sock) and self._discard_waiting(sock):
             sock = self._connected()
         machine = self._machine
@@ -219,6 +212,8 @@ class Session:
                     problem=verdict.problem,
                 )
             )
+        if verdict.strays:
+            self._saw_stray()
         for stray in verdict.strays:
             self._publish(Frame(time.time(), "rx", stray, unsolicited=True))
         if verdict.too_long is not None:
@@ -277,6 +272,10 @@ class Session:
         except (OSError, ValueError):
             return True  # a socket that cannot be asked cannot be trusted
 
+    def _saw_stray(self) -> None:
+        """A line nobody asked for: settle before each request from now on, longer each time."""
+        self._settle = min(self._settle * 2, MAX_SETTLE) if self._settle else SETTLE
+
     def _discard_waiting(self, sock: socket.socket) -> bool:
         """Log what waits as unsolicited and drop the connection; False when it was only
         the LF of a CRLF peer's last reply, consumed here, and the connection is kept."""
@@ -284,6 +283,8 @@ class Session:
         verdict = self._machine.waiting_verdict(data, still_open)
         if not verdict.drop:
             return False
+        if verdict.strays:
+            self._saw_stray()
         for line in verdict.strays:
             self._publish(Frame(time.time(), "rx", line, unsolicited=True))
         self._drop()
@@ -310,7 +311,6 @@ class Session:
         self._kernel_timeout = _set_kernel_timeout(sock, self.timeout)
         sock.settimeout(None if self._kernel_timeout else self.timeout)
         self._sock = sock
-        self._peer_is_local = _is_loopback(sock)
         self._machine.reset()
         if _POLL is not None:
             self._poll = _POLL()
@@ -364,15 +364,6 @@ def _set_kernel_timeout(sock: socket.socket, seconds: float) -> bool:
     except (OSError, AttributeError, struct.error, OverflowError):
         return False
     return True
-
-
-def _is_loopback(sock: socket.socket) -> bool:
-    """True when the peer is this machine (127.0.0.0/8 or ::1)."""
-    try:
-        address = sock.getpeername()[0]
-    except OSError:
-        return False
-    return ipaddress.ip_address(address.split("%")[0]).is_loopback
 
 
 def _closed_at_once(sock: socket.socket) -> bool:

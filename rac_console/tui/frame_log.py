@@ -17,6 +17,9 @@ from ..session import Frame
 
 MAX_LINES = 5000
 MAX_PENDING = 50_000
+#: Lines drawn per flush (10 a second) at most: past it only the newest are drawn, and one
+#: line says how many were not (drawing them cost the poller its CPU, unread).
+MAX_LINES_PER_FLUSH = 500
 
 
 class FrameLog(Log):
@@ -53,7 +56,16 @@ class FrameLog(Log):
         events = list(self._pending)
         self._pending.clear()
         shown = [e for e in events if not isinstance(e, Frame) or self.show_polls or not e.poll]
-        lines = [_line(e) for e in shown[-MAX_LINES:]]
+        lines = [_line(e) for e in shown[-MAX_LINES_PER_FLUSH:]]
+        if len(shown) > MAX_LINES_PER_FLUSH:
+            skipped = len(shown) - MAX_LINES_PER_FLUSH
+            stamp = shown[-MAX_LINES_PER_FLUSH - 1]
+            when = stamp.time if isinstance(stamp, Frame) else stamp[0]
+            lines.insert(
+                0,
+                f"{clock_text(when)} ── {skipped} earlier lines not drawn (faster than anyone "
+                "reads): --record FILE keeps every frame ──",
+            )
         if lines:
             # Log follows only when the view already sat at the end, and any layout
             # change (a resize, the candidate list) moves the end away from the view:
