@@ -12,8 +12,8 @@ import sys
 import tempfile
 from pathlib import Path
 
-from rac_console.core import ConsoleCore
-from rac_console.history import History
+from rac_console.engine import Engine
+from rac_console.present.history import History
 from rac_console.tui.app import RacConsoleApp
 
 OUT = Path(__file__).resolve().parent.parent / "screenshots"
@@ -57,8 +57,8 @@ SCENES = {
 
 async def take(name: str, size: tuple[int, int], lines: list[str], typed: str) -> None:
     with tempfile.TemporaryDirectory() as home:
-        core = ConsoleCore(None, interval=0.2)
-        app = RacConsoleApp(core, History(Path(home) / "history"))
+        engine = Engine(None, interval=0.2)
+        app = RacConsoleApp(engine, History(Path(home) / "history"))
         async with app.run_test(size=size) as pilot:
             for line in lines:
                 app.command_line.insert_text_at_cursor(line)

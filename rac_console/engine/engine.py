@@ -15,7 +15,6 @@ from collections import deque
 
 from ..commands.language import Command, VarRef
 from ..protocol import describe_hresult, hresult_name
-from ..protocol.request import get_for
 from ..session import (
     BadReply,
     ConnectFailed,
@@ -28,7 +27,7 @@ from ..session import (
 )
 from ..sim.thread import SimulatorThread
 from .backoff import Backoff
-from .events import Alert, Message, Note, Result, Status
+from .events import Alert, Event, Message, Note, Result, Status
 from .outbox import Outbox
 from .recorder import FrameRecorder
 from .watch import WatchList, WatchRow
@@ -38,6 +37,9 @@ SIMULATOR_NOTICE = "no -H given: talking to the built-in RC8 simulator, not a co
 #: The status is published at most this often while polling flat out (and on every change
 #: a user causes).
 STATUS_EVERY = 0.1
+#: Events are handed to the outbox in batches at least this often while polling (and at
+#: once when the engine goes idle or answers a line): one lock per batch, not per frame.
+EVENTS_EVERY = 0.01
 
 
 class Engine:
@@ -83,6 +85,8 @@ class Engine:
         self._next_cycle_at = 0.0  # monotonic()
         self._status_at = 0.0
         self._status_dirty = True
+        self._events: list[Event] = []  # published at the next flush_events()
+        self._events_at = 0.0  # perf_counter() of the last flush
         self._inbox: queue.SimpleQueue[tuple[int, str | Command] | None] = queue.SimpleQueue()
         self._seq = itertools.count(1)
         self._connect_first = True
@@ -134,8 +138,10 @@ class Engine:
                 self._connect_at_start()
             while True:
                 wait = self._wait_time()
-                if wait != 0 and self._status_dirty:
-                    self.publish_status(force=True)
+                if wait != 0:
+                    self.flush_events()
+                    if self._status_dirty:
+                        self.publish_status(force=True)
                 item = self._next(wait)
                 if item is None:
                     break  # stop
@@ -150,6 +156,7 @@ class Engine:
             self.close_target()
             if self.recorder is not None:
                 self.recorder.close()
+            self.flush_events()
             self.publish_status(force=True)
 
     def _next(self, wait: float | None) -> tuple[int, str | Command] | tuple[()] | None:
@@ -168,7 +175,8 @@ class Engine:
         try:
             self.session.connect()
         except (ConnectFailed, Disconnected) as exc:
-            self.outbox.put(Result(0, (Message(f"{exc}: commands will retry", "error"),)))
+            self.emit(Result(0, (Message(f"{exc}: commands will retry", "error"),)))
+            self.flush_events()
 
     # ------------------------------------------------------------ target
 
@@ -206,16 +214,27 @@ class Engine:
 
     # ------------------------------------------------------------ events
 
+    def emit(self, event: Event) -> None:
+        """Queue an event for the outbox (handed over by :meth:`flush_events`)."""
+        self._events.append(event)
+
+    def flush_events(self) -> None:
+        if self._events:
+            self.outbox.put_many(self._events)
+            self._events = []
+        self._events_at = time.perf_counter()
+
     def _on_frame(self, frame: Frame) -> None:
         if self.recorder is not None:
             self.recorder(frame)
-        self.outbox.put(frame)
+        self._events.append(frame)
 
     def note(self, text: str) -> None:
-        self.outbox.put(Note(text, time.time()))
+        self.emit(Note(text, time.time()))
 
     def alert(self, text: str) -> None:
-        self.outbox.put(Alert(text))
+        self.emit(Alert(text))
+        self.flush_events()
 
     def show_row(self, row: WatchRow) -> None:
         self.outbox.put_row(row.view())
@@ -374,6 +393,8 @@ class Engine:
             return
         self._cycle_count += 1
         self._end_cycle_if_done()
+        if time.perf_counter() - self._events_at > EVENTS_EVERY:
+            self.flush_events()
 
     def _begin_cycle(self, now: float) -> None:
         started = time.perf_counter()
@@ -397,11 +418,10 @@ class Engine:
     def _poll_row(self, row: WatchRow) -> None:
         session = self.session
         assert session is not None
-        var = row.var
         outbox = self.outbox
         outbox.waiting_since = time.perf_counter()
         try:
-            reply = session.exchange(get_for(var.kind, var.index), poll=True)
+            reply = session.exchange(row.request, poll=True)
         except ConnectFailed:
             raise
         except TransportError as exc:

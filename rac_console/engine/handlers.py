@@ -49,7 +49,8 @@ def handle(engine: Engine, seq: int, what: str | Command) -> None:
     except Exception as exc:  # a bug must not end the session at the cell
         feedback = [Message(f"internal error: {exc!r}", "error")]
     engine.publish_status(force=True)
-    engine.outbox.put(Result(seq, tuple(feedback), line, command))
+    engine.emit(Result(seq, tuple(feedback), line, command))
+    engine.flush_events()
 
 
 def run(engine: Engine, command: Command, line: str | None) -> list[Feedback]:

@@ -56,6 +56,17 @@ class Outbox:
         if woke:
             self._notify()
 
+    def put_many(self, events: list[Event]) -> None:
+        """Several events at once, in order: one lock for a batch of frames."""
+        with self._lock:
+            batch = self._batch.events
+            batch.extend(events)
+            if len(batch) > MAX_EVENTS:
+                self._shed_frames()
+            woke = self._wake()
+        if woke:
+            self._notify()
+
     def put_row(self, view: RowView) -> None:
         with self._lock:
             self._batch.rows[view.var] = view

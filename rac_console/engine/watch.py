@@ -7,9 +7,11 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass, field
+from functools import cached_property
 
 from ..commands.language import VarRef
 from ..protocol import Variant
+from ..protocol.request import Request, get_for
 from .events import OK, WAITING, RowView
 
 
@@ -23,6 +25,11 @@ class WatchRow:
     changed_at: float | None = None
     polled_at: float | None = None
     every: float | None = None  # this row's own poll period; None: the console's interval
+
+    @cached_property
+    def request(self) -> Request:
+        """The GET this row is polled with, made once."""
+        return get_for(self.var.kind, self.var.index)
 
     def due(self, now: float, interval: float) -> bool:
         """True when this row should be polled in the cycle starting ``now``."""

@@ -66,6 +66,7 @@ class Repl:
         self.rows: dict[VarRef, RowView] = {}
         self._waiting: dict[int, asyncio.Future[Result]] = {}
         self._wake = asyncio.Event()
+        self._closing = False
         self.prompt: PromptSession[str] = PromptSession(
             message=self.prompt_message,
             history=SharedHistory(history),
@@ -133,9 +134,12 @@ class Repl:
                 self._echo(event)
 
     async def _drain_forever(self) -> None:
-        while True:
+        # asyncio.timeout, not wait_for: 3.11's wait_for can swallow the cancellation that
+        # ends this task when the event is set at the same moment (the REPL then hung).
+        while not self._closing:
             with contextlib.suppress(TimeoutError):
-                await asyncio.wait_for(self._wake.wait(), DRAIN_SECONDS)
+                async with asyncio.timeout(DRAIN_SECONDS):
+                    await self._wake.wait()
             self._wake.clear()
             self.drain()
 
@@ -181,6 +185,7 @@ class Repl:
                 if not await self.handle(line):
                     break
         finally:
+            self._closing = True
             drainer.cancel()
             await asyncio.gather(drainer, return_exceptions=True)
             await asyncio.to_thread(self.engine.stop)
@@ -282,7 +287,8 @@ class Repl:
             ):
                 while not stop.is_set():
                     with contextlib.suppress(TimeoutError):
-                        await asyncio.wait_for(stop.wait(), LIVE_REFRESH_SECONDS)
+                        async with asyncio.timeout(LIVE_REFRESH_SECONDS):
+                            await stop.wait()
                     self.drain()
                     live.update(self._watch_table(command), refresh=True)
         finally:
