@@ -78,7 +78,7 @@ class Engine:
         self.recorder = FrameRecorder(record, self.alert) if record else None
         self._lost = False
         self._early_drop = False
-        self._cycle: deque[VarRef] = deque()
+        self._cycle: deque[WatchRow] = deque()  # rows still to poll in this cycle
         self._cycle_started = 0.0  # perf_counter()
         self._cycle_count = 0
         self._last_cycle: tuple[float, int] | None = None  # start, polls: for polls/s
@@ -362,8 +362,8 @@ class Engine:
             if not self._cycle:  # every row has its own, longer period
                 self._next_cycle_at = now + self.period
                 return
-        row = self.watch.rows.get(self._cycle[0])
-        if row is None:  # unwatched during the cycle
+        row = self._cycle[0]
+        if not row.watched:  # unwatched during the cycle
             self._cycle.popleft()
             self._end_cycle_if_done()
             return
@@ -403,7 +403,7 @@ class Engine:
             if last_count and started > last_start:
                 self.polls_per_second = last_count / (started - last_start)
         interval = self.interval
-        self._cycle.extend(var for var, row in self.watch.rows.items() if row.due(now, interval))
+        self._cycle.extend(row for row in self.watch.rows.values() if row.due(now, interval))
         self._cycle_started, self._cycle_count = started, 0
         self._next_cycle_at = now + self.period
 

@@ -25,6 +25,7 @@ class WatchRow:
     changed_at: float | None = None
     polled_at: float | None = None
     every: float | None = None  # this row's own poll period; None: the console's interval
+    watched: bool = True  # False once unwatched (a poll cycle may still hold the row)
 
     @cached_property
     def request(self) -> Request:
@@ -39,8 +40,9 @@ class WatchRow:
 
     def update(self, variant: Variant, now: float) -> bool:
         """A good value came; True when what a table shows changed."""
-        shown_changed = self.status != OK or variant != self.variant
-        if self.variant is None or variant != self.variant:
+        same = variant is self.variant or variant == self.variant  # a repeated reply: the same
+        shown_changed = self.status != OK or not same
+        if not same:
             self.changed_at = now
         self.variant = variant
         self.status, self.stale, self.polled_at = OK, False, now
@@ -97,7 +99,7 @@ class WatchList:
         """Remove these rows (none given: all); the ones that were watched."""
         targets = list(self.rows) if not variables else [v for v in variables if v in self.rows]
         for var in targets:
-            del self.rows[var]
+            self.rows.pop(var).watched = False
         return targets
 
     def mark_all(self, status: str) -> list[WatchRow]:

@@ -145,9 +145,11 @@ class Session:
             wait = self._settle - (time.perf_counter() - self._replied_at)
             if wait > 0:
                 self.has_unread(wait)
-        if self._peer_spoke(sock) and self._discard_waiting(sock):
-            sock = self._connected()
         machine = self._machine
+        # The stray check (the usual case, inlined: nothing held, one poll that says no).
+        quiet = self._poll is not None and not machine.pending and not self._poll.poll(0)
+        if not quiet and self._peer_spoke(sock) and self._discard_waiting(sock):
+            sock = self._connected()
         data = machine.begin(request)
         sent_at = self._sent_at = time.perf_counter()
         try:
@@ -195,11 +197,21 @@ class Session:
             verdict = machine.feed(chunk)
             if verdict.answer is None and not verdict.drop:
                 continue
-            return self._conclude(verdict, now - sent_at, poll, chunk)
+            return self._conclude(verdict, now - sent_at, poll, now)
 
-    def _conclude(self, verdict: Verdict, rtt: float, poll: bool, chunk: bytes) -> Reply:
+    def _conclude(self, verdict: Verdict, rtt: float, poll: bool, now: float) -> Reply:
         observers = bool(self._frame_observers)
         answer = verdict.answer
+        response = verdict.response
+        if not verdict.drop and answer is not None and response is not None:
+            # The usual reply: one good line, nothing else (a drop is set for anything else).
+            if observers:
+                self._publish(
+                    Frame(time.time(), "rx", answer + b"\r", rtt, poll=poll, response=response)
+                )
+            self._replied_at = now
+            self.last_rtt = rtt
+            return Reply(answer, response, rtt)
         if answer is not None and observers:
             self._publish(
                 Frame(
