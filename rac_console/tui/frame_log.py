@@ -2,12 +2,10 @@
 
 from __future__ import annotations
 
-import contextlib
 import time
 from collections import deque
 
 from rich.cells import cell_len
-from textual import work
 from textual.widgets import Log
 
 from ..engine import Alert, Note
@@ -75,16 +73,21 @@ class FrameLog(Log):
                 self.scroll_end(animate=False, immediate=True, x_axis=False)
         return len(events)
 
-    @work(thread=True, exit_on_error=False)
-    def _update_size(self, updates: int, lines: list[str]) -> None:
-        """Log's background width update, made safe for shutdown: a flush just before the
-        console closes may run this after the widget left the app or the app stopped
-        (a RuntimeError, which in Log's own version ends the app with a traceback)."""
+    def _update_size(self, updates: int, lines: list[str]) -> None:  # type: ignore[override]
+        """Log's width update, done here and now: Log starts a thread per write for it
+        (cell widths of every line). Frame lines are ASCII but for the arrows, so their
+        length is their width; only another line is measured. Also safe at shutdown."""
         if not lines:
             return
-        with contextlib.suppress(RuntimeError):
-            width = max(cell_len(self._process_line(line)) for line in lines)
-            self.app.call_from_thread(self._update_maximum_width, updates, width)
+        width = max(
+            len(line) if line.isascii() or _NARROW.issuperset(line) else cell_len(line)
+            for line in lines
+        )
+        self._update_maximum_width(updates, width)
+
+
+#: Characters of a frame line that are one cell wide though not ASCII.
+_NARROW = frozenset("→←↵─ ·") | frozenset(chr(c) for c in range(32, 127))
 
 
 def _line(event: Frame | tuple[float, str]) -> str:
