@@ -93,7 +93,7 @@ async def test_argument_hint_stays_legible_beside_a_history_suggestion(tmp_path:
     driver.history.append("put P 10 1 2 3 4 5 6 -1")
 
     def toolbar_text() -> str:
-        return "".join(text for _, text, *_ in driver.repl._toolbar())
+        return "".join(text for _, text, *_ in driver.repl.toolbar())
 
     async def steps(d: Driver) -> None:
         d.type("put P 10 ")

@@ -75,7 +75,7 @@ class Repl:
             complete_while_typing=False,
             lexer=RacLexer(),
             input_processors=[HintProcessor()],
-            bottom_toolbar=self._toolbar,
+            bottom_toolbar=self.toolbar,
             style=STYLE,
             input=input,
             output=output,
@@ -97,7 +97,7 @@ class Repl:
             return FormattedText([("class:prompt.sim", "sim"), ("", "> ")])
         return FormattedText([("class:prompt.live", f"{status.host}:{status.port}"), ("", "> ")])
 
-    def _toolbar(self) -> FormattedText:
+    def toolbar(self) -> FormattedText:
         status = self.status
         target = status.target if status is not None else "starting"
         rtt = status.rtt if status is not None else None
