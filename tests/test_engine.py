@@ -191,3 +191,30 @@ def test_a_typed_command_waits_for_at_most_the_poll_in_flight() -> None:
     finally:
         engine.stop()
         server.close()
+
+
+def test_stop_ends_a_latency_run_and_skips_queued_lines() -> None:
+    """Quitting must not wait for a long latency run or for lines still queued behind a
+    silent controller: when stop() returns, the engine has closed its target."""
+    engine = Engine(None, interval=0.05, timeout=1.0)
+    engine.start()
+    front = Front(engine)
+    seq = engine.submit("latency 100000 I 1")
+    front.until(lambda: len(front.sent()) > 100, "the latency run to be under way")
+    assert seq not in front.results
+    engine.stop()
+    front.drain()
+    assert front.status is not None and not front.status.has_session
+
+    silent = RecordingServer(lambda line: None)
+    engine = Engine("127.0.0.1", silent.port, timeout=2.0)
+    engine.start()
+    try:
+        for n in range(5):
+            engine.submit(f"get I {n}")
+        engine.stop()
+        front = Front(engine)
+        front.drain()
+        assert front.status is not None and not front.status.has_session
+    finally:
+        silent.close()

@@ -116,8 +116,10 @@ def test_the_client_never_takes_a_reply_for_another_request(mode: str) -> None:
     wrong, failures, requests, connections = asyncio.run(scenario())
     assert wrong == []
     assert len(failures) < 2 * COUNT  # the session kept working
-    if mode == "extra":  # the request is answered; the line after it resets the connection
-        assert failures == [] and connections > 1
+    if mode == "extra":
+        # An extra line in the reply's own write: two lines for one request, neither is
+        # taken (a bad reply); the connection is reset and the next request is answered.
+        assert set(failures) <= {"BadReply"} and connections > 1
     elif mode in ("delay+jitter", "split"):
         assert failures == [] and connections == 1
     else:

@@ -25,7 +25,7 @@ import pytest
 
 from rac_console.cli.main import build_parser, main
 from rac_console.protocol import kind_of, parse_response
-from rac_console.session import Frame, Session, blocking
+from rac_console.session import BadReply, Frame, Session, blocking
 from rac_console.sim.faults import EXTRA_LINE, FaultPlan, FaultSettings
 from rac_console.sim.server import SimulatorServer
 
@@ -180,13 +180,17 @@ def test_many_gets_with_a_stray_after_every_reply_never_return_the_stray() -> No
         session = Session(HOST, peer.port, timeout=DEADLINE)
         frames = frames_of(session)
         wrong: list[tuple[int, object]] = []
-        waiting = 0
+        waiting = refused = 0
         for n in range(1, count + 1):
             index = n % 100
-            reply = session.get(INT, index)
-            value = reply.response.variant.value if reply.response.variant else None
-            if not reply.response.ok or value != value_of(index):
-                wrong.append((n, value))
+            try:
+                reply = session.get(INT, index)
+            except BadReply:  # the stray came in the reply's read: neither line is taken
+                refused += 1
+            else:
+                value = reply.response.variant.value if reply.response.variant else None
+                if not reply.response.ok or value != value_of(index):
+                    wrong.append((n, value))
             if n % 2 == 0:
                 peer.release()
             peer.wait_done(n)  # the stray is sent, or came with the reply
@@ -196,6 +200,7 @@ def test_many_gets_with_a_stray_after_every_reply_never_return_the_stray() -> No
         session.close()
         unsolicited = sum(f.unsolicited for f in frames)
     assert wrong == [], f"{len(wrong)} answers were not the reply to their request: {wrong[:5]}"
+    assert refused < count // 2  # most strays come on their own, after the reply was taken
     assert waiting >= count // 2  # at least every gated stray waited when a get was made
     assert unsolicited >= count - 1  # every stray but the last is logged
     assert peer.connections >= count
@@ -539,7 +544,10 @@ def test_a_peer_that_sends_late_strays_is_given_time_to_finish() -> None:
     wrong = []
     try:
         for n in range(200):
-            reply = session.get(INT, n % 100)
+            try:
+                reply = session.get(INT, n % 100)
+            except BadReply:  # a stray in the reply's own read: neither line taken
+                continue
             assert reply.response.variant is not None
             if reply.response.variant.value != n % 100:
                 wrong.append(n)

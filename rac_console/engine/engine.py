@@ -91,6 +91,7 @@ class Engine:
         self._seq = itertools.count(1)
         self._connect_first = True
         self._started = threading.Event()
+        self._stopping = threading.Event()
         self._thread = threading.Thread(target=self._run, name="rac-engine", daemon=True)
 
     # ------------------------------------------------------- any thread
@@ -119,11 +120,22 @@ class Engine:
         """End the thread: a request in flight is cut short, the target closed."""
         if not self._thread.is_alive():
             return
+        self._stopping.set()  # lines still queued are not run; a latency run ends
         self._inbox.put(None)  # stop
         session = self.session
         if session is not None:
             session.interrupt()
         self._thread.join(timeout)
+
+    @property
+    def stopping(self) -> bool:
+        """True once :meth:`stop` was called: long work (a latency run) ends early."""
+        return self._stopping.is_set()
+
+    def connect_failed(self) -> None:
+        """A typed command found the controller unreachable: that was no early drop of a
+        connection (none was made), so the poller marks none."""
+        self._early_drop = False
 
     # ---------------------------------------------------- engine thread
 
@@ -136,7 +148,7 @@ class Engine:
             self._started.set()
             if self._connect_first:
                 self._connect_at_start()
-            while True:
+            while not self._stopping.is_set():
                 wait = self._wait_time()
                 if wait != 0:
                     self.flush_events()
@@ -228,6 +240,8 @@ class Engine:
         if self.recorder is not None:
             self.recorder(frame)
         self._events.append(frame)
+        if time.perf_counter() - self._events_at > EVENTS_EVERY:
+            self.flush_events()  # while polling, and during a long command (latency)
 
     def note(self, text: str) -> None:
         self.emit(Note(text, time.time()))
@@ -393,8 +407,6 @@ class Engine:
             return
         self._cycle_count += 1
         self._end_cycle_if_done()
-        if time.perf_counter() - self._events_at > EVENTS_EVERY:
-            self.flush_events()
 
     def _begin_cycle(self, now: float) -> None:
         started = time.perf_counter()

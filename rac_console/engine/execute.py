@@ -7,6 +7,7 @@ engine behind the console and the REPL.
 from __future__ import annotations
 
 import time
+from collections.abc import Callable
 
 from ..commands.language import Exchange, Get, Put, VarRef
 from ..commands.latency import LatencySummary, summarize
@@ -75,8 +76,15 @@ def execute(
     )
 
 
-def measure_latency(session: Session, var: VarRef, count: int, interval: float) -> LatencySummary:
-    """GET one variable ``count`` times, ``interval`` seconds apart (0: back to back).
+def measure_latency(
+    session: Session,
+    var: VarRef,
+    count: int,
+    interval: float,
+    cancelled: Callable[[], bool] = lambda: False,
+) -> LatencySummary:
+    """GET one variable ``count`` times, ``interval`` seconds apart (0: back to back),
+    or until ``cancelled()`` says to stop.
 
     Raises ConnectFailed when the controller cannot be reached at all.
     """
@@ -85,6 +93,8 @@ def measure_latency(session: Session, var: VarRef, count: int, interval: float) 
     errors = 0
     started = time.perf_counter()
     for n in range(count):
+        if cancelled():
+            break
         if n and interval:
             time.sleep(interval)
         try:

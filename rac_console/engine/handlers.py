@@ -66,6 +66,8 @@ def run(engine: Engine, command: Command, line: str | None) -> list[Feedback]:
                 outcome = execute(session, command, read_only=engine.read_only, line=line)
             finally:
                 engine.outbox.waiting_since = None
+            if isinstance(outcome.failure, ConnectFailed):
+                engine.connect_failed()
             if isinstance(outcome.failure, TransportError):
                 engine.mark_failure(outcome.failure)
             return [outcome]
@@ -75,8 +77,11 @@ def run(engine: Engine, command: Command, line: str | None) -> list[Feedback]:
             if engine.session is None:
                 return [Message(NOT_CONNECTED, "error")]
             try:
-                summary = measure_latency(engine.session, var, count, interval)
+                summary = measure_latency(
+                    engine.session, var, count, interval, cancelled=lambda: engine.stopping
+                )
             except (ConnectFailed, Disconnected) as exc:
+                engine.connect_failed()
                 return [Message(str(exc), "error")]
             return [Message(summary.text(f"GET {var}"))]
         case Watch(vars=variables, label=label, every=every):

@@ -26,7 +26,8 @@ def open_private(path: str, mode: str = "a") -> TextIO:
 
 
 class FrameRecorder:
-    """A frame observer appending JSON lines: ``t``, ``dir``, ``text``, ``rtt_ms``.
+    """A frame observer appending JSON lines: ``t``, ``dir``, ``text``, ``rtt_ms``
+    (``partial``, ``unsolicited``, and ``refused`` with why for a reply not taken).
 
     A write that fails (a full disk, a quota, a file-size limit) stops the recording
     for good: the failure is kept in :attr:`failure` and told once to ``on_failure``;
@@ -62,6 +63,8 @@ class FrameRecorder:
             record["partial"] = True
         if frame.unsolicited:
             record["unsolicited"] = True
+        if frame.problem is not None:
+            record["refused"] = frame.problem  # a reply the session would not take
         line = (json.dumps(record) + "\n").encode("ascii")
         try:
             written = os.write(self._fd, line)

@@ -83,6 +83,7 @@ class Session:
         self._replied_at = 0.0
         self._settle = 0.0  # the peer has sent lines nobody asked for: settle this long first
         self._kernel_timeout = False
+        self._interrupted = False  # set by interrupt(): no new connection is opened
 
     # ------------------------------------------------------------ observers
 
@@ -312,6 +313,8 @@ class Session:
         sock = self._sock
         if sock is not None:
             return sock
+        if self._interrupted:
+            raise Disconnected("the session was stopped")
         self._set_state("connecting")
         try:
             sock = socket.create_connection((self.host, self.port), self.connect_timeout)
@@ -345,7 +348,9 @@ class Session:
 
     def interrupt(self) -> None:
         """Wake a request blocked on this session from another thread (it then fails
-        with Disconnected); the owning thread closes the socket."""
+        with Disconnected) and refuse new connections from now on; the owning thread
+        closes the socket."""
+        self._interrupted = True
         sock = self._sock
         if sock is not None:
             with contextlib.suppress(OSError):

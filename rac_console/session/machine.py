@@ -23,6 +23,8 @@ JUDGED_KEPT = 512
 
 Judgement = tuple[Response | None, str | None]
 
+TWO_LINES = "more than one line came for one request: which one answered cannot be told"
+
 
 @dataclass(slots=True)
 class Verdict:
@@ -131,6 +133,10 @@ class SessionMachine:
             strays.append(self._decoder.pending)
             verdict.drop = True
         verdict.strays = tuple(strays)
+        if verdict.answer is not None and verdict.problem is None and strays:
+            # More than one line for one request: with no request ids, either may be the
+            # answer (a late stray, then the reply), so neither is taken.
+            verdict.problem = TWO_LINES
         return verdict
 
     def _judge(self, request: Request, line: bytes) -> Judgement:
