@@ -6,6 +6,7 @@ prompt-toolkit's pipe input against the simulator or a hostile server written he
 from __future__ import annotations
 
 import asyncio
+import contextlib
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -109,3 +110,59 @@ async def test_argument_hint_stays_legible_beside_a_history_suggestion(tmp_path:
         assert "needs:" not in toolbar_text()
 
     await driver.run(steps)
+
+
+@pytest.mark.slow
+def test_ctrl_c_while_a_command_waits_cancels_it_and_keeps_the_repl() -> None:
+    """At the cell, Ctrl-C gives up on a slow request; it must not end the session."""
+    pty = pytest.importorskip("pty")  # a real terminal, so Ctrl-C is a signal
+    import os
+    import select
+    import sys
+    import time
+
+    silent = RecordingServer(lambda line: None)
+    pid, fd = pty.fork()
+    if pid == 0:  # the child: the REPL on a terminal, talking to a silent controller
+        os.execvp(
+            sys.executable,
+            [
+                sys.executable,
+                "-m",
+                "rac_console",
+                "repl",
+                "-H",
+                "127.0.0.1",
+                "-p",
+                str(silent.port),
+                "--timeout",
+                "30",
+            ],
+        )
+    output = b""
+
+    def read_until(text: bytes, timeout: float = 15) -> None:
+        nonlocal output
+        deadline = time.monotonic() + timeout
+        while text not in output:
+            assert time.monotonic() < deadline, f"no {text!r} in {output[-400:]!r}"
+            if select.select([fd], [], [], 0.1)[0]:
+                output += os.read(fd, 65536)
+
+    try:
+        read_until(b"127.0.0.1:")  # the prompt names the controller
+        os.write(fd, b"get I 1\r")
+        assert silent.wait_received(len(b"GET:RC8:1:I:\r"), timeout=15)  # the GET went out
+        os.write(fd, b"\x03")  # Ctrl-C while the GET waits (a 30 s timeout)
+        read_until(b"cancelled")
+        os.write(fd, b"help\r")
+        read_until(b"leave the console")  # the REPL is still there and answers
+        assert os.waitpid(pid, os.WNOHANG) == (0, 0)
+        os.write(fd, b"quit\r")
+    finally:
+        silent.close()
+        with contextlib.suppress(OSError):
+            os.kill(pid, 9)
+        with contextlib.suppress(ChildProcessError):
+            os.waitpid(pid, 0)
+        os.close(fd)

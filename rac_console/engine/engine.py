@@ -92,6 +92,7 @@ class Engine:
         self._connect_first = True
         self._started = threading.Event()
         self._stopping = threading.Event()
+        self._cancelled = threading.Event()  # the command running now was cancelled
         self._thread = threading.Thread(target=self._run, name="rac-engine", daemon=True)
 
     # ------------------------------------------------------- any thread
@@ -127,10 +128,22 @@ class Engine:
             session.interrupt()
         self._thread.join(timeout)
 
+    def cancel(self) -> None:
+        """Cut short the command running now (Ctrl-C at the REPL): a request in flight
+        fails at once, a latency run ends; polling and later lines go on."""
+        self._cancelled.set()
+        session = self.session
+        if session is not None:
+            session.cancel()
+
     @property
     def stopping(self) -> bool:
-        """True once :meth:`stop` was called: long work (a latency run) ends early."""
-        return self._stopping.is_set()
+        """True once :meth:`stop` or :meth:`cancel` was called: a latency run ends early."""
+        return self._stopping.is_set() or self._cancelled.is_set()
+
+    def begin_command(self) -> None:
+        """A new line starts: a cancel meant for the one before is forgotten."""
+        self._cancelled.clear()
 
     def connect_failed(self) -> None:
         """A typed command found the controller unreachable: that was no early drop of a

@@ -41,6 +41,7 @@ def handle(engine: Engine, seq: int, what: str | Command) -> None:
     go to the outbox (so a front end showing the result knows the state it left)."""
     command: Command | None = None
     line = what if isinstance(what, str) else None
+    engine.begin_command()
     try:
         command = parse_command(what) if isinstance(what, str) else what
         feedback = run(engine, command, line) if command is not None else []

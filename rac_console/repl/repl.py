@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
+import signal
 import time
 
 from prompt_toolkit import PromptSession
@@ -157,7 +158,15 @@ class Repl:
         seq = engine.submit(line) if isinstance(line, str) else engine.submit_command(line)
         self._waiting[seq] = future
         self._wake.set()
-        return await future
+        # Ctrl-C while a command runs cancels that command, not the REPL (where the loop
+        # can take signals: not on Windows, where Ctrl-C keeps its default meaning).
+        with contextlib.suppress(NotImplementedError, RuntimeError, ValueError):
+            loop.add_signal_handler(signal.SIGINT, engine.cancel)
+        try:
+            return await future
+        finally:
+            with contextlib.suppress(NotImplementedError, RuntimeError, ValueError):
+                loop.remove_signal_handler(signal.SIGINT)
 
     # -------------------------------------------------------------- loop
 

@@ -84,6 +84,7 @@ class Session:
         self._settle = 0.0  # the peer has sent lines nobody asked for: settle this long first
         self._kernel_timeout = False
         self._interrupted = False  # set by interrupt(): no new connection is opened
+        self._cancel_requested = False  # set by cancel(): the request in flight was cut
 
     # ------------------------------------------------------------ observers
 
@@ -146,6 +147,7 @@ class Session:
             wait = self._settle - (time.perf_counter() - self._replied_at)
             if wait > 0:
                 self.has_unread(wait)
+        self._cancel_requested = False
         machine = self._machine
         # The stray check (the usual case, inlined: nothing held, one poll that says no).
         quiet = self._poll is not None and not machine.pending and not self._poll.poll(0)
@@ -253,6 +255,8 @@ class Session:
         return RequestTimeout(f"no reply within {self.timeout:g} s")
 
     def _lost(self, message: str = "the controller closed the connection") -> Disconnected:
+        if self._cancel_requested:
+            message = "cancelled"
         fragment = self._machine.pending
         if fragment:
             self._publish(Frame(time.time(), "rx", fragment))
@@ -345,6 +349,15 @@ class Session:
             with contextlib.suppress(OSError):
                 sock.close()
         self._set_state("closed")
+
+    def cancel(self) -> None:
+        """Cut short the request in flight from another thread (it fails with
+        Disconnected, the connection is dropped); later requests connect again."""
+        self._cancel_requested = True
+        sock = self._sock
+        if sock is not None:
+            with contextlib.suppress(OSError):
+                sock.shutdown(socket.SHUT_RDWR)
 
     def interrupt(self) -> None:
         """Wake a request blocked on this session from another thread (it then fails
