@@ -253,6 +253,9 @@ class Engine:
         if self.recorder is not None:
             self.recorder(frame)
         self._events.append(frame)
+        # The request in flight, for the status line's "waiting for a reply": set as a
+        # request leaves, cleared by its reply or by the connection's end.
+        self.outbox.waiting_since = time.perf_counter() if frame.direction == "tx" else None
         if time.perf_counter() - self._events_at > EVENTS_EVERY:
             self.flush_events()  # while polling, and during a long command (latency)
 
@@ -276,6 +279,7 @@ class Engine:
     def _on_state(self, state: State) -> None:
         self.connection = state
         if state != "connected":
+            self.outbox.waiting_since = None
             self._forget_figures()
         if state == "closed" and self.backoff.closed():
             self._early_drop = True  # the poller waits before its next request
@@ -443,8 +447,6 @@ class Engine:
     def _poll_row(self, row: WatchRow) -> None:
         session = self.session
         assert session is not None
-        outbox = self.outbox
-        outbox.waiting_since = time.perf_counter()
         try:
             reply = session.exchange(row.request, poll=True)
         except ConnectFailed:
@@ -455,8 +457,6 @@ class Engine:
             if row.fail(status or "DISCONNECTED", time.monotonic()):
                 self.show_row(row)
             return
-        finally:
-            outbox.waiting_since = None
         self.backoff.good()
         response = reply.response
         if response.ok and response.variant is not None:

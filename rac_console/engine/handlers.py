@@ -6,8 +6,6 @@ parser; its behaviour is here. Every problem becomes feedback, never an exceptio
 
 from __future__ import annotations
 
-import time
-
 from ..commands.language import (
     Command,
     Connect,
@@ -62,11 +60,7 @@ def run(engine: Engine, command: Command, line: str | None) -> list[Feedback]:
                 return [Message(NOT_CONNECTED, "error")]
             if isinstance(command, Get | Put):
                 engine.see((command.var,))
-            engine.outbox.waiting_since = time.perf_counter()
-            try:
-                outcome = execute(session, command, read_only=engine.read_only, line=line)
-            finally:
-                engine.outbox.waiting_since = None
+            outcome = execute(session, command, read_only=engine.read_only, line=line)
             if isinstance(outcome.failure, ConnectFailed):
                 engine.connect_failed()
             if isinstance(outcome.failure, TransportError):

@@ -30,6 +30,12 @@ class Batch:
     status: Status | None = None
     frames_dropped: int = 0
 
+    def apply_rows(self, rows: dict[VarRef, RowView]) -> None:
+        """Bring a front end's copy of the watched rows up to date."""
+        for var in self.removed:
+            rows.pop(var, None)
+        rows.update(self.rows)
+
 
 class Outbox:
     """Thread-safe: ``put*`` from the engine's thread, :meth:`drain` from a front end's.
@@ -43,7 +49,8 @@ class Outbox:
         self._lock = threading.Lock()
         self._batch = Batch()
         self._empty = True
-        #: ``time.perf_counter()`` when the request in flight left; one writer (the engine).
+        #: ``time.perf_counter()`` when the request in flight left, None when none is; one
+        #: writer (the engine's frame observer), read by the status line.
         self.waiting_since: float | None = None
 
     def put(self, event: Event) -> None:

@@ -84,9 +84,9 @@ class Repl:
 
     # ------------------------------------------------------------- prompt
 
-    def _seen(self) -> set[tuple[str, int]]:
-        seen = set(self.status.seen) if self.status is not None else set()
-        return seen | {(v.kind.code, v.index) for v in self.rows}
+    def _seen(self) -> frozenset[tuple[str, int]]:
+        """Indices used or watched (the engine counts watched ones as used)."""
+        return self.status.seen if self.status is not None else frozenset()
 
     def prompt_message(self) -> FormattedText:
         status = self.status
@@ -121,9 +121,7 @@ class Repl:
         batch: Batch = self.engine.outbox.drain()
         if batch.status is not None:
             self.status = batch.status
-        for var in batch.removed:
-            self.rows.pop(var, None)
-        self.rows.update(batch.rows)
+        batch.apply_rows(self.rows)
         for event in batch.events:
             if isinstance(event, Result):
                 waiter = self._waiting.pop(event.seq, None)

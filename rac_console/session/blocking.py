@@ -79,7 +79,6 @@ class Session:
         self._state: State = "closed"
         self._sock: socket.socket | None = None
         self._poll: Any = None
-        self._sent_at: float | None = None
         self._replied_at = 0.0
         self._settle = 0.0  # the peer has sent lines nobody asked for: settle this long first
         self._kernel_timeout = False
@@ -95,11 +94,6 @@ class Session:
     @property
     def state(self) -> State:
         return self._state
-
-    @property
-    def waiting_since(self) -> float | None:
-        """When (``time.perf_counter()``) the request in flight was sent; None when none is."""
-        return self._sent_at
 
     def add_frame_observer(self, observer: FrameObserver) -> None:
         self._frame_observers.append(observer)
@@ -154,23 +148,19 @@ class Session:
         if not quiet and self._peer_spoke(sock) and self._discard_waiting(sock):
             sock = self._connected()
         data = machine.begin(request)
-        sent_at = self._sent_at = time.perf_counter()
+        sent_at = time.perf_counter()
         try:
-            try:
-                sock.sendall(data)
-            except (TimeoutError, BlockingIOError):  # the peer has not read for a timeout
-                raise self._timed_out() from None
-            except ConnectionError:  # reset or broken pipe: the peer closed it
-                raise self._lost() from None
-            except OSError as exc:
-                self._drop()
-                raise Disconnected(f"the connection failed while sending: {_reason(exc)}") from None
-            observers = self._frame_observers
-            if observers:
-                self._publish(Frame(time.time(), "tx", data, poll=poll))
-            return self._await_reply(sock, sent_at, poll)
-        finally:
-            self._sent_at = None
+            sock.sendall(data)
+        except (TimeoutError, BlockingIOError):  # the peer has not read for a timeout
+            raise self._timed_out() from None
+        except ConnectionError:  # reset or broken pipe: the peer closed it
+            raise self._lost() from None
+        except OSError as exc:
+            self._drop()
+            raise Disconnected(f"the connection failed while sending: {_reason(exc)}") from None
+        if self._frame_observers:
+            self._publish(Frame(time.time(), "tx", data, poll=poll))
+        return self._await_reply(sock, sent_at, poll)
 
     def _await_reply(self, sock: socket.socket, sent_at: float, poll: bool) -> Reply:
         machine = self._machine
@@ -364,10 +354,7 @@ class Session:
         with Disconnected) and refuse new connections from now on; the owning thread
         closes the socket."""
         self._interrupted = True
-        sock = self._sock
-        if sock is not None:
-            with contextlib.suppress(OSError):
-                sock.shutdown(socket.SHUT_RDWR)
+        self.cancel()
 
     def close(self) -> None:
         self._drop()

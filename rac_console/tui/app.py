@@ -138,9 +138,9 @@ class RacConsoleApp(App[int]):
             )
         )
 
-    def _completion_indices(self) -> set[tuple[str, int]]:
-        seen = set(self.status.seen) if self.status is not None else set()
-        return seen | {(v.kind.code, v.index) for v in self.rows}
+    def _completion_indices(self) -> frozenset[tuple[str, int]]:
+        """Indices used or watched (the engine counts watched ones as used)."""
+        return self.status.seen if self.status is not None else frozenset()
 
     # -------------------------------------------------------------- refresh
 
@@ -151,11 +151,9 @@ class RacConsoleApp(App[int]):
             if self.status is None or batch.status.target != self.status.target:
                 self.sub_title = terminal_safe(batch.status.target)
             self.status = batch.status
-        for var in batch.removed:
-            self.rows.pop(var, None)
+        batch.apply_rows(self.rows)
         self._removed |= batch.removed
         self._removed -= batch.rows.keys()
-        self.rows.update(batch.rows)
         for event in batch.events:
             if isinstance(event, Result):
                 self._show_result(event)
