@@ -134,9 +134,7 @@ def latency(args: argparse.Namespace) -> ExitStatus:
         command = parse_command(f"latency {max(1, int(args.count))} {args.var}")
         assert isinstance(command, Latency)
         with open_session(args, output.local_failure) as session:
-            summary = measure_latency(
-                session, command.var, command.count, args.latency_interval
-            )
+            summary = measure_latency(session, command.var, command.count, args.latency_interval)
     except InputError as exc:
         print_error(output.err, str(exc))
         return ExitStatus.REFUSED

@@ -18,6 +18,7 @@ Thread rules (the only ones; nothing else is shared):
 from .engine import DEFAULT_INTERVAL, SIMULATOR_NOTICE, Engine
 from .events import (
     Alert,
+    Cycle,
     Feedback,
     Message,
     Note,
@@ -33,6 +34,7 @@ __all__ = [
     "SIMULATOR_NOTICE",
     "Alert",
     "Batch",
+    "Cycle",
     "Engine",
     "Feedback",
     "Message",

@@ -14,7 +14,7 @@ import time
 from collections import deque
 
 from ..commands.language import Command, VarRef
-from ..protocol import describe_hresult, hresult_name
+from ..protocol import Variant, describe_hresult, hresult_name
 from ..session import (
     BadReply,
     ConnectFailed,
@@ -27,7 +27,7 @@ from ..session import (
 )
 from ..sim.thread import SimulatorThread
 from .backoff import Backoff
-from .events import Alert, Event, Message, Note, Result, Status
+from .events import Alert, Cycle, Event, Message, Note, Result, Status
 from .outbox import Outbox
 from .recorder import FrameRecorder
 from .watch import WatchList, WatchRow
@@ -55,8 +55,11 @@ class Engine:
         record: str | None = None,
         interval: float = DEFAULT_INTERVAL,
         outbox: Outbox | None = None,
+        cycles: bool = False,
     ) -> None:
-        """Raises InputError when ``record`` cannot be opened (before any thread starts)."""
+        """Raises InputError when ``record`` cannot be opened (before any thread starts).
+
+        With ``cycles``, a :class:`Cycle` event follows each poll cycle (for trends)."""
         self.outbox = outbox if outbox is not None else Outbox()
         self._target = (host, port)
         self.timeout = timeout
@@ -81,6 +84,8 @@ class Engine:
         self._cycle: deque[WatchRow] = deque()  # rows still to poll in this cycle
         self._cycle_started = 0.0  # perf_counter()
         self._cycle_count = 0
+        self.publish_cycles = cycles
+        self._samples: list[tuple[VarRef, Variant | None]] = []  # read in this cycle
         self._last_cycle: tuple[float, int] | None = None  # start, polls: for polls/s
         self._next_cycle_at = 0.0  # monotonic()
         self._status_at = 0.0
@@ -434,6 +439,7 @@ class Engine:
         interval = self.interval
         self._cycle.extend(row for row in self.watch.rows.values() if row.due(now, interval))
         self._cycle_started, self._cycle_count = started, 0
+        self._samples = []
         self._next_cycle_at = now + self.period
 
     def _end_cycle_if_done(self) -> None:
@@ -442,6 +448,9 @@ class Engine:
         if self._cycle_count:
             self.cycle_seconds = time.perf_counter() - self._cycle_started
             self._last_cycle = (self._cycle_started, self._cycle_count)
+        if self._samples:
+            self._cycle_ended(tuple(self._samples))
+            self._samples = []
         self.publish_status()
 
     def _poll_row(self, row: WatchRow) -> None:
@@ -456,16 +465,25 @@ class Engine:
             status = {RequestTimeout: "TIMEOUT", BadReply: "BAD REPLY"}.get(type(exc))
             if row.fail(status or "DISCONNECTED", time.monotonic()):
                 self.show_row(row)
+            self._samples.append((row.var, None))
             return
         self.backoff.good()
         response = reply.response
-        if response.ok and response.variant is not None:
-            changed = row.update(response.variant, time.monotonic())
+        variant = response.variant
+        if response.ok and variant is not None:
+            changed = row.update(variant, time.monotonic())
         else:
+            variant = None
             status = hresult_name(response.code) or describe_hresult(response.code)[:10]
             changed = row.fail(status, time.monotonic())
+        self._samples.append((row.var, variant))
         if changed:
             self.show_row(row)
+
+    def _cycle_ended(self, samples: tuple[tuple[VarRef, Variant | None], ...]) -> None:
+        """A cycle's values go to the trends (when asked for)."""
+        if self.publish_cycles:
+            self.emit(Cycle(time.time(), time.monotonic(), samples))
 
     def _begin_retry(self, state: str) -> None:
         """Back off before the next try; the status line counts it down."""

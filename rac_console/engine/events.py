@@ -110,4 +110,17 @@ class Status:
         return 4 if status == 0 and self.record_failure is not None else status
 
 
-Event = Frame | Note | Alert | Result
+@dataclass(frozen=True, slots=True)
+class Cycle:
+    """One poll cycle ended: what it read, for trends and the CSV log.
+
+    Published only by an engine made with ``cycles=True`` (the console); each row
+    polled in the cycle appears once, with its good value or None when the poll failed.
+    """
+
+    time: float  # time.time() when the cycle ended (wall clock, for timestamps)
+    monotonic: float  # time.monotonic() then (for windows of seconds)
+    samples: tuple[tuple[VarRef, Variant | None], ...]
+
+
+Event = Frame | Note | Alert | Result | Cycle

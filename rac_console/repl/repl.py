@@ -33,6 +33,7 @@ from ..engine import (
     Status,
     UiStep,
 )
+from ..engine.events import Event
 from ..present.cells import age_text, status_cell, value_cell
 from ..present.frames import frame_line
 from ..present.history import History
@@ -90,8 +91,10 @@ class Repl:
 
     def prompt_message(self) -> FormattedText:
         status = self.status
-        if status is None or not status.has_session or (
-            self.lost and status.connection != "connected"
+        if (
+            status is None
+            or not status.has_session
+            or (self.lost and status.connection != "connected")
         ):
             return FormattedText([("class:prompt.off", "not connected"), ("", "> ")])
         if status.is_simulator:
@@ -251,7 +254,7 @@ class Repl:
         else:
             self.console.print(notice_text(error_text(outcome), error=True), soft_wrap=True)
 
-    def _echo(self, event: Frame | Note | Alert) -> None:
+    def _echo(self, event: Event) -> None:
         """``frames on``: every frame, dimmed, as it crosses the wire (not during a watch);
         an alert (a recording stopped) always."""
         if isinstance(event, Alert):

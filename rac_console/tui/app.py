@@ -20,6 +20,7 @@ from ..commands.outcome import Outcome
 from ..engine import (
     SIMULATOR_NOTICE,
     Alert,
+    Cycle,
     Engine,
     Feedback,
     Message,
@@ -157,6 +158,8 @@ class RacConsoleApp(App[int]):
         for event in batch.events:
             if isinstance(event, Result):
                 self._show_result(event)
+            elif isinstance(event, Cycle):
+                pass  # trends: not drawn yet
             else:
                 self.frame_log.add(event)
                 if isinstance(event, Alert):
