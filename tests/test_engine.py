@@ -12,7 +12,7 @@ from pathlib import Path
 import pytest
 from servers import RecordingServer
 
-from rac_console.engine import Engine, Message, Note, Result, RowView, Status
+from rac_console.engine import Alert, Engine, Message, Note, Result, RowView, Status
 from rac_console.session import Frame
 
 DEADLINE = 10.0
@@ -27,6 +27,7 @@ class Front:
         self.rows: dict[str, RowView] = {}
         self.frames: list[Frame] = []
         self.notes: list[str] = []
+        self.alerts: list[str] = []
         self.status: Status | None = None
 
     def drain(self) -> None:
@@ -42,6 +43,8 @@ class Front:
                 self.frames.append(event)
             elif isinstance(event, Note):
                 self.notes.append(event.text)
+            elif isinstance(event, Alert):
+                self.alerts.append(event.text)
 
     def until(self, predicate: Callable[[], bool], what: str) -> None:
         deadline = time.monotonic() + DEADLINE

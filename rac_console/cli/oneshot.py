@@ -9,9 +9,10 @@ import sys
 from collections.abc import Iterator
 
 from ..commands.argv import exchange_from_words, input_line
-from ..commands.language import Get, Latency, Put, Raw
+from ..commands.language import Get, Latency, Put, Raw, Wait
 from ..commands.outcome import ExitStatus, Outcome, refused, worst
 from ..commands.registry import parse_command
+from ..engine.conditions import wait_for
 from ..engine.execute import execute, measure_latency
 from ..present.render import error_text, make_console, notice_text, print_error, print_outcome
 from ..protocol import InputError
@@ -118,11 +119,13 @@ def _run_line(session: Session, line: str, read_only: bool) -> Outcome | None:
         return refused(line, str(exc))
     if command is None:
         return None
+    if isinstance(command, Wait):
+        return wait_for(session, command, line=line, read_only=read_only)
     if not isinstance(command, Get | Put | Raw):
         return refused(
             line,
             f"{line.split()[0]!r} works in the console and the REPL; "
-            "run takes get, put, send and GET:/PUT: lines",
+            "run takes get, put, send, wait and GET:/PUT: lines",
         )
     return execute(session, command, read_only=read_only, line=line)
 

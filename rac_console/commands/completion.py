@@ -82,6 +82,11 @@ def complete(text: str, seen: Iterable[tuple[str, int]] = ()) -> list[Candidate]
         return matching((str(i), f"{kind.code}{i}") for i in indices)
     if command == "put" and len(done) == 3 and kind.code == "IO":
         return matching([("on", "set the bit (sends 11,-1)"), ("off", "clear it (sends 11,0)")])
+    if command == "wait" and len(done) == 3:
+        options = [("changes", "until the value differs from the first read")]
+        if kind.code == "IO":
+            options[:0] = [("on", "until the bit is set"), ("off", "until it is clear")]
+        return matching(options)
     return []
 
 
@@ -108,6 +113,8 @@ def hint(text: str) -> str:
                 needs = ["TYPE", "INDEX", "TEXT"]
     if command == "latency":
         return _latency_hint(done[1:])
+    if command == "wait" and len(done) >= 3:
+        return _wait_hint([word.lower() for word in done[3:]])
     if command == "watch" and any(word.lower() == "every" for word in done[3:]):
         return "SECONDS" if done[-1].lower() == "every" else ""
     remaining = needs[len(done) - 1 :]
@@ -124,6 +131,22 @@ def _latency_hint(words: list[str]) -> str:
         if not words:
             return "[TYPE INDEX]"
     return {1: "INDEX"}.get(len(_split_var(["latency", *words])) - 1, "")
+
+
+_OPERATORS = ("==", "=", "!=", "<", "<=", ">", ">=")
+
+
+def _wait_hint(words: list[str]) -> str:
+    """What a ``wait`` still needs after its variable."""
+    if not words:
+        return "CONDITION [within SECONDS]"
+    if words[-1] == "within":
+        return "SECONDS"
+    if "within" in words:
+        return ""
+    if words == [words[0]] and words[0] in _OPERATORS:
+        return "VALUE [within SECONDS]"
+    return "[within SECONDS]"
 
 
 def common_prefix(candidates: list[Candidate]) -> str:

@@ -131,6 +131,49 @@ class Frames:
     on: bool
 
 
+class Op(Enum):
+    """How a ``wait`` compares the variable with its value."""
+
+    EQ = "=="
+    NE = "!="
+    LT = "<"
+    LE = "<="
+    GT = ">"
+    GE = ">="
+    ON = "on"
+    OFF = "off"
+    CHANGES = "changes"
+
+
+@dataclass(frozen=True)
+class Wait:
+    """``wait VAR OP VALUE [within SECONDS]``: read until the condition holds, or time out."""
+
+    var: VarRef
+    op: Op
+    value: Variant | float | None  # a Variant for == and !=, a number for < <= > >=
+    within: float
+    value_text: str = ""  # as typed, for messages
+
+    @property
+    def condition(self) -> str:
+        """``IO128 on``, ``I10 >= 100``, ``P0 changes``."""
+        tail = f" {self.value_text}" if self.value_text else ""
+        return f"{self.var} {self.op.value}{tail}"
+
+    @property
+    def request(self) -> Request:
+        return get_for(self.var.kind, self.var.index)
+
+
+@dataclass(frozen=True)
+class CsvLog:
+    """``log FILE.csv``: one CSV row per poll cycle; ``log stop``; ``log``: where to."""
+
+    path: str | None
+    stop: bool = False
+
+
 class Step(Enum):
     """What a command without arguments asks for."""
 
@@ -160,6 +203,8 @@ Command = (
     | Help
     | Frames
     | Latency
+    | Wait
+    | CsvLog
     | Simple
 )
 

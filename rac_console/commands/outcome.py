@@ -23,6 +23,32 @@ class ExitStatus(IntEnum):
 
 
 @dataclass(frozen=True)
+class Waited:
+    """How a ``wait`` went: shown after the last value read, and in ``--json``."""
+
+    condition: str  # IO128 on
+    met: bool
+    seconds: float  # from the first read sent to the reply that met it (or the last)
+    reads: int
+    within: float
+
+    def text(self) -> str:
+        reads = f"{self.reads} read{'s' * (self.reads != 1)}"
+        if self.met:
+            return f"{self.condition} after {self.seconds:.3f} s ({reads})"
+        return f"{self.condition}: not met within {self.within:g} s ({reads})"
+
+    def to_json(self) -> dict[str, Any]:
+        return {
+            "condition": self.condition,
+            "met": self.met,
+            "seconds": round(self.seconds, 3),
+            "reads": self.reads,
+            "within": self.within,
+        }
+
+
+@dataclass(frozen=True)
 class Outcome:
     """The result of one exchange, or why there was none."""
 
@@ -36,6 +62,7 @@ class Outcome:
     input_line: str | None = None
     written: Variant | None = None
     failure: Exception | None = None  # why no trustworthy reply came (not in the JSON)
+    waited: Waited | None = None  # a wait: its condition, whether it was met, how long
 
     @property
     def ok(self) -> bool:
@@ -74,6 +101,8 @@ class Outcome:
             data["input"] = self.input_line
         if self.error:
             data["error"] = self.error
+        if self.waited is not None:
+            data["wait"] = self.waited.to_json()
         return data
 
 

@@ -14,6 +14,7 @@ from dataclasses import dataclass
 from enum import Enum
 
 from ..protocol import InputError
+from .conditions import parse_log, parse_wait
 from .language import (
     Command,
     Simple,
@@ -154,6 +155,34 @@ COMMANDS: dict[str, CommandSpec] = {
             "measure round trips: COUNT GETs back to back (default 100 of I 0)",
             parse_latency,
             "latency 1000",
+        ),
+        CommandSpec(
+            "wait",
+            "TYPE INDEX CONDITION [within SECONDS]",
+            "read a variable until a condition holds (default: within 10 s)",
+            parse_wait,
+            "wait IO 128 on within 2",
+            Completes.VARIABLE,
+            (
+                _TYPE_NOTE,
+                "CONDITION: on | off (IO), changes, or == != < <= > >= VALUE (< <= > >= for I F D)",
+                "e.g. wait I 10 >= 100 within 30, wait P 0 changes within 5",
+                "reads up to 100 times a second, watched rows still polled; "
+                "not met in time: an error (exit 1 in run)",
+            ),
+        ),
+        CommandSpec(
+            "log",
+            "FILE.csv | stop",
+            "log the watched values to a CSV file, one row per poll cycle",
+            parse_log,
+            "log cell3.csv",
+            notes=(
+                "columns: time, then one per field (P10.X, P10.Y, ..., IO128), "
+                "taken when logging starts",
+                "an existing file is appended to if its columns are the same; log alone "
+                "says where the log goes",
+            ),
         ),
         CommandSpec("clear", "", "clear the frame log", _no_argument(Step.CLEAR)),
         CommandSpec(

@@ -14,7 +14,7 @@ import time
 from collections import deque
 
 from ..commands.language import Command, VarRef
-from ..protocol import Variant, describe_hresult, hresult_name
+from ..protocol import InputError, Variant, describe_hresult, hresult_name
 from ..session import (
     BadReply,
     ConnectFailed,
@@ -27,7 +27,8 @@ from ..session import (
 )
 from ..sim.thread import SimulatorThread
 from .backoff import Backoff
-from .events import Alert, Cycle, Event, Message, Note, Result, Status
+from .csvlog import CsvLog, check_writable
+from .events import OK, Alert, Cycle, Event, Message, Note, Result, Status
 from .outbox import Outbox
 from .recorder import FrameRecorder
 from .watch import WatchList, WatchRow
@@ -56,10 +57,13 @@ class Engine:
         interval: float = DEFAULT_INTERVAL,
         outbox: Outbox | None = None,
         cycles: bool = False,
+        log_csv: str | None = None,
     ) -> None:
         """Raises InputError when ``record`` cannot be opened (before any thread starts).
 
-        With ``cycles``, a :class:`Cycle` event follows each poll cycle (for trends)."""
+        With ``cycles``, a :class:`Cycle` event follows each poll cycle (for trends).
+        ``log_csv`` starts a CSV log at the first poll cycle (raises InputError when the
+        file cannot be written)."""
         self.outbox = outbox if outbox is not None else Outbox()
         self._target = (host, port)
         self.timeout = timeout
@@ -79,6 +83,12 @@ class Engine:
         self.polls_per_second: float | None = None
         self.backoff = Backoff()
         self.recorder = FrameRecorder(record, self.alert) if record else None
+        self.csv: CsvLog | None = None
+        self.csv_pending: str | None = None  # starts at the next cycle with rows to log
+        self.csv_failure: str | None = None
+        if log_csv:
+            check_writable(log_csv)
+            self.csv_pending = log_csv
         self._lost = False
         self._early_drop = False
         self._cycle: deque[WatchRow] = deque()  # rows still to poll in this cycle
@@ -186,6 +196,8 @@ class Engine:
             self.close_target()
             if self.recorder is not None:
                 self.recorder.close()
+            if self.csv is not None:
+                self.csv.close()
             self.flush_events()
             self.publish_status(force=True)
 
@@ -340,6 +352,8 @@ class Engine:
                 polls_per_second=self.polls_per_second,
                 interval_met=self._interval_met(period),
                 record_failure=self.recorder.failure if self.recorder is not None else None,
+                csv_log=self.csv.path if self.csv is not None else self.csv_pending,
+                csv_failure=self.csv_failure,
                 seen=self._seen_frozen,
             )
         )
@@ -480,10 +494,62 @@ class Engine:
         if changed:
             self.show_row(row)
 
+    def poll_until(self, until: float) -> None:
+        """Until ``time.perf_counter()`` reaches ``until`` (between a wait's reads): poll
+        the watched rows that are due, sleep when none is."""
+        while not self.stopping:
+            now = time.perf_counter()
+            if now >= until:
+                return
+            wait = self._wait_time()
+            if wait == 0:
+                self._poll_once()
+                continue
+            remaining = until - now
+            time.sleep(remaining if wait is None else min(remaining, wait))
+
     def _cycle_ended(self, samples: tuple[tuple[VarRef, Variant | None], ...]) -> None:
-        """A cycle's values go to the trends (when asked for)."""
+        """A cycle's values go to the CSV log and the trends (when asked for)."""
+        wall = time.time()
+        if self.csv_pending is not None:
+            try:
+                self.start_csv(self.csv_pending)
+            except InputError as exc:
+                self.alert(f"CSV log not started: {exc}")
+        csv_log = self.csv
+        if csv_log is not None:
+            rows = self.watch.rows
+            values: dict[VarRef, Variant | None] = {}
+            for var in csv_log.variables:
+                row = rows.get(var)
+                good = row is not None and row.status == OK and not row.stale
+                values[var] = row.variant if good and row is not None else None
+            csv_log.write(wall, values)
         if self.publish_cycles:
-            self.emit(Cycle(time.time(), time.monotonic(), samples))
+            self.emit(Cycle(wall, time.monotonic(), samples))
+
+    def start_csv(self, path: str) -> CsvLog:
+        """Log the watched rows to ``path`` from now on (InputError: it cannot)."""
+        self.csv_pending, self.csv_failure = None, None
+        self._status_dirty = True
+        csv_log = CsvLog(path, list(self.watch.rows), self._csv_failed)
+        if csv_log.failure is None:  # its header may have failed already
+            self.csv = csv_log
+        return csv_log
+
+    def stop_csv(self) -> CsvLog | None:
+        """End the CSV log (or the one waiting for its first cycle); the one ended."""
+        csv_log, self.csv, self.csv_pending = self.csv, None, None
+        if csv_log is not None:
+            csv_log.close()
+        self._status_dirty = True
+        return csv_log
+
+    def _csv_failed(self, text: str) -> None:
+        self.csv_failure = text
+        self.csv = None
+        self.alert(text)
+        self.publish_status(force=True)
 
     def _begin_retry(self, state: str) -> None:
         """Back off before the next try; the status line counts it down."""

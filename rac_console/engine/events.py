@@ -103,11 +103,14 @@ class Status:
     interval_met: bool
     record_failure: str | None
     seen: frozenset[tuple[str, int]]
+    csv_log: str | None = None  # the CSV log's path while logging
+    csv_failure: str | None = None  # why the CSV log stopped on its own
 
     def exit_status(self, status: int) -> int:
         """A front end's exit status: 4 (a local I/O error) when it would be 0 but the
-        recording stopped on the way."""
-        return 4 if status == 0 and self.record_failure is not None else status
+        recording or the CSV log stopped on the way."""
+        failed = self.record_failure is not None or self.csv_failure is not None
+        return 4 if status == 0 and failed else status
 
 
 @dataclass(frozen=True, slots=True)

@@ -9,6 +9,7 @@ from __future__ import annotations
 from ..commands.language import (
     Command,
     Connect,
+    CsvLog,
     Frames,
     Get,
     Help,
@@ -20,6 +21,7 @@ from ..commands.language import (
     Step,
     Unwatch,
     VarRef,
+    Wait,
     Watch,
     WatchFile,
 )
@@ -27,6 +29,8 @@ from ..commands.registry import help_lines, parse_command
 from ..protocol import InputError
 from ..session import ConnectFailed, Disconnected, TransportError
 from . import watchlist
+from .conditions import wait_for
+from .csvlog import check_writable
 from .engine import Engine
 from .events import Feedback, Message, Result, UiStep
 from .execute import execute, measure_latency
@@ -66,6 +70,26 @@ def run(engine: Engine, command: Command, line: str | None) -> list[Feedback]:
             if isinstance(outcome.failure, TransportError):
                 engine.mark_failure(outcome.failure)
             return [outcome]
+        case Wait():
+            session = engine.session
+            if session is None:
+                return [Message(NOT_CONNECTED, "error")]
+            engine.see((command.var,))
+            outcome = wait_for(
+                session,
+                command,
+                line=line,
+                read_only=engine.read_only,
+                cancelled=lambda: engine.stopping,
+                between=engine.poll_until,
+            )
+            if isinstance(outcome.failure, ConnectFailed):
+                engine.connect_failed()
+            if isinstance(outcome.failure, TransportError):
+                engine.mark_failure(outcome.failure)
+            return [outcome]
+        case CsvLog():
+            return [_csv_log(engine, command)]
         case Frames(on=on):
             return [UiStep.FRAMES_ON if on else UiStep.FRAMES_OFF]
         case Latency(var=var, count=count, interval=interval):
@@ -127,6 +151,8 @@ def _watch(
     text = f"watching {names}" if added else f"{names} already watched"
     if every is not None:
         text += f", polled every {every:g} s (other rows: interval {engine.interval:g} s)"
+    if engine.csv is not None and not set(variables) <= set(engine.csv.variables):
+        text += " (not in the CSV log's columns: log stop, then log FILE again to add them)"
     return Message(text)
 
 
@@ -141,6 +167,49 @@ def _unwatch(engine: Engine, variables: tuple[VarRef, ...]) -> Message:
         verb = "was" if len(absent) == 1 else "were"
         text += f" ({names_text(tuple(absent))} {verb} not watched)"
     return Message(text)
+
+
+def _csv_log(engine: Engine, command: CsvLog) -> Message:
+    current = engine.csv.path if engine.csv is not None else engine.csv_pending
+    if command.stop:
+        ended = engine.stop_csv()
+        if ended is not None:
+            return Message(f"CSV log stopped: {ended.rows} rows in {ended.path}")
+        if current is not None:
+            return Message(f"CSV log to {current} stopped before its first row")
+        return Message("no CSV log to stop", "error")
+    if command.path is None:
+        if engine.csv is not None:
+            columns = len(engine.csv.variables)
+            return Message(
+                f"logging {columns} variables to {engine.csv.path}: {engine.csv.rows} rows so far"
+            )
+        if current is not None:
+            return Message(f"logging to {current} from the first poll cycle")
+        return Message("not logging: log FILE.csv starts a CSV log of the watched values")
+    if current is not None:
+        return Message(f"already logging to {current}: log stop first", "error")
+    if not engine.watch.rows:
+        try:
+            check_writable(command.path)
+        except InputError as exc:
+            return Message(str(exc), "error")
+        engine.csv_pending = command.path
+        engine.publish_status(force=True)
+        return Message(
+            f"logging to {command.path} from the first poll cycle: "
+            "the variables watched then are its columns"
+        )
+    try:
+        started = engine.start_csv(command.path)
+    except InputError as exc:
+        return Message(f"CSV log not started: {exc}", "error")
+    how = "appending to" if started.appending else "logging to"
+    count = len(started.variables)
+    return Message(
+        f"{how} {started.path}: {count} variable{'s' * (count != 1)}, "
+        "one row per poll cycle (log stop ends it)"
+    )
 
 
 def _connect(engine: Engine, host: str, port: int) -> Message:

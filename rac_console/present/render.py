@@ -71,6 +71,8 @@ def outcome_text(outcome: Outcome) -> Text:
         detail = [describe_response(response)]
     detail.append(rtt_text(outcome))
     line.append("   " + "  ".join(d for d in detail if d), style="dim")
+    if outcome.waited is not None:
+        line.append(f"   ✓ {outcome.waited.text()}", style="green")
     return line
 
 

@@ -31,6 +31,12 @@ def status_text(status: Status, waiting_since: float | None, frames_per_second: 
     if status.record_failure is not None:
         text.append(" ")
         text.append(" RECORDING STOPPED ", style="bold white on red")
+    if status.csv_failure is not None:
+        text.append(" ")
+        text.append(" CSV LOG STOPPED ", style="bold white on red")
+    elif status.csv_log is not None:
+        text.append(" ")
+        text.append(" CSV ", style="bold black on green")
     text.append(" ")
     state = status.connection
     if state in ("lost", "dropped") and status.retry_at is not None:

@@ -1,0 +1,113 @@
+"""``wait`` and ``log``: their parsers, and when a wait's condition holds.
+
+Pure: nothing here reads the wire. The engine and ``run`` read the variable and ask
+:func:`holds` about each value read.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+
+from ..protocol import InputError, Variant
+from .language import (
+    CsvLog,
+    Op,
+    Wait,
+    _parse_seconds,
+    parse_var,
+)
+
+WAIT_USAGE = (
+    "wait TYPE INDEX CONDITION [within SECONDS], e.g. wait IO 128 on within 2, "
+    "wait I 10 >= 100 within 30, wait P 0 changes within 5"
+)
+#: How long a wait without ``within`` waits: never for ever, next to machinery.
+DEFAULT_WITHIN = 10.0
+NUMERIC_KINDS = ("I", "F", "D")
+
+_OPERATOR_RE = re.compile(r"(==|=|!=|<=|>=|<|>)\s*(.*)", re.DOTALL)
+_WITHIN_RE = re.compile(r"(.*?)\s*\bwithin\s+(\S+?)s?", re.ASCII | re.DOTALL | re.IGNORECASE)
+
+
+def parse_wait(rest: str) -> Wait:
+    var, after = parse_var(rest, WAIT_USAGE)
+    condition, within = after.strip(), DEFAULT_WITHIN
+    match = _WITHIN_RE.fullmatch(condition)
+    if match:
+        condition, within = match.group(1).strip(), _parse_seconds(match.group(2), "within")
+    if not condition:
+        raise InputError(f"wait needs a condition: {WAIT_USAGE}")
+    word = condition.lower()
+    if word in ("on", "off"):
+        if var.kind.code != "IO":
+            raise InputError(
+                f"on and off are for IO bits; compare {var} with a value: wait {var} == 1"
+            )
+        return Wait(var, Op.ON if word == "on" else Op.OFF, None, within)
+    if word == "changes":
+        return Wait(var, Op.CHANGES, None, within)
+    operator = _OPERATOR_RE.fullmatch(condition)
+    if operator is None:
+        raise InputError(
+            f"unknown condition {condition!r}: use on, off, changes, or == != < <= > >= "
+            f"and a value ({WAIT_USAGE})"
+        )
+    symbol, value_text = operator.group(1), operator.group(2).strip()
+    op = Op.EQ if symbol == "=" else Op(symbol)
+    if not value_text:
+        raise InputError(f"{symbol} needs a value: wait {var} {symbol} 100")
+    if op in (Op.EQ, Op.NE):
+        return Wait(var, op, var.kind.value_from_text(value_text), within, value_text)
+    if var.kind.code not in NUMERIC_KINDS:
+        raise InputError(
+            f"{symbol} compares numbers (I F D); wait for {var} with ==, != or changes"
+        )
+    return Wait(var, op, _number(value_text, symbol), within, value_text)
+
+
+def _number(text: str, symbol: str) -> float:
+    try:
+        value = float(text) if text.isascii() else math.nan
+    except ValueError:
+        value = math.nan
+    if not math.isfinite(value):
+        raise InputError(f"{symbol} needs one number, e.g. >= 100, got {text!r}")
+    return value
+
+
+def holds(wait: Wait, variant: Variant, first: Variant | None) -> bool:
+    """Whether the value read meets the condition (``first``: the first value read,
+    which ``changes`` compares with)."""
+    value = variant.value
+    match wait.op:
+        case Op.ON | Op.OFF:
+            return isinstance(value, bool | int) and bool(value) == (wait.op is Op.ON)
+        case Op.CHANGES:
+            return first is not None and value != first.value
+        case Op.EQ | Op.NE:
+            assert isinstance(wait.value, Variant)
+            return bool(value == wait.value.value) == (wait.op is Op.EQ)
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        return False
+    threshold = wait.value
+    assert isinstance(threshold, float)
+    match wait.op:
+        case Op.LT:
+            return value < threshold
+        case Op.LE:
+            return value <= threshold
+        case Op.GT:
+            return value > threshold
+        case _:
+            return value >= threshold
+
+
+def parse_log(rest: str) -> CsvLog:
+    """``log FILE.csv`` starts, ``log stop`` stops, ``log`` says where it goes."""
+    text = rest.strip()
+    if not text:
+        return CsvLog(None)
+    if text.lower() == "stop":
+        return CsvLog(None, stop=True)
+    return CsvLog(text)

@@ -1,0 +1,81 @@
+"""``wait``: read one variable until its condition holds or the time is up.
+
+Shared by ``run`` (over a bare session) and the engine behind the console and the
+REPL (which keeps polling the watched rows between the reads).
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from dataclasses import replace
+
+from ..commands.conditions import holds
+from ..commands.language import Get, Wait
+from ..commands.outcome import ExitStatus, Outcome, Waited
+from ..protocol import Variant
+from ..session import ConnectFailed, Session
+from .execute import execute
+
+#: The shortest time between two reads of a wait: at most 100 reads a second, so a
+#: wait of minutes does not flood a controller that answers in microseconds.
+READ_EVERY = 0.01
+
+
+def _sleep_until(until: float) -> None:
+    time.sleep(max(0.0, until - time.perf_counter()))
+
+
+def wait_for(
+    session: Session,
+    wait: Wait,
+    *,
+    line: str | None = None,
+    read_only: bool = False,
+    cancelled: Callable[[], bool] = lambda: False,
+    between: Callable[[float], None] = _sleep_until,
+) -> Outcome:
+    """Read ``wait.var`` until the condition holds, ``wait.within`` seconds pass, the
+    controller cannot be reached, or ``cancelled()``; the last read's outcome, with how
+    it went. ``between(until)`` passes the time to the next read (the engine polls)."""
+    get = Get(wait.var)
+    started = time.perf_counter()
+    deadline = started + wait.within
+    first: Variant | None = None
+    reads = 0
+    while True:
+        sent_at = time.perf_counter()
+        outcome = execute(session, get, read_only=read_only, line=line)
+        reads += 1
+        now = time.perf_counter()
+        variant = outcome.variant if outcome.ok else None
+        if variant is not None:
+            if holds(wait, variant, first):
+                return _ended(outcome, wait, True, now - started, reads)
+            first = first if first is not None else variant
+        if isinstance(outcome.failure, ConnectFailed) or outcome.status == ExitStatus.REFUSED:
+            return _ended(outcome, wait, False, now - started, reads)
+        if now >= deadline:
+            return _ended(outcome, wait, False, now - started, reads)
+        if cancelled():
+            return _ended(outcome, wait, False, now - started, reads, "wait cancelled")
+        between(min(sent_at + READ_EVERY, deadline))
+
+
+def _ended(
+    outcome: Outcome,
+    wait: Wait,
+    met: bool,
+    seconds: float,
+    reads: int,
+    why: str | None = None,
+) -> Outcome:
+    waited = Waited(wait.condition, met, seconds, reads, wait.within)
+    if met:
+        return replace(outcome, waited=waited)
+    # Not met: the last read's own failure says most; else the condition is the error.
+    status = outcome.status if not outcome.ok else ExitStatus.CONTROLLER_ERROR
+    error = why or waited.text()
+    if outcome.error:
+        error += f"; the last read failed: {outcome.error}"
+    return replace(outcome, status=status, error=error, waited=waited)

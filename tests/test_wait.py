@@ -1,0 +1,219 @@
+"""``wait VAR OP VALUE [within SECONDS]``: the parser, the engine behind the console and
+the REPL, and ``run`` scripts, against the real simulator."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+import threading
+from collections.abc import Iterator
+from pathlib import Path
+
+import pytest
+from test_engine import Front
+
+from rac_console.commands.conditions import holds, parse_wait
+from rac_console.commands.language import Op, Put
+from rac_console.commands.outcome import ExitStatus, Outcome
+from rac_console.commands.registry import parse_command
+from rac_console.engine import Engine
+from rac_console.protocol import InputError, Variant
+from rac_console.session import Session
+
+# ------------------------------------------------------------------ parser
+
+
+@pytest.mark.parametrize(
+    ("line", "op", "within"),
+    [
+        ("wait IO 128 on within 2", Op.ON, 2.0),
+        ("wait IO128 off", Op.OFF, 10.0),
+        ("wait I 10 >= 100 within 30", Op.GE, 30.0),
+        ("wait I[10] < -5 within 0.5s", Op.LT, 0.5),
+        ("wait P 0 changes within 5", Op.CHANGES, 5.0),
+        ("wait F 1 = 0.5", Op.EQ, 10.0),
+        ("wait S 1 != \"part OK\" within 1", Op.NE, 1.0),
+        ("wait P 1 == 350 0 450 180 0 180 5", Op.EQ, 10.0),
+    ],
+)
+def test_wait_lines_parse(line: str, op: Op, within: float) -> None:
+    command = parse_command(line)
+    assert command is not None and command.op is op and command.within == within  # type: ignore[union-attr]
+
+
+@pytest.mark.parametrize(
+    ("rest", "says"),
+    [
+        ("I 1", "needs a condition"),
+        ("I 1 on", "on and off are for IO"),
+        ("S 1 > 3", "compares numbers"),
+        ("P 0 >= 3", "compares numbers"),
+        ("I 1 >= abc", "needs one number"),
+        ("I 1 >= nan", "needs one number"),
+        ("I 1 >=", "needs a value"),
+        ("I 1 about 3", "unknown condition"),
+        ("I 1 >= 5 within 9999", "within must be from 0 to 3600"),
+        ("I 1 >= 5 within soon", "within needs a number"),
+        ("P 1 == 1 2 3", "P needs 7 values"),
+        ("IO 1 == maybe", "IO needs on or off"),
+    ],
+)
+def test_wait_refuses_what_it_cannot_check(rest: str, says: str) -> None:
+    with pytest.raises(InputError, match=says):
+        parse_wait(rest)
+
+
+def test_conditions_compare_values_as_read() -> None:
+    at_least = parse_wait("I 1 >= 100")
+    assert holds(at_least, Variant(3, 100), None)
+    assert not holds(at_least, Variant(3, 99), None)
+    assert not holds(at_least, Variant(8, "100"), None)  # a string is not a number
+    on = parse_wait("IO 5 on")
+    assert holds(on, Variant(11, True), None) and not holds(on, Variant(11, False), None)
+    changes = parse_wait("P 0 changes")
+    first = Variant(8196, [1.0] * 7)
+    assert not holds(changes, first, None)
+    assert not holds(changes, Variant(8196, [1.0] * 7), first)
+    assert holds(changes, Variant(8196, [1.0] * 6 + [2.0]), first)
+    assert holds(parse_wait("F 1 == 0.1"), Variant(4, 0.1), None)
+
+
+# ------------------------------------------------------------------ engine
+
+
+@pytest.fixture
+def front() -> Iterator[Front]:
+    engine = Engine(None, interval=0.05, timeout=1.0)
+    engine.start()
+    try:
+        yield Front(engine)
+    finally:
+        engine.stop()
+
+
+def run_outcome(front: Front, line: str) -> Outcome:
+    seq = front.engine.submit(line)
+    front.until(lambda: seq in front.results, f"the answer to {line!r}")
+    (outcome,) = front.results[seq].feedback
+    assert isinstance(outcome, Outcome)
+    return outcome
+
+
+def test_a_condition_that_holds_is_met_at_the_first_read(front: Front) -> None:
+    outcome = run_outcome(front, "wait IO 128 on within 2")  # ON in the simulator
+    assert outcome.ok and outcome.waited is not None
+    assert outcome.waited.met and outcome.waited.reads == 1
+    assert outcome.to_json()["wait"]["condition"] == "IO128 on"
+
+
+def test_a_condition_never_met_times_out_as_an_error(front: Front) -> None:
+    outcome = run_outcome(front, "wait I 1 >= 100 within 0.3")  # I1 is 1
+    assert outcome.status == ExitStatus.CONTROLLER_ERROR
+    assert outcome.waited is not None and not outcome.waited.met
+    assert outcome.waited.reads > 1 and outcome.waited.seconds >= 0.3
+    assert "I1 >= 100: not met within 0.3 s" in (outcome.error or "")
+    reads = [f for f in front.sent() if f == b"GET:RC8:1:I:\r"]
+    assert len(reads) == outcome.waited.reads  # every read on the wire, no more
+
+
+def test_a_write_from_another_client_ends_the_wait(front: Front) -> None:
+    front.until(lambda: front.status is not None and front.status.host is not None, "status")
+    assert front.status is not None and front.status.host is not None
+    host, port = front.status.host, front.status.port
+    seq = front.engine.submit("wait I 20 == 7 within 8")
+    front.until(lambda: b"GET:RC8:20:I:\r" in front.sent(), "the wait's first read")
+    other = Session(host, port, timeout=2.0)
+    try:
+        put = parse_command("put I 20 7")
+        assert isinstance(put, Put)
+        other.exchange(put.request)
+    finally:
+        other.close()
+    front.until(lambda: seq in front.results, "the wait's end")
+    (outcome,) = front.results[seq].feedback
+    assert isinstance(outcome, Outcome) and outcome.ok
+    assert outcome.variant == Variant(3, 7)
+    assert outcome.waited is not None and outcome.waited.met and outcome.waited.reads > 1
+
+
+def test_a_moving_position_changes(front: Front) -> None:
+    outcome = run_outcome(front, "wait P 0 changes within 5")
+    assert outcome.ok and outcome.waited is not None and outcome.waited.met
+
+
+def test_watched_rows_are_polled_during_a_wait(front: Front) -> None:
+    front.run("watch I 0")
+    front.until(lambda: "I0" in front.rows and front.rows["I0"].status == "OK", "I0's value")
+    start = len(front.frames)
+    outcome = run_outcome(front, "wait I 1 >= 100 within 0.5")
+    assert outcome.waited is not None and not outcome.waited.met
+    during = [f for f in front.frames[start:] if f.direction == "tx"]
+    first_read = next(n for n, f in enumerate(during) if f.data == b"GET:RC8:1:I:\r")
+    last_read = max(n for n, f in enumerate(during) if f.data == b"GET:RC8:1:I:\r")
+    polls = [f for f in during[first_read:last_read] if f.poll and f.data == b"GET:RC8:0:I:\r"]
+    assert len(polls) >= 3  # interval 0.05 s over half a second
+
+
+def test_cancel_ends_a_long_wait(front: Front) -> None:
+    seq = front.engine.submit("wait I 1 >= 100 within 60")
+    front.until(lambda: b"GET:RC8:1:I:\r" in front.sent(), "the wait's first read")
+    threading.Timer(0.1, front.engine.cancel).start()
+    front.until(lambda: seq in front.results, "the cancelled wait's end")  # long before 60 s
+    (outcome,) = front.results[seq].feedback
+    assert isinstance(outcome, Outcome) and not outcome.ok
+    assert outcome.error is not None and outcome.error.startswith("wait cancelled")
+
+
+# ------------------------------------------------------------------ run
+
+
+def run_script(script: str, *options: str) -> subprocess.CompletedProcess[str]:
+    return subprocess.run(
+        [sys.executable, "-m", "rac_console", *options, "run", "-"],
+        input=script,
+        capture_output=True,
+        text=True,
+        timeout=60,
+    )
+
+
+@pytest.mark.slow
+def test_a_cell_check_script_passes() -> None:
+    result = run_script("put IO 20 on\nwait IO 20 on within 2\nget P 0\n", "--json")
+    assert result.returncode == 0, result.stderr
+    lines = [json.loads(line) for line in result.stdout.splitlines()]
+    assert [line["line"] for line in lines] == [1, 2, 3]
+    assert lines[1]["wait"]["met"] is True and lines[1]["value"] is True
+
+
+@pytest.mark.slow
+def test_a_wait_that_times_out_fails_the_script_with_exit_1() -> None:
+    result = run_script("wait I 1 >= 100 within 0.2\nget I 1\n")
+    assert result.returncode == 1
+    assert "line 1: I1 >= 100: not met within 0.2 s" in result.stderr
+    assert "Traceback" not in result.stderr
+    assert "I1 = 1" in result.stdout  # the script went on
+
+
+# ------------------------------------------------------------------ REPL
+
+
+async def test_the_repl_waits_and_logs(tmp_path: Path) -> None:
+    from test_repl import Driver
+
+    csv_path = tmp_path / "repl.csv"
+    driver = Driver(tmp_path, interval=0.02)
+
+    async def steps(d: Driver) -> None:
+        d.type("wait IO 128 on within 2\r")
+        await d.until(lambda out: "✓ IO128 on after" in out, "the wait")
+        d.type("wait I 1 > 5 within 0.1\r")
+        await d.until(lambda out: "I1 > 5: not met within 0.1 s" in out, "the timeout")
+        d.type(f"log {csv_path}\r")
+        await d.until(lambda out: "from the first poll cycle" in out, "the log's start")
+        d.type("log stop\r")
+        await d.until(lambda out: "stopped before its first row" in out, "the log's end")
+
+    await driver.run(steps)
+    assert not csv_path.read_text()  # opened to check it can be written: no row, no header
