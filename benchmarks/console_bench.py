@@ -58,8 +58,18 @@ def cpu_now() -> float:
     return usage.ru_utime + usage.ru_stime
 
 
-async def measure_console(port: int, seconds: float, warmup: float, soak_frames: int) -> dict:
-    """In this process: the console against 127.0.0.1:PORT; the figures as a dict."""
+async def measure_console(
+    port: int,
+    seconds: float,
+    warmup: float,
+    soak_frames: int,
+    watch: tuple[str, ...] = ("watch I 0-99",),
+    press: tuple[str, ...] = (),
+    csv: str | None = None,
+) -> dict:
+    """In this process: the console against 127.0.0.1:PORT, watching what ``watch``
+    says, after pressing ``press`` (F5: the I/O grid), logging to ``csv`` when given;
+    the figures as a dict."""
     from textual import events
 
     from rac_console.engine import Engine, Outbox
@@ -90,7 +100,9 @@ async def measure_console(port: int, seconds: float, warmup: float, soak_frames:
             return batch
 
     outbox = CountingOutbox()
-    engine = Engine("127.0.0.1", port, timeout=2.0, interval=0.0, outbox=outbox)
+    engine = Engine(
+        "127.0.0.1", port, timeout=2.0, interval=0.0, outbox=outbox, cycles=True, log_csv=csv
+    )
     out: dict = {}
     with tempfile.TemporaryDirectory() as home:
         app = RacConsoleApp(engine, History(Path(home) / "history"))
@@ -98,8 +110,12 @@ async def measure_console(port: int, seconds: float, warmup: float, soak_frames:
             await pilot.pause(0.3)
             out["memory_start_mb"] = rss_mb()
             command_line = app.command_line
-            command_line.insert_text_at_cursor("watch I 0-99")
-            await pilot.press("enter")
+            for line in watch:
+                command_line.insert_text_at_cursor(line)
+                await pilot.press("enter")
+            if press:
+                await pilot.press(*press)
+                command_line.focus()
             started = time.perf_counter()
             while outbox.polls == 0 or time.perf_counter() - started < warmup:
                 await asyncio.sleep(0.05)
@@ -156,11 +172,20 @@ async def measure_console(port: int, seconds: float, warmup: float, soak_frames:
 
 
 def console_round(
-    port: int, seconds: float, warmup: float, cpu: int | None = None
+    port: int,
+    seconds: float,
+    warmup: float,
+    cpu: int | None = None,
+    watch: tuple[str, ...] = (),
+    press: tuple[str, ...] = (),
+    csv: str | None = None,
 ) -> tuple[Run, dict]:
     """One console round in a process of its own: its Run and all it reported."""
+    more: list[object] = [f"--watch-line={line}" for line in watch]
+    more += [f"--press={key}" for key in press]
+    more += ["--csv", csv] if csv else []
     out = child("console_bench.py", "--child", "--port", port, "--seconds", seconds,
-                "--warmup", warmup, cpu=cpu)  # fmt: skip
+                "--warmup", warmup, *more, cpu=cpu)  # fmt: skip
     return Run(out["requests"], out["seconds"], out["cpu"]), out
 
 
@@ -197,9 +222,17 @@ def main() -> None:
     parser.add_argument("--child", action="store_true", help=argparse.SUPPRESS)
     parser.add_argument("--warmup", type=float, default=1.0, help=argparse.SUPPRESS)
     parser.add_argument("--soak", type=int, default=0, help=argparse.SUPPRESS)
+    parser.add_argument("--watch-line", action="append", default=[], help=argparse.SUPPRESS)
+    parser.add_argument("--press", action="append", default=[], help=argparse.SUPPRESS)
+    parser.add_argument("--csv", help=argparse.SUPPRESS)
     args = parser.parse_args()
     if args.child:
-        out = asyncio.run(measure_console(args.port, args.seconds, args.warmup, args.soak))
+        watch = tuple(args.watch_line) or ("watch I 0-99",)
+        out = asyncio.run(
+            measure_console(
+                args.port, args.seconds, args.warmup, args.soak, watch, tuple(args.press), args.csv
+            )
+        )
         print(json.dumps(out), flush=True)
         return
     programs = CPrograms()

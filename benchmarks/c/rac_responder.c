@@ -1,7 +1,8 @@
 /* A minimal RAC responder in C: the floor a client is measured against.
  *
- * Answers every CR-terminated line on every connection with "0,3,123\r" at once,
- * so a benchmark measures the client, not a Python server.  Listens on 127.0.0.1;
+ * Answers every CR-terminated line on every connection at once, so a benchmark
+ * measures the client, not a Python server: a GET with a reply of its type (I:
+ * "0,3,123\r", IO: "0,11,-1\r", P: seven numbers, ...), a PUT with "0\r".  Listens on 127.0.0.1;
  * prints the port it got (argument 0 or none: any free port) and serves until killed.
  *
  *     cc -O2 -o rac_responder rac_responder.c && ./rac_responder 0
@@ -17,6 +18,37 @@
 #include <unistd.h>
 
 #define MAX_CONN 256
+
+/* What is known of the line being read on one connection. */
+struct line_state {
+    int colons;   /* ':' seen so far */
+    char first;   /* its first byte: 'G' or 'P' */
+    char type[2]; /* the first two bytes of the type field (after the third ':') */
+    int typed;    /* bytes of the type field seen */
+};
+
+static const char *reply_for(const struct line_state *line, size_t *size) {
+    static const char put[] = "0\r", i4[] = "0,3,123\r", io[] = "0,11,-1\r",
+                      r4[] = "0,4,1.5\r", r8[] = "0,5,2.25\r", bstr[] = "0,8,abc\r",
+                      v[] = "0,8196,1,2,3\r", p[] = "0,8196,350,0,450,180,0,180,5\r",
+                      j[] = "0,8196,0,30,90,0,60,0,0,0\r",
+                      t[] = "0,8196,350,0,450,1,0,0,0,0,-1,5\r";
+    const char *out = i4;
+    size_t n = sizeof i4 - 1;
+#define PICK(x) (out = (x), n = sizeof(x) - 1)
+    if (line->first == 'P') PICK(put);
+    else if (line->type[0] == 'I' && line->typed > 1 && line->type[1] == 'O') PICK(io);
+    else if (line->type[0] == 'F') PICK(r4);
+    else if (line->type[0] == 'D') PICK(r8);
+    else if (line->type[0] == 'S') PICK(bstr);
+    else if (line->type[0] == 'V') PICK(v);
+    else if (line->type[0] == 'P') PICK(p);
+    else if (line->type[0] == 'J') PICK(j);
+    else if (line->type[0] == 'T') PICK(t);
+#undef PICK
+    *size = n;
+    return out;
+}
 
 int main(int argc, char **argv) {
     int port = argc > 1 ? atoi(argv[1]) : 0;
@@ -37,10 +69,10 @@ int main(int argc, char **argv) {
     fflush(stdout);
 
     struct pollfd fds[MAX_CONN + 1];
+    struct line_state lines[MAX_CONN + 1];
     int count = 1;
     fds[0].fd = listener;
     fds[0].events = POLLIN;
-    static const char reply[] = "0,3,123\r";
     char buffer[65536];
     for (;;) {
         if (poll(fds, count, -1) < 0) continue;
@@ -50,6 +82,7 @@ int main(int argc, char **argv) {
                 setsockopt(conn, IPPROTO_TCP, TCP_NODELAY, &one, sizeof one);
                 fds[count].fd = conn;
                 fds[count].events = POLLIN;
+                memset(&lines[count], 0, sizeof lines[count]);
                 count++;
             } else if (conn >= 0) {
                 close(conn);
@@ -60,12 +93,25 @@ int main(int argc, char **argv) {
             ssize_t got = recv(fds[i].fd, buffer, sizeof buffer, 0);
             if (got <= 0) {
                 close(fds[i].fd);
+                lines[i] = lines[count - 1];
                 fds[i] = fds[--count];
                 i--;
                 continue;
             }
+            struct line_state *line = &lines[i];
             for (ssize_t k = 0; k < got; k++) {
-                if (buffer[k] == '\r') send(fds[i].fd, reply, sizeof reply - 1, 0);
+                char c = buffer[k];
+                if (c == '\r') {
+                    size_t size;
+                    const char *reply = reply_for(line, &size);
+                    send(fds[i].fd, reply, size, 0);
+                    memset(line, 0, sizeof *line);
+                } else if (c == ':') {
+                    line->colons++;
+                } else {
+                    if (!line->first) line->first = c;
+                    if (line->colons == 3 && line->typed < 2) line->type[line->typed++] = c;
+                }
             }
         }
     }
