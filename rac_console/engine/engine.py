@@ -14,7 +14,7 @@ import time
 from collections import deque
 
 from ..commands.language import Command, VarRef
-from ..protocol import InputError, Variant, describe_hresult, hresult_name
+from ..protocol import Variant, describe_hresult, hresult_name
 from ..session import (
     BadReply,
     ConnectFailed,
@@ -27,8 +27,8 @@ from ..session import (
 )
 from ..sim.thread import SimulatorThread
 from .backoff import Backoff
-from .csvlog import CsvLog, check_writable
-from .events import OK, Alert, Cycle, Event, Message, Note, Result, Status
+from .csvsink import CsvSink
+from .events import Alert, Cycle, Event, Message, Note, Result, Status
 from .outbox import Outbox
 from .recorder import FrameRecorder
 from .watch import WatchList, WatchRow
@@ -83,12 +83,9 @@ class Engine:
         self.polls_per_second: float | None = None
         self.backoff = Backoff()
         self.recorder = FrameRecorder(record, self.alert) if record else None
-        self.csv: CsvLog | None = None
-        self.csv_pending: str | None = None  # starts at the next cycle with rows to log
-        self.csv_failure: str | None = None
+        self.csv = CsvSink(self.alert, self._csv_changed)
         if log_csv:
-            check_writable(log_csv)
-            self.csv_pending = log_csv
+            self.csv.wait_for_rows(log_csv)
         self._lost = False
         self._early_drop = False
         self._cycle: deque[WatchRow] = deque()  # rows still to poll in this cycle
@@ -196,8 +193,7 @@ class Engine:
             self.close_target()
             if self.recorder is not None:
                 self.recorder.close()
-            if self.csv is not None:
-                self.csv.close()
+            self.csv.stop()
             self.flush_events()
             self.publish_status(force=True)
 
@@ -352,8 +348,8 @@ class Engine:
                 polls_per_second=self.polls_per_second,
                 interval_met=self._interval_met(period),
                 record_failure=self.recorder.failure if self.recorder is not None else None,
-                csv_log=self.csv.path if self.csv is not None else self.csv_pending,
-                csv_failure=self.csv_failure,
+                csv_log=self.csv.path,
+                csv_failure=self.csv.failure,
                 seen=self._seen_frozen,
             )
         )
@@ -511,44 +507,12 @@ class Engine:
     def _cycle_ended(self, samples: tuple[tuple[VarRef, Variant | None], ...]) -> None:
         """A cycle's values go to the CSV log and the trends (when asked for)."""
         wall = time.time()
-        if self.csv_pending is not None:
-            try:
-                self.start_csv(self.csv_pending)
-            except InputError as exc:
-                self.alert(f"CSV log not started: {exc}")
-        csv_log = self.csv
-        if csv_log is not None:
-            rows = self.watch.rows
-            values: dict[VarRef, Variant | None] = {}
-            for var in csv_log.variables:
-                row = rows.get(var)
-                good = row is not None and row.status == OK and not row.stale
-                values[var] = row.variant if good and row is not None else None
-            csv_log.write(wall, values)
+        if self.csv.path is not None:
+            self.csv.cycle_ended(wall, self.watch.rows)
         if self.publish_cycles:
             self.emit(Cycle(wall, time.monotonic(), samples))
 
-    def start_csv(self, path: str) -> CsvLog:
-        """Log the watched rows to ``path`` from now on (InputError: it cannot)."""
-        self.csv_pending, self.csv_failure = None, None
-        self._status_dirty = True
-        csv_log = CsvLog(path, list(self.watch.rows), self._csv_failed)
-        if csv_log.failure is None:  # its header may have failed already
-            self.csv = csv_log
-        return csv_log
-
-    def stop_csv(self) -> CsvLog | None:
-        """End the CSV log (or the one waiting for its first cycle); the one ended."""
-        csv_log, self.csv, self.csv_pending = self.csv, None, None
-        if csv_log is not None:
-            csv_log.close()
-        self._status_dirty = True
-        return csv_log
-
-    def _csv_failed(self, text: str) -> None:
-        self.csv_failure = text
-        self.csv = None
-        self.alert(text)
+    def _csv_changed(self) -> None:
         self.publish_status(force=True)
 
     def _begin_retry(self, state: str) -> None:

@@ -30,7 +30,6 @@ from ..protocol import InputError
 from ..session import ConnectFailed, Disconnected, TransportError
 from . import watchlist
 from .conditions import wait_for
-from .csvlog import check_writable
 from .engine import Engine
 from .events import Feedback, Message, Result, UiStep
 from .execute import execute, measure_latency
@@ -151,7 +150,8 @@ def _watch(
     text = f"watching {names}" if added else f"{names} already watched"
     if every is not None:
         text += f", polled every {every:g} s (other rows: interval {engine.interval:g} s)"
-    if engine.csv is not None and not set(variables) <= set(engine.csv.variables):
+    log = engine.csv.log
+    if log is not None and not set(variables) <= set(log.variables):
         text += " (not in the CSV log's columns: log stop, then log FILE again to add them)"
     return Message(text)
 
@@ -170,38 +170,32 @@ def _unwatch(engine: Engine, variables: tuple[VarRef, ...]) -> Message:
 
 
 def _csv_log(engine: Engine, command: CsvLog) -> Message:
-    current = engine.csv.path if engine.csv is not None else engine.csv_pending
+    sink = engine.csv
+    current, log = sink.path, sink.log
     if command.stop:
-        ended = engine.stop_csv()
+        ended = sink.stop()
         if ended is not None:
             return Message(f"CSV log stopped: {ended.rows} rows in {ended.path}")
         if current is not None:
             return Message(f"CSV log to {current} stopped before its first row")
         return Message("no CSV log to stop", "error")
     if command.path is None:
-        if engine.csv is not None:
-            columns = len(engine.csv.variables)
-            return Message(
-                f"logging {columns} variables to {engine.csv.path}: {engine.csv.rows} rows so far"
-            )
+        if log is not None:
+            count = len(log.variables)
+            return Message(f"logging {count} variables to {log.path}: {log.rows} rows so far")
         if current is not None:
             return Message(f"logging to {current} from the first poll cycle")
         return Message("not logging: log FILE.csv starts a CSV log of the watched values")
     if current is not None:
         return Message(f"already logging to {current}: log stop first", "error")
-    if not engine.watch.rows:
-        try:
-            check_writable(command.path)
-        except InputError as exc:
-            return Message(str(exc), "error")
-        engine.csv_pending = command.path
-        engine.publish_status(force=True)
-        return Message(
-            f"logging to {command.path} from the first poll cycle: "
-            "the variables watched then are its columns"
-        )
     try:
-        started = engine.start_csv(command.path)
+        if not engine.watch.rows:
+            sink.wait_for_rows(command.path)
+            return Message(
+                f"logging to {command.path} from the first poll cycle: "
+                "the variables watched then are its columns"
+            )
+        started = sink.start(command.path, list(engine.watch.rows))
     except InputError as exc:
         return Message(f"CSV log not started: {exc}", "error")
     how = "appending to" if started.appending else "logging to"
