@@ -258,6 +258,7 @@ OPTIONS = {
 TOP_OPTIONS = OPTIONS | {
     "--version": Option("--version", None),
     "--watch": Option("--watch", "FILE"),
+    "--log-csv": Option("--log-csv", "FILE"),
     "--history": Option("--history", "FILE"),
     "--interval": Option("--interval", "SECONDS"),
 }

@@ -217,3 +217,26 @@ async def test_the_repl_waits_and_logs(tmp_path: Path) -> None:
 
     await driver.run(steps)
     assert not csv_path.read_text()  # opened to check it can be written: no row, no header
+
+
+@pytest.mark.parametrize(
+    ("typed", "needs"),
+    [
+        ("wait IO 128 ", "CONDITION [within SECONDS]"),
+        ("wait I 10 >= ", "VALUE [within SECONDS]"),
+        ("wait I 10 >= 100 ", "[within SECONDS]"),
+        ("wait P 0 changes within ", "SECONDS"),
+        ("wait P 0 changes within 5 ", ""),
+    ],
+)
+def test_the_hint_says_what_a_wait_still_needs(typed: str, needs: str) -> None:
+    from rac_console.commands.completion import hint
+
+    assert hint(typed) == needs
+
+
+def test_a_wait_on_a_bit_completes_its_conditions() -> None:
+    from rac_console.commands.completion import complete
+
+    assert [c.text for c in complete("wait IO 128 ")] == ["on", "off", "changes"]
+    assert [c.text for c in complete("wait I 1 ")] == ["changes"]
