@@ -16,6 +16,7 @@ from typing import Any
 
 from ..sim.faults import FaultSettings
 from ..sim.notices import Notices
+from ..sim.replay import DEFAULT_END, ReplayController, ReplayError, load_recording
 from ..sim.server import SimulatorServer, is_loopback
 
 
@@ -67,9 +68,13 @@ async def serve(args: argparse.Namespace) -> int:
     except ValueError as exc:
         print(f"rac-console: {exc}", file=sys.stderr)
         return 2
+    replay = _replay(args)
+    if isinstance(replay, int):
+        return replay
     server = SimulatorServer(
         args.bind,
         args.sim_port,
+        controller=replay,
         faults=faults,
         idle_timeout=getattr(args, "idle_timeout", 0),
         control=not getattr(args, "no_control", False),
@@ -84,6 +89,9 @@ async def serve(args: argparse.Namespace) -> int:
         )
         return 3
     handler = _quiet_asyncio(asyncio.get_running_loop(), server.notices)
+    if replay is not None:
+        replay.notify = server.notices.note
+        _to_stderr(f"rac-console sim: {replay.recording.describe(replay.end)}")
     print(f"RC8 simulator listening on {server.host}:{server.port} (Ctrl-C to stop)", flush=True)
     if faults.active or faults.max_sessions:
         print(f"faults: {faults.describe()}", flush=True)
@@ -95,3 +103,20 @@ async def serve(args: argparse.Namespace) -> int:
         log.removeHandler(handler)
         log.propagate = True
     return 0
+
+
+def _replay(args: argparse.Namespace) -> ReplayController | int | None:
+    """The controller serving ``--replay FILE`` (None without it), or exit status 2
+    after one line on stderr: a file that cannot be replayed, or --replay-end alone."""
+    path, end = getattr(args, "replay", None), getattr(args, "replay_end", None)
+    if path is None:
+        if end is not None:
+            print("rac-console: --replay-end needs --replay FILE", file=sys.stderr)
+            return 2
+        return None
+    try:
+        recording = load_recording(path)
+    except ReplayError as exc:
+        print(f"rac-console: {exc}", file=sys.stderr)
+        return 2
+    return ReplayController(recording, end or DEFAULT_END)

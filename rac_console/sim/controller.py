@@ -174,17 +174,10 @@ class SimulatedController:
         self.known_frames.clear()
 
     def _answer(self, text: str) -> str:
-        fields = text.split(":", 4)
-        if len(fields) != 5:
+        request = read_request(text)
+        if request is None:
             return _code(E_INVALIDCOMMAND)
-        command, part, number, subcommand, parameter = fields
-        command = command.upper()
-        kind = KINDS.get(subcommand.upper())
-        if command not in ("GET", "PUT") or part.upper() != "RC8" or kind is None:
-            return _code(E_INVALIDCOMMAND)
-        if not number.isascii() or not number.isdigit():
-            return _code(E_INVALIDCOMMAND)
-        index = int(number)
+        command, kind, index, parameter = request
         if index >= self.count(kind):
             return _code(E_INVALIDARG)
         if command == "GET":
@@ -209,6 +202,24 @@ class SimulatedController:
         except ValueError:
             return E_INVALIDARG
         return S_OK
+
+
+def read_request(text: str) -> tuple[str, VarKind, int, str] | None:
+    """``(command, kind, index, parameter)`` of a request line as an RC8 reads it (case
+    and indentation aside, ``GET:RC8:010:i:`` is ``GET:RC8:10:I:``); None when it is not
+    a GET or PUT of a known type (E_INVALIDCOMMAND). One reading, so a replay keys its
+    recorded requests exactly as the simulator answers them."""
+    fields = text.lstrip(" \t").split(":", 4)
+    if len(fields) != 5:
+        return None
+    command, part, number, subcommand, parameter = fields
+    command = command.upper()
+    kind = KINDS.get(subcommand.upper())
+    if command not in ("GET", "PUT") or part.upper() != "RC8" or kind is None:
+        return None
+    if not number.isascii() or not number.isdigit():
+        return None
+    return command, kind, int(number), parameter
 
 
 def _code(code: int) -> str:

@@ -40,6 +40,7 @@ from ..protocol.hresult import E_INVALIDARG, E_INVALIDCOMMAND, E_INVALIDRCVPACKE
 from .controller import MAX_REQUEST, SimulatedController, _reply
 from .faults import EXTRA_LINE, GARBAGE, FaultPlan, FaultSettings
 from .notices import Notices
+from .replay import ReplayController
 
 LOOPBACK = "127.0.0.1"
 CONTROL_PREFIX = b"SIM:"
@@ -399,7 +400,7 @@ class SimulatorServer:
         self,
         host: str = LOOPBACK,
         port: int = 0,
-        controller: SimulatedController | None = None,
+        controller: SimulatedController | ReplayController | None = None,
         faults: FaultSettings | None = None,
         transcript: bool = False,
         *,
@@ -409,6 +410,7 @@ class SimulatorServer:
     ) -> None:
         self.host = host
         self.port = port
+        #: A replay's answers move on with each request: it keeps none for the fast path.
         self.controller = controller or SimulatedController()
         self.transcript: list[tuple[int, bytes, bytes | None]] | None = [] if transcript else None
         #: Request frames the sessions answer at once, from the controller's kept replies:

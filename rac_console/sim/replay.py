@@ -1,0 +1,280 @@
+"""``rac-console sim --replay FILE``: a ``--record`` file's answers, served again in order.
+
+A session recorded at a cell can be watched again at the desk: the Nth GET of a
+variable gets the Nth answer the controller gave to a GET of it, byte for byte (an
+error HRESULT included), so the console is tried against real data with no robot.
+
+Only what the controller said is served, never an invented value:
+
+- Pairs only: a request and the reply that answered it. A reply the session refused,
+  a partial or unsolicited line, and a request that got no answer are left out.
+- Requests are keyed as the controller reads them (:func:`read_request`), by type and
+  index, so ``get:rc8:010:i:`` replays the answers recorded for ``GET:RC8:10:I:``.
+- A GET of a variable the file never answered gets E_NOTIMPL: a controller answers no
+  well-formed GET with it, so it cannot be mistaken for a recorded error (a recorded
+  E_INVALIDARG, say, for an index out of range, is replayed as it was).
+- A PUT gets E_ACCESSDENIED: the replay is read-only, so every value it answers is one
+  the controller gave. (Accepting writes would mix values nobody recorded into it.)
+- Past a variable's last answer it holds that answer (``hold``, the default: it never
+  shows a change that did not happen) or starts again from its first (``cycle``).
+
+The order is the replay's, shared by every connection, like one controller's values.
+Pure: no I/O but reading the file; what the user should hear goes to ``notify``.
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Callable, Iterable
+from dataclasses import dataclass, field
+
+from ..protocol.hresult import (
+    E_ACCESSDENIED,
+    E_INVALIDCOMMAND,
+    E_INVALIDRCVPACKET,
+    E_NOTIMPL,
+    E_UNEXPECTED,
+)
+from ..protocol.text import terminal_safe
+from .controller import MAX_REQUEST, _reply, read_request
+
+END_MODES = ("hold", "cycle")
+DEFAULT_END = "hold"
+NOT_RECORDED = E_NOTIMPL
+READ_ONLY = E_ACCESSDENIED
+QUOTED = 40  # characters of a file's value quoted in an error
+MAX_TOLD = 4096  # variables told about once each; past that, the notices' rate limit only
+
+Key = tuple[str, int]  # (type code, index): ("I", 10)
+Notify = Callable[[str, str], None]  # (kind, text), as Notices.note takes them
+
+
+class ReplayError(Exception):
+    """A record file that cannot be replayed; its text is one line for the user."""
+
+
+@dataclass
+class Recording:
+    """The GET answers of one record file, per variable, in the order they came."""
+
+    path: str
+    answers: dict[Key, list[bytes]] = field(default_factory=dict)  # reply frames, CR ended
+    unanswered: int = 0  # requests with no reply, or whose reply was refused or cut off
+    unused_replies: int = 0  # unsolicited lines, and replies that answered no request
+    not_gets: int = 0  # answered requests that were not GETs (PUTs, raw lines, SIM:)
+
+    @property
+    def count(self) -> int:
+        return sum(len(replies) for replies in self.answers.values())
+
+    def describe(self, end: str) -> str:
+        """The one line said when the replay starts."""
+        ignored = [
+            f"{n} {what}"
+            for n, what in (
+                (self.unanswered, "requests with no answer"),
+                (self.unused_replies, "unsolicited or unpaired replies"),
+                (self.not_gets, "answered PUTs and other non-GET requests"),
+            )
+            if n
+        ]
+        skipped = f" (ignored: {', '.join(ignored)})" if ignored else ""
+        then = "hold the last" if end == "hold" else "start again from the first"
+        return (
+            f"replaying {terminal_safe(self.path)}: {len(self.answers)} variables, "
+            f"{self.count} answers{skipped}; after a variable's last answer: {then}"
+        )
+
+
+def unescape_text(text: str) -> bytes:
+    """The bytes ``escape_bytes`` wrote as ``text``; ValueError for text it never writes."""
+    if not (text.isascii() and text.isprintable()):
+        raise ValueError("only printable ASCII is written as it is")
+    if "\\" not in text:
+        return text.encode("ascii")
+    out = bytearray()
+    i, size = 0, len(text)
+    while i < size:
+        ch = text[i]
+        if ch != "\\":
+            out += ch.encode("ascii")
+            i += 1
+        elif text.startswith("\\\\", i):
+            out.append(0x5C)
+            i += 2
+        elif text[i + 1 : i + 2] == "x" and _is_hex(text[i + 2 : i + 4]):
+            out.append(int(text[i + 2 : i + 4], 16))
+            i += 4
+        else:
+            raise ValueError("a backslash that starts no \\\\ or \\xNN")
+    return bytes(out)
+
+
+def _is_hex(pair: str) -> bool:
+    return len(pair) == 2 and all(c in "0123456789abcdefABCDEF" for c in pair)
+
+
+def load_recording(path: str) -> Recording:
+    """Read a ``--record`` file; ReplayError (one line) when it cannot be replayed."""
+    name = terminal_safe(path)
+    try:
+        with open(path, "rb") as file:
+            recording = read_records(file, path)
+    except OSError as exc:
+        reason = terminal_safe(exc.strerror or str(exc))
+        raise ReplayError(f"cannot read the replay file {name}: {reason}") from None
+    if not recording.answers:
+        raise ReplayError(
+            f"{name} holds no GET answered by a controller: nothing to replay "
+            "(record one with --record FILE)"
+        )
+    return recording
+
+
+def read_records(lines: Iterable[bytes], path: str) -> Recording:
+    """Pair each request with the reply that answered it, line by line."""
+    recording = Recording(path)
+    answers = recording.answers
+    seen: dict[bytes, bytes] = {}  # one bytes object per distinct reply: a still value
+    pending: bytes | None = None  # the request waiting for its reply
+    for number, raw in enumerate(lines, 1):
+        if not raw.strip():
+            continue
+        direction, data, unusable = _record(raw, number, path)
+        if direction == "tx":
+            recording.unanswered += pending is not None
+            pending = data
+            continue
+        if pending is None or unusable == "unsolicited":  # a waiting request still waits
+            recording.unused_replies += 1
+            continue
+        if unusable:  # refused or cut off: the request went unanswered
+            recording.unanswered += 1
+            pending = None
+            continue
+        key = _get_key(pending)
+        pending = None
+        if key is None:
+            recording.not_gets += 1
+            continue
+        reply = data + b"\r"
+        answers.setdefault(key, []).append(seen.setdefault(reply, reply))
+    recording.unanswered += pending is not None
+    return recording
+
+
+def _record(raw: bytes, number: int, path: str) -> tuple[str, bytes, str]:
+    """One line's direction, its bytes and why a reply cannot be used ("" when it can)."""
+    where = f"{terminal_safe(path)} line {number}"
+    try:
+        record = json.loads(raw)
+    except (ValueError, RecursionError):  # RecursionError: nesting too deep to read
+        raise ReplayError(f"{where} is not JSON (not a --record file?)") from None
+    if not isinstance(record, dict):
+        raise ReplayError(f"{where} is not a recorded frame (a JSON object)")
+    direction, text = record.get("dir"), record.get("text")
+    if direction not in ("tx", "rx"):
+        raise ReplayError(f'{where}: \'dir\' must be "tx" or "rx", not {_quoted(direction)}')
+    if not isinstance(text, str):
+        raise ReplayError(f"{where}: 'text' must be a string, not {_quoted(text)}")
+    try:
+        data = unescape_text(text)
+    except ValueError:
+        raise ReplayError(
+            f"{where}: 'text' is not as --record writes it: {_quoted(text)}"
+        ) from None
+    if record.get("partial"):
+        return direction, data, "partial"
+    if record.get("refused") is not None:
+        return direction, data, "refused"
+    if record.get("unsolicited"):
+        return direction, data, "unsolicited"
+    if b"\r" in data:  # it could not be sent again as one reply
+        return direction, data, "refused"
+    return direction, data, ""
+
+
+def _quoted(value: object) -> str:
+    text = json.dumps(value)
+    if len(text) > QUOTED:
+        text = text[: QUOTED - 1] + "…"
+    return terminal_safe(text)
+
+
+def _get_key(request: bytes) -> Key | None:
+    """The variable a well-formed GET reads; None for anything else."""
+    try:
+        parsed = read_request(request.decode("ascii"))
+    except UnicodeDecodeError:
+        return None
+    if parsed is None or parsed[0] != "GET" or parsed[3].strip(" \t"):
+        return None
+    return parsed[1].code, parsed[2]
+
+
+class ReplayController:
+    """Answers request lines from a :class:`Recording`, as the server's controller.
+
+    It keeps no replies (``known_frames`` stays empty): the same line is answered with
+    the next recorded value each time, so the server's fast path never serves it.
+    """
+
+    def __init__(
+        self, recording: Recording, end: str = DEFAULT_END, notify: Notify | None = None
+    ) -> None:
+        if end not in END_MODES:
+            raise ValueError(f"end must be one of {', '.join(END_MODES)}, not {end!r}")
+        self.recording = recording
+        self.end = end
+        self.notify = notify  # (kind, text) for Notices.note; set once the server has one
+        self.requests = 0
+        self.known_frames: dict[bytes, bytes] = {}  # the server's fast path: never filled
+        self._next: dict[Key, int] = {}
+        self._told: set[tuple[str, Key]] = set()
+
+    def forget(self) -> None:
+        """Nothing is kept, so nothing to drop (the server calls it after SIM: lines)."""
+
+    def handle(self, line: bytes) -> tuple[bytes, bool]:
+        """The reply frame (CR included) to one request line, and whether to close."""
+        self.requests += 1
+        if len(line) + 1 > MAX_REQUEST:
+            return _reply(E_INVALIDRCVPACKET), True
+        try:
+            return self._answer(line.decode("ascii")), False
+        except UnicodeDecodeError:
+            return _reply(E_INVALIDCOMMAND), False
+        except Exception:  # a bug here must cost one answer, never the session
+            return _reply(E_UNEXPECTED), False
+
+    def _answer(self, text: str) -> bytes:
+        request = read_request(text)
+        if request is None:
+            return _reply(E_INVALIDCOMMAND)
+        command, kind, index, parameter = request
+        key = (kind.code, index)
+        if command == "PUT":
+            self._say("put", key, "refused (E_ACCESSDENIED): a replay is read-only")
+            return _reply(READ_ONLY)
+        if parameter.strip(" \t"):
+            return _reply(E_INVALIDCOMMAND)
+        replies = self.recording.answers.get(key)
+        if replies is None:
+            self._say("unrecorded", key, "not in the recording: answered E_NOTIMPL")
+            return _reply(NOT_RECORDED)
+        n = self._next.get(key, 0)
+        if n == len(replies):  # past the last answer
+            n = 0 if self.end == "cycle" else n - 1
+            then = "holding the last" if self.end == "hold" else "starting again from the first"
+            self._say("end", key, f"past its {len(replies)} recorded answers: {then}")
+        self._next[key] = n + 1
+        return replies[n]
+
+    def _say(self, kind: str, key: Key, text: str) -> None:
+        """Tell the user once per variable and kind (the notices rate-limit the rest)."""
+        if self.notify is None or (kind, key) in self._told or len(self._told) >= MAX_TOLD:
+            return
+        self._told.add((kind, key))
+        code, index = key
+        verb = "PUT" if kind == "put" else "GET"
+        self.notify(f"replay-{kind}", f"replay: {verb}:RC8:{index}:{code}: {text}")
