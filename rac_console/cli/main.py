@@ -145,6 +145,7 @@ class CliParser:
     parser: argparse.ArgumentParser
     top_actions: tuple[argparse.Action, ...]  # options before the command word
     command_actions: tuple[argparse.Action, ...]  # options of get, put and send
+    get_actions: tuple[argparse.Action, ...] = ()  # get's own: -r/--repeat, -i/--interval
 
     @property
     def top_options(self) -> dict[str, Option]:
@@ -153,6 +154,11 @@ class CliParser:
     @property
     def command_options(self) -> dict[str, Option]:
         return _option_table(self.command_actions)
+
+    def options_for(self, command: str) -> dict[str, Option]:
+        """The options of one of get, put and send (only get repeats)."""
+        extra = self.get_actions if command == "get" else ()
+        return _option_table((*self.command_actions, *extra))
 
 
 def _option_table(actions: Iterable[argparse.Action]) -> dict[str, Option]:
@@ -166,6 +172,69 @@ def _option_table(actions: Iterable[argparse.Action]) -> dict[str, Option]:
         metavar = None if action.nargs == 0 else str(action.metavar or action.dest.upper())
         table.update(dict.fromkeys(names, Option(long, metavar)))
     return table
+
+
+def _whole(hint: str) -> Callable[[str], int]:
+    """An argparse type for a count of 1 or more; 0 is refused with ``hint``."""
+
+    def parse(text: str) -> int:
+        if not (text.isascii() and text.isdigit()) or int(text) < 1:
+            why = hint if text.isascii() and text.isdigit() else ""
+            raise argparse.ArgumentTypeError(f"give a whole number from 1 up, got {text!r}{why}")
+        return int(text)
+
+    return parse
+
+
+def _repeat_options(get: argparse.ArgumentParser) -> tuple[argparse.Action, ...]:
+    """``get -r N -i S``: N reads, S seconds apart start to start (as redis-cli -r/-i).
+
+    The interval defaults to 0, as in redis-cli and ``latency``: N reads now, back to
+    back; a steady series over time is ``watch``. Both default to None so that ``-i``
+    without ``-r`` can be refused rather than ignored."""
+    return (
+        get.add_argument(
+            "-r",
+            "--repeat",
+            type=_whole(" (-r 0 would read nothing or forever: for an endless series use watch)"),
+            metavar="N",
+            help="read N times, one result a line with its time (JSON: repetition, time)",
+        ),
+        get.add_argument(
+            "-i",
+            "--interval",
+            dest="repeat_interval",
+            type=_seconds(allow_zero=True),
+            metavar="S",
+            help="with -r: S seconds from the start of one read to the next (default 0)",
+        ),
+    )
+
+
+WATCH_HELP = "print watched variables as lines for pipes: watch IO 128-135 --every 0.2"
+
+
+def _watch_options(watch: argparse.ArgumentParser) -> None:
+    watch.add_argument(
+        "variables",
+        metavar="VAR",
+        nargs="+",
+        help="as the console's watch: P 0, P[0], IO 128-135, several in a row",
+    )
+    watch.add_argument(
+        "--every",
+        type=_seconds(allow_zero=True),
+        default=0.5,
+        metavar="S",
+        help="seconds from the start of one cycle to the next (default 0.5, as the console)",
+    )
+    watch.add_argument(
+        "--count",
+        type=_whole(" (leave --count out to watch until Ctrl-C)"),
+        default=None,
+        metavar="N",
+        help="stop after N cycles (default: until Ctrl-C)",
+    )
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -188,6 +257,11 @@ def build_cli() -> CliParser:
     console = parser.add_argument_group("console options (no COMMAND: the full-screen console)")
     top_actions += [
         console.add_argument("--watch", metavar="FILE", help="load a TOML watch list at start"),
+        console.add_argument(
+            "--log-csv",
+            metavar="FILE",
+            help="log the watched values to FILE, one CSV row per poll cycle (also: log FILE)",
+        ),
         console.add_argument(
             "--history", metavar="FILE", help="history file (default: in your state directory)"
         ),
@@ -226,6 +300,7 @@ def build_cli() -> CliParser:
     )
     get.add_argument("type", metavar="TYPE", nargs="?", help=type_help)
     get.add_argument("index", metavar="INDEX", nargs="?", help="0 to 32767")
+    get_actions = _repeat_options(get)
     put, _ = command(
         "put",
         "write a variable: put P 10 1 2 3 4 5 6 -1",
@@ -267,6 +342,8 @@ def build_cli() -> CliParser:
     latency.add_argument(
         "--var", default="I 0", metavar="'TYPE INDEX'", help="the variable to read (default 'I 0')"
     )
+    watch, _ = command("watch", WATCH_HELP, usage="%(prog)s [options] VAR...")
+    _watch_options(watch)
     repl, _ = command("repl", "a line-oriented console for plain terminals, ssh and serial")
     repl.add_argument(
         "--history",
@@ -280,6 +357,12 @@ def build_cli() -> CliParser:
         default=argparse.SUPPRESS,
         metavar="SECONDS",
         help="time between polls of watch (default 0.5)",
+    )
+    repl.add_argument(
+        "--log-csv",
+        metavar="FILE",
+        default=argparse.SUPPRESS,
+        help="log the watched values to FILE, one CSV row per poll cycle",
     )
     sim = commands.add_parser(
         "sim",
@@ -313,6 +396,21 @@ def build_cli() -> CliParser:
         action="store_true",
         help="turn off the SIM:SET:/SIM:GET: control lines (then answered "
         "E_INVALIDCOMMAND, like any unknown command)",
+    )
+    sim.add_argument(
+        "--replay",
+        metavar="FILE",
+        default=None,
+        help="serve what a controller answered in a --record FILE instead of simulated "
+        "values: the Nth GET of a variable gets its Nth recorded answer (errors too); "
+        "a variable never recorded answers E_NOTIMPL, a PUT E_ACCESSDENIED (read-only)",
+    )
+    sim.add_argument(
+        "--replay-end",
+        choices=("hold", "cycle"),
+        default=None,
+        help="after a variable's last recorded answer: hold it (the default: never shows "
+        "a change that did not happen) or cycle back to its first",
     )
     faults = sim.add_argument_group(
         "faults (each reproducible with --seed; change them while it runs with a line "
@@ -382,7 +480,7 @@ def build_cli() -> CliParser:
         metavar="N",
         help="seed of the jitter and error choices (default 0)",
     )
-    return CliParser(parser, tuple(top_actions), tuple(command_actions))
+    return CliParser(parser, tuple(top_actions), tuple(command_actions), get_actions)
 
 
 def use_uvloop() -> bool:
@@ -408,6 +506,14 @@ def _dispatch(args: argparse.Namespace) -> int:
             file=sys.stderr,
         )
         return 2
+    if args.command == "get" and (args.repeat, args.repeat_interval) != (None, None):
+        from .live import repeat_get
+
+        return repeat_get(args)
+    if args.command == "watch":
+        from .live import watch
+
+        return watch(args)
     if args.command in ("get", "put", "send"):
         from .oneshot import one_command
 
@@ -450,6 +556,8 @@ def _interactive(args: argparse.Namespace) -> int:
             read_only=args.read_only,
             record=args.record,
             interval=args.interval,
+            log_csv=getattr(args, "log_csv", None),
+            cycles=args.command is None,  # the console draws trends; the REPL has none
         )
     except InputError as exc:
         print(f"rac-console: {terminal_safe(str(exc))}", file=sys.stderr)
@@ -501,7 +609,8 @@ def parse_args(words: Sequence[str]) -> argparse.Namespace:
             args.words = [w for w in positionals if w is not None] + getattr(args, "value", [])
             args.words_problem = None
         return args
-    split = split_words(words[at], words[at + 1 :], cli.command_options, before=words[:at])
+    options = cli.options_for(words[at])
+    split = split_words(words[at], words[at + 1 :], options, before=words[:at])
     args = cli.parser.parse_args([*words[: at + 1], *split.options])
     args.words = list(split.operands)
     args.words_problem = split.problem

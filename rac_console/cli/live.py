@@ -1,0 +1,317 @@
+"""Live values for pipes: ``get ... -r N -i S`` and ``watch VAR...``, one line at a time.
+
+Both run over one session (:func:`.target.open_session`) and send through
+:func:`~rac_console.engine.execute.execute`, like ``get`` and ``run``. Every line is
+flushed as it is written, so ``| grep --line-buffered`` sees it at once; a reader that
+goes away (``| head -3``) ends the command quietly. The exit status is the worst one
+seen, as for ``run``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import errno
+import json
+import os
+import sys
+import time
+from collections.abc import Callable, Iterator
+from datetime import datetime
+from typing import Any
+
+from ..commands.argv import exchange_from_words, input_line
+from ..commands.language import Get, VarRef, _parse_var_list
+from ..commands.outcome import ExitStatus, Outcome, refused, worst
+from ..engine.backoff import Backoff
+from ..engine.execute import execute
+from ..present.render import error_text, outcome_text, print_error
+from ..protocol import InputError, hresult_name
+from ..session import BadReply, ConnectFailed, RequestTimeout, Session
+from .oneshot import Output
+from .target import open_session
+
+WATCH_USAGE = "rac-console watch TYPE INDEX [TYPE INDEX|TYPE FIRST-LAST]..., e.g. watch IO 128-135"
+
+#: How a write to stdout fails once its reader has gone: EPIPE (BrokenPipeError), and
+#: on Windows also EINVAL.
+_READER_GONE = {errno.EPIPE, *([errno.EINVAL] if sys.platform == "win32" else [])}
+
+
+class Schedule:
+    """When each repetition (or watch cycle) starts: ``interval`` seconds start to start.
+
+    Starts are counted from the previous *scheduled* start, so a slow reply does not
+    push the later ones back. A start that is already late begins at once and the
+    count goes on from it: missed starts are never made up in a burst. After a
+    transport failure the next start waits at least the poller's backoff (0.5 s
+    doubling to 5 s), so a controller that is down is not asked in a tight loop.
+    """
+
+    def __init__(self, interval: float) -> None:
+        self.interval = interval
+        self._next: float | None = None
+        self._backoff = Backoff()
+
+    def wait(self) -> None:
+        """Sleep until the next start is due (the first one is due at once)."""
+        now = time.monotonic()
+        if self._next is not None and now < self._next:
+            time.sleep(self._next - now)
+            now = self._next  # on the grid: the sleep's own lateness does not add up
+        self._next = now + self.interval
+
+    def ended(self, outcomes: list[Outcome]) -> None:
+        """What came of the requests since the last start."""
+        if any(o.status == ExitStatus.TRANSPORT for o in outcomes):
+            assert self._next is not None
+            self._next = max(self._next, time.monotonic() + self._backoff.next_delay())
+        else:
+            self._backoff.good()
+
+
+def timestamp() -> str:
+    """Now as ISO 8601 local time with milliseconds and the UTC offset (unambiguous
+    across time zones and daylight saving): ``2026-11-22T01:02:03.456+01:00``."""
+    return datetime.now().astimezone().isoformat(timespec="milliseconds")
+
+
+def write_line(text: str) -> None:
+    """One line on stdout, flushed now, for readers that act line by line."""
+    sys.stdout.write(text + "\n")
+    sys.stdout.flush()
+
+
+def _reader_gone(exc: OSError) -> bool:
+    """True when stdout's reader has gone; stdout then points at the null device,
+    so nothing more (Python's last flush at exit included) can fail on it."""
+    if exc.errno not in _READER_GONE:
+        return False
+    with contextlib.suppress(OSError, ValueError):  # ValueError: stdout has no descriptor
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+    return True
+
+
+# ------------------------------------------------------------ the shared loop
+
+Tick = Callable[[Session, int, str], list[Outcome]]
+"""One repetition or cycle: given the session, its number and start time, it reads,
+prints its line and returns what came of its requests."""
+
+
+def run_live(
+    args: argparse.Namespace,
+    output: Output,
+    tick: Tick,
+    *,
+    count: int | None,
+    interval: float,
+    until_ctrl_c: bool,
+) -> ExitStatus:
+    """``count`` ticks (None: without end) over one session, ``interval`` apart.
+
+    The status is the worst one seen. A closed stdout ends it quietly; Ctrl-C ends it
+    the same way when ``until_ctrl_c`` (the usual end of a watch), else it goes on up
+    to ``main`` (status 130: fewer results than asked for).
+    """
+    statuses: list[ExitStatus] = []
+    schedule = Schedule(interval)
+    try:
+        with open_session(args, output.local_failure) as session:
+            for number in _ticks(count):
+                schedule.wait()
+                outcomes = tick(session, number, timestamp())
+                schedule.ended(outcomes)
+                statuses += [o.status for o in outcomes]
+    except KeyboardInterrupt:
+        if not until_ctrl_c:
+            raise
+    except InputError as exc:  # --record cannot open its file
+        print_error(output.err, str(exc))
+        return ExitStatus.REFUSED
+    except OSError as exc:
+        if not _reader_gone(exc):
+            raise
+    return output.status(worst(statuses))
+
+
+def _ticks(count: int | None) -> Iterator[int]:
+    """Numbers from 1: ``count`` of them, or without end."""
+    number = 0
+    while count is None or number < count:
+        number += 1
+        yield number
+
+
+# ------------------------------------------------------------------ get -r N
+
+
+def repeat_get(args: argparse.Namespace) -> ExitStatus:
+    """``get TYPE INDEX -r N [-i S]``: N results, one a line, each with its time."""
+    output = Output(args.json)
+    line = input_line("get", args.words)
+    try:
+        if args.words_problem is not None:
+            raise InputError(args.words_problem)
+        if args.repeat is None:
+            raise InputError(
+                "-i needs -r N, how many times to read: "
+                f"rac-console get {' '.join(args.words) or 'I 0'} -r 10 -i {args.repeat_interval:g}"
+            )
+        command = exchange_from_words("get", args.words)
+    except InputError as exc:
+        output.show(refused(line, str(exc)))
+        return ExitStatus.REFUSED
+
+    def repetition(session: Session, number: int, started: str) -> list[Outcome]:
+        outcome = execute(session, command, read_only=args.read_only, line=line)
+        _show_repetition(output, outcome, number, started)
+        return [outcome]
+
+    interval = args.repeat_interval or 0.0
+    return run_live(
+        args, output, repetition, count=args.repeat, interval=interval, until_ctrl_c=False
+    )
+
+
+def _show_repetition(output: Output, outcome: Outcome, number: int, started: str) -> None:
+    """JSON with ``repetition`` and ``time``; text as ``get`` prints it after the time
+    and a tab. A failure is one line on stderr, as in ``run``."""
+    prefix = f"repetition {number} at {started}: "
+    if output.as_json:
+        output.show(outcome, {"repetition": number, "time": started}, prefix)
+    elif outcome.ok:
+        write_line(f"{started}\t{outcome_text(outcome).plain}")
+    else:
+        print_error(output.err, error_text(outcome, prefix))
+
+
+# --------------------------------------------------------------------- watch
+
+
+def watch_variables(words: list[str]) -> tuple[VarRef, ...]:
+    """The variables the words name, in the console's ``watch`` syntax (``P 0``,
+    ``IO 128-135``, several in a row); labels and ``every`` are the console's own."""
+    variables, rest, _ = _parse_var_list(" ".join(words), WATCH_USAGE)
+    rest = rest.strip()
+    if rest.lower().startswith("every"):
+        raise InputError(f"write the period as an option: --every {rest[5:].strip() or '0.5'}")
+    if rest:
+        raise InputError(f"watch takes variables only, not {rest!r}: {WATCH_USAGE}")
+    return variables
+
+
+def watch(args: argparse.Namespace) -> ExitStatus:
+    """``watch VAR... [--every S] [--count N]``: one line a cycle until N cycles or Ctrl-C.
+
+    Ctrl-C is how a watch without --count ends, so it is no failure: the status is
+    the worst one seen (0 when every read succeeded). A connection that fails is
+    tried again the next cycle, the failure shown in that cycle's line.
+    """
+    output = Output(args.json)
+    try:
+        variables = watch_variables(args.variables)
+    except InputError as exc:
+        print_error(output.err, str(exc))
+        return ExitStatus.REFUSED
+    reported: dict[VarRef, str] = {}  # each variable's failure, said on stderr once
+
+    def cycle(session: Session, number: int, started: str) -> list[Outcome]:
+        results = _read_cycle(session, variables, args.read_only)
+        _report_failures(output, results, reported)
+        if output.as_json:
+            write_line(json.dumps(_cycle_json(number, started, results)))
+        else:
+            write_line(_cycle_text(started, results))
+        return [o for o in results.values() if o is not None]
+
+    return run_live(args, output, cycle, count=args.count, interval=args.every, until_ctrl_c=True)
+
+
+def _read_cycle(
+    session: Session, variables: tuple[VarRef, ...], read_only: bool
+) -> dict[VarRef, Outcome | None]:
+    """Each variable's outcome; after a connection failure the rest of the cycle is
+    not read (None): it would only wait out the same failure once per variable."""
+    results: dict[VarRef, Outcome | None] = {}
+    broken = False
+    for var in variables:
+        if broken:
+            results[var] = None
+            continue
+        outcome = execute(session, Get(var), read_only=read_only)
+        results[var] = outcome
+        broken = outcome.status == ExitStatus.TRANSPORT
+    return results
+
+
+def _report_failures(
+    output: Output, results: dict[VarRef, Outcome | None], reported: dict[VarRef, str]
+) -> None:
+    """A failure on stderr when it starts or changes, not every cycle (the cycle's
+    line shows it each time)."""
+    for var, outcome in results.items():
+        if outcome is None:
+            continue
+        if outcome.ok:
+            reported.pop(var, None)
+            continue
+        message = error_text(outcome, f"{var}: ")
+        if reported.get(var) != message:
+            reported[var] = message
+            print_error(output.err, message)
+
+
+def _cycle_text(started: str, results: dict[VarRef, Outcome | None]) -> str:
+    """``TIME<TAB>NAME=VALUE<TAB>...``: fields for ``cut -f``/``awk -F'\\t'`` and
+    self-describing for ``grep 'IO130=ON'``, with no header line to skip. A value is
+    never split by a tab (tabs in strings are escaped); array elements are joined
+    with commas; a failure is ``NAME=!REASON``."""
+    fields = [started]
+    for var, outcome in results.items():
+        fields.append(f"{var}={_field(outcome)}")
+    return "\t".join(fields)
+
+
+def _field(outcome: Outcome | None) -> str:
+    if outcome is None:
+        return "!skipped"
+    if not outcome.ok:
+        return "!" + _reason(outcome)
+    variant, var = outcome.variant, outcome.var
+    return (
+        "" if variant is None or var is None else ",".join(t for _, t in var.kind.fields(variant))
+    )
+
+
+def _reason(outcome: Outcome) -> str:
+    """One word for why a read failed: the HRESULT's name, or what the connection did."""
+    if outcome.response is not None and not outcome.response.ok:
+        code = outcome.response.code
+        return hresult_name(code) or f"0x{code & 0xFFFFFFFF:08X}"
+    match outcome.failure:
+        case RequestTimeout():
+            return "timeout"
+        case ConnectFailed():
+            return "no-connection"
+        case BadReply():
+            return "bad-reply"
+        case None:
+            return "refused"  # nothing was sent
+        case _:
+            return "disconnected"
+
+
+def _cycle_json(number: int, started: str, results: dict[VarRef, Outcome | None]) -> dict[str, Any]:
+    """``{"time", "cycle", "ok", "values": {NAME: value or null}, "errors": {NAME: why}}``:
+    ``jq '.values.IO130'`` reads one variable; ``errors`` holds only the failed ones."""
+    values: dict[str, Any] = {}
+    errors: dict[str, str] = {}
+    for var, outcome in results.items():
+        variant = outcome.variant if outcome is not None and outcome.ok else None
+        values[str(var)] = variant.to_json() if variant is not None else None
+        if outcome is None:
+            errors[str(var)] = "not read: the connection failed earlier in this cycle"
+        elif not outcome.ok:
+            errors[str(var)] = outcome.summary()
+    return {"time": started, "cycle": number, "ok": not errors, "values": values, "errors": errors}

@@ -1,0 +1,392 @@
+"""``get ... -r N -i S`` and ``watch VAR...``: the real CLI as a subprocess, against the
+built-in simulator and servers written here (127.0.0.1 port 0), read as a pipe reads it.
+"""
+
+from __future__ import annotations
+
+import itertools
+import json
+import queue
+import re
+import signal
+import subprocess
+import sys
+import threading
+from collections.abc import Callable
+from datetime import datetime
+from pathlib import Path
+
+import pytest
+import test_cli as shared
+from servers import CLOSE, RecordingServer
+from test_cli import cli, fixed_reply, json_lines, unused_port
+
+pytestmark = pytest.mark.slow
+
+env = shared.env  # the fixtures of test_cli: a private HOME, servers that stop with the test
+recording = shared.recording
+
+STAMP_RE = re.compile(r"\d{4}-\d\d-\d\dT\d\d:\d\d:\d\d\.\d{3}[+-]\d\d:\d\d")
+E_INVALIDARG = b"-2147024809\r"
+POSIX_ONLY = pytest.mark.skipif(
+    sys.platform == "win32", reason="Windows cannot send SIGINT to one process"
+)
+
+
+def stamp(text: str) -> datetime:
+    """An ISO 8601 time with milliseconds and the UTC offset."""
+    assert STAMP_RE.fullmatch(text), text
+    return datetime.fromisoformat(text)
+
+
+def gaps(times: list[str]) -> list[float]:
+    moments = [stamp(t) for t in times]
+    return [(b - a).total_seconds() for a, b in itertools.pairwise(moments)]
+
+
+def no_traceback(stderr: str) -> None:
+    assert "Traceback" not in stderr
+    assert "Exception ignored" not in stderr
+    assert "BrokenPipe" not in stderr
+
+
+def answer_by_line(answers: dict[bytes, bytes | object]) -> Callable[[bytes], object]:
+    """Answers per request line; any other line closes the connection."""
+    return lambda line: answers.get(line, CLOSE)
+
+
+class Running:
+    """The CLI as a running subprocess; its stdout lines arrive in a queue as printed.
+
+    With ``keep=N`` the reader takes N lines and then closes its end of the pipe, as
+    ``| head -N`` does.
+    """
+
+    def __init__(self, env: dict[str, str], tmp_path: Path, *args: str, keep: int = 0) -> None:
+        self._stderr_path = tmp_path / f"stderr-{id(self)}.txt"
+        self._stderr = self._stderr_path.open("w", encoding="utf-8")
+        self.process = subprocess.Popen(
+            [sys.executable, "-m", "rac_console", *args],
+            env=env,
+            stdin=subprocess.DEVNULL,
+            stdout=subprocess.PIPE,
+            stderr=self._stderr,
+            text=True,
+            encoding="utf-8",
+        )
+        self.lines: queue.Queue[str | None] = queue.Queue()
+        threading.Thread(target=self._read, args=(keep,), daemon=True).start()
+
+    def _read(self, keep: int) -> None:
+        stdout = self.process.stdout
+        assert stdout is not None
+        for number, line in enumerate(stdout, 1):
+            self.lines.put(line)
+            if number == keep:
+                stdout.close()  # the reader goes away, as head does
+                return
+        self.lines.put(None)
+
+    def line(self, timeout: float = 20) -> str:
+        line = self.lines.get(timeout=timeout)
+        assert line is not None, f"stdout ended; stderr: {self.stderr()}"
+        return line
+
+    def rest(self) -> list[str]:
+        """The lines still to come, up to the end of stdout."""
+        lines = []
+        while (line := self.lines.get(timeout=20)) is not None:
+            lines.append(line)
+        return lines
+
+    def finish(self, timeout: float = 20) -> int:
+        try:
+            return self.process.wait(timeout=timeout)
+        finally:
+            if self.process.poll() is None:
+                self.process.kill()
+                self.process.wait(timeout=5)
+            self._stderr.close()
+
+    def stderr(self) -> str:
+        return self._stderr_path.read_text(encoding="utf-8")
+
+
+# ------------------------------------------------------------------ get -r N -i S
+
+
+def test_get_repeats_as_json_lines_with_repetition_and_time(env: dict[str, str]) -> None:
+    result = cli(env, "get", "I", "0", "-r", "3", "-i", "0", "--json")
+    assert result.returncode == 0, result.stderr
+    data = json_lines(result.stdout)
+    assert [d["repetition"] for d in data] == [1, 2, 3]
+    assert all(d["ok"] and d["request"] == "GET:RC8:0:I:" for d in data)
+    assert all(gap >= 0 for gap in gaps([d["time"] for d in data]))
+
+
+@pytest.mark.parametrize(
+    "words",
+    [
+        ["get", "-r", "3", "I", "0"],
+        ["get", "I", "0", "-r", "3", "-i", "0"],
+        ["get", "I0", "--repeat=3", "--interval=0"],
+        ["-r", "3", "get", "I", "0"],  # before the command: refused below
+    ],
+)
+def test_repeat_options_may_stand_before_or_after_the_variable(
+    env: dict[str, str], words: list[str]
+) -> None:
+    result = cli(env, "--json", *words)
+    if words[0] != "get":
+        assert result.returncode == 2  # -r is get's, not a global option
+        return
+    assert result.returncode == 0, result.stderr
+    assert [d["repetition"] for d in json_lines(result.stdout)] == [1, 2, 3]
+
+
+def test_the_moving_counter_moves_across_repetitions(env: dict[str, str]) -> None:
+    # I0 is the simulator's 10 Hz cycle counter: 0.2 s apart, every read is higher.
+    result = cli(env, "--json", "get", "I", "0", "-r", "3", "-i", "0.2")
+    assert result.returncode == 0, result.stderr
+    values = [d["value"] for d in json_lines(result.stdout)]
+    assert values == sorted(set(values)), values
+
+
+def test_the_interval_runs_from_start_to_start(env: dict[str, str]) -> None:
+    result = cli(env, "--json", "get", "I", "0", "-r", "4", "-i", "0.25")
+    assert result.returncode == 0, result.stderr
+    assert all(gap >= 0.24 for gap in gaps([d["time"] for d in json_lines(result.stdout)]))
+
+
+def test_get_repeated_as_text_is_time_tab_and_what_get_prints(env: dict[str, str]) -> None:
+    result = cli(env, "get", "I", "2", "-r", "2")
+    assert result.returncode == 0, result.stderr
+    lines = result.stdout.splitlines()
+    assert len(lines) == 2
+    for line in lines:
+        time_text, shown = line.split("\t")
+        stamp(time_text)
+        assert shown.split()[:3] == ["I2", "=", "250"]
+
+
+def test_repeated_errors_give_exit_1_and_a_line_each(
+    env: dict[str, str], recording: Callable[..., RecordingServer]
+) -> None:
+    server = recording(fixed_reply(E_INVALIDARG))
+    result = cli(env, *server.args, "get", "I", "10", "-r", "3")
+    assert result.returncode == 1
+    assert result.stdout == ""
+    errors = result.stderr.splitlines()
+    assert [e.split(" at ")[0] for e in errors] == [
+        f"rac-console: repetition {n}" for n in (1, 2, 3)
+    ]
+    assert all("E_INVALIDARG" in e for e in errors)
+
+    result = cli(env, *server.args, "--json", "get", "I", "10", "-r", "2")
+    assert result.returncode == 1
+    assert [(d["repetition"], d["result_name"]) for d in json_lines(result.stdout)] == [
+        (1, "E_INVALIDARG"),
+        (2, "E_INVALIDARG"),
+    ]
+
+
+def test_a_closed_connection_is_exit_3_and_every_repetition_is_tried(
+    env: dict[str, str], recording: Callable[..., RecordingServer]
+) -> None:
+    server = recording(fixed_reply(CLOSE))
+    result = cli(env, *server.args, "--json", "get", "I", "10", "-r", "2", "-i", "0")
+    assert result.returncode == 3
+    data = json_lines(result.stdout)
+    assert [(d["repetition"], d["ok"]) for d in data] == [(1, False), (2, False)]
+    assert server.lines == [b"GET:RC8:10:I:"] * 2
+
+
+# --------------------------------------------------------------------- watch
+
+
+def test_watch_json_has_every_variable_each_cycle(env: dict[str, str]) -> None:
+    result = cli(env, "watch", "I", "1", "IO", "128-131", "--count", "3", "--json")
+    assert result.returncode == 0, result.stderr
+    data = json_lines(result.stdout)
+    assert [d["cycle"] for d in data] == [1, 2, 3]
+    for cycle in data:
+        stamp(cycle["time"])
+        assert list(cycle["values"]) == ["I1", "IO128", "IO129", "IO130", "IO131"]
+        assert cycle["values"]["I1"] == 1
+        assert all(isinstance(cycle["values"][f"IO{n}"], bool) for n in range(128, 132))
+        assert (cycle["ok"], cycle["errors"]) == (True, {})
+
+
+def test_watch_text_is_time_then_tab_separated_name_value_fields(env: dict[str, str]) -> None:
+    result = cli(env, "watch", "I", "1", "IO", "128-129", "P", "0", "--count", "2", "--every", "0")
+    assert result.returncode == 0, result.stderr
+    lines = result.stdout.splitlines()
+    assert len(lines) == 2
+    for line in lines:
+        time_text, *fields = line.split("\t")
+        stamp(time_text)
+        pairs = [field.split("=", 1) for field in fields]
+        assert [name for name, _ in pairs] == ["I1", "IO128", "IO129", "P0"]
+        values = dict(pairs)
+        assert values["I1"] == "1"
+        assert {values["IO128"], values["IO129"]} <= {"ON", "OFF"}
+        assert len([float(v) for v in values["P0"].split(",")]) == 7
+
+
+def test_watch_cycles_run_start_to_start(env: dict[str, str]) -> None:
+    result = cli(env, "--json", "watch", "P", "0", "J", "0", "--every", "0.25", "--count", "3")
+    assert result.returncode == 0, result.stderr
+    assert all(gap >= 0.24 for gap in gaps([d["time"] for d in json_lines(result.stdout)]))
+
+
+def test_watch_shows_wire_text_escaped(
+    env: dict[str, str], recording: Callable[..., RecordingServer]
+) -> None:
+    server = recording(fixed_reply(b"0,8,red\x1b[31m\r"))
+    result = cli(env, *server.args, "watch", "S", "1", "--count", "1")
+    assert result.returncode == 0, result.stderr
+    assert result.stdout.split("\t")[1] == "S1=red\\x1b[31m\n"
+
+
+def test_a_controller_error_is_in_the_line_and_exit_1(
+    env: dict[str, str], recording: Callable[..., RecordingServer]
+) -> None:
+    ok = b"0,3,7\r"
+    server = recording(answer_by_line({b"GET:RC8:1:I:": ok, b"GET:RC8:10:I:": E_INVALIDARG}))
+    result = cli(env, *server.args, "watch", "I", "1", "I", "10", "--count", "3", "--every", "0")
+    assert result.returncode == 1
+    lines = result.stdout.splitlines()
+    assert [line.split("\t")[1:] for line in lines] == [["I1=7", "I10=!E_INVALIDARG"]] * 3
+    (said,) = result.stderr.splitlines()  # once, not every cycle
+    assert said.startswith("rac-console: I10: ") and "E_INVALIDARG" in said
+
+    result = cli(env, *server.args, "--json", "watch", "I", "1", "I10", "--count", "1")
+    (cycle,) = json_lines(result.stdout)
+    assert cycle["ok"] is False
+    assert cycle["values"] == {"I1": 7, "I10": None}
+    assert list(cycle["errors"]) == ["I10"] and "E_INVALIDARG" in cycle["errors"]["I10"]
+
+
+@pytest.mark.parametrize(
+    ("reply", "reason"),
+    [(CLOSE, "disconnected"), (None, "timeout"), ("refused", "no-connection")],
+)
+def test_a_failing_connection_is_exit_3_and_count_still_ends_it(
+    env: dict[str, str],
+    recording: Callable[..., RecordingServer],
+    reply: object,
+    reason: str,
+) -> None:
+    """Every cycle tries again; the variables after the failure are skipped."""
+    server = recording(answer_by_line({b"GET:RC8:1:I:": b"0,3,7\r", b"GET:RC8:2:I:": reply}))
+    target = server.args if reply != "refused" else ["-H", "127.0.0.1", "-p", str(unused_port())]
+    words = ["watch", "I", "1", "I", "2", "I", "3", "--count", "3", "--every", "0"]
+    result = cli(env, *target, "--timeout", "0.3", *words)
+    assert result.returncode == 3
+    no_traceback(result.stderr)
+    lines = [line.split("\t")[1:] for line in result.stdout.splitlines()]
+    first = "I1=!no-connection" if reply == "refused" else "I1=7"
+    second = "I2=!skipped" if reply == "refused" else f"I2=!{reason}"
+    assert lines == [[first, second, "I3=!skipped"]] * 3
+
+    result = cli(env, *target, "--timeout", "0.3", "--json", *words[:-4], "--count", "1")
+    (cycle,) = json_lines(result.stdout)
+    assert cycle["values"]["I3"] is None
+    assert "not read" in cycle["errors"]["I3"]
+
+
+# -------------------------------------------------------------- pipes and Ctrl-C
+
+
+@pytest.mark.parametrize(
+    "words",
+    [
+        ["watch", "I", "0", "--every", "0.01"],
+        ["--json", "watch", "I", "0", "IO", "0-7", "--every", "0"],
+        ["get", "I", "0", "-r", "100000", "-i", "0.01"],
+        ["--json", "get", "I", "0", "-r", "100000"],
+    ],
+)
+def test_a_closed_pipe_ends_it_quietly(
+    env: dict[str, str], tmp_path: Path, words: list[str]
+) -> None:
+    running = Running(env, tmp_path, *words, keep=1)
+    running.line()
+    assert running.finish() == 0
+    no_traceback(running.stderr())
+
+
+@POSIX_ONLY
+def test_ctrl_c_ends_watch_with_its_lines_and_exit_0(env: dict[str, str], tmp_path: Path) -> None:
+    running = Running(env, tmp_path, "--json", "watch", "I", "0", "P", "0", "--every", "0.05")
+    seen = [running.line(), running.line()]
+    running.process.send_signal(signal.SIGINT)
+    seen += running.rest()
+    assert running.finish() == 0
+    no_traceback(running.stderr())
+    assert "interrupted" not in running.stderr()
+    cycles = [json.loads(line) for line in seen]  # every line whole
+    assert [c["cycle"] for c in cycles] == list(range(1, len(cycles) + 1))
+
+
+@POSIX_ONLY
+def test_ctrl_c_ends_watch_with_the_worst_status_seen(
+    env: dict[str, str], tmp_path: Path, recording: Callable[..., RecordingServer]
+) -> None:
+    server = recording(fixed_reply(E_INVALIDARG))
+    running = Running(env, tmp_path, *server.args, "watch", "I", "10", "--every", "0.05")
+    running.line()
+    running.process.send_signal(signal.SIGINT)
+    running.rest()
+    assert running.finish() == 1
+
+
+@POSIX_ONLY
+def test_ctrl_c_cuts_a_repeated_get_short_with_130(env: dict[str, str], tmp_path: Path) -> None:
+    running = Running(env, tmp_path, "get", "I", "0", "-r", "1000", "-i", "0.05")
+    running.line()
+    running.process.send_signal(signal.SIGINT)
+    running.rest()
+    assert running.finish() == 130
+    assert "interrupted" in running.stderr()
+    no_traceback(running.stderr())
+
+
+# ------------------------------------------------------ refused before sending
+
+
+@pytest.mark.parametrize(
+    ("words", "said"),
+    [
+        (["get", "I", "0", "-r", "x"], "-r/--repeat"),
+        (["get", "I", "0", "-r", "0"], "use watch"),
+        (["get", "I", "0", "-r", "-2"], "-r/--repeat"),
+        (["get", "I", "0", "-r", "3", "-i", "-1"], "-i/--interval"),
+        (["get", "I", "0", "-r", "3", "-i", "x"], "-i/--interval"),
+        (["get", "I", "0", "-i", "0.5"], "-i needs -r N"),
+        (["get", "I", "0", "-r"], "-r needs a value"),
+        (["put", "I", "10", "5", "-r", "3"], "looks like an option"),
+        (["send", "GET:RC8:10:I:", "-r", "3"], "looks like an option"),
+        (["watch", "I", "0", "--every", "-1"], "--every"),
+        (["watch", "I", "0", "--every", "x"], "--every"),
+        (["watch", "I", "0", "--count", "0"], "leave --count out"),
+        (["watch", "I", "0", "--count", "x"], "--count"),
+        (["watch", "I", "0", "every", "0.2"], "--every 0.2"),
+        (["watch", "I", "0", "gripper"], "variables only"),
+        (["watch", "Q", "0"], "unknown variable type"),
+        (["watch", "IO", "9-3"], "range runs upwards"),
+    ],
+)
+def test_bad_values_exit_2_and_send_nothing(
+    env: dict[str, str],
+    recording: Callable[..., RecordingServer],
+    words: list[str],
+    said: str,
+) -> None:
+    server = recording(fixed_reply(b"0,3,1\r"))
+    result = cli(env, *server.args, *words)
+    assert result.returncode == 2
+    no_traceback(result.stderr)
+    assert said in result.stderr
+    assert server.connections() == []
+    assert server.received == b""
