@@ -54,10 +54,31 @@ SCENES = {
     "completion": ((100, 30), ["watch P 1"], "get "),
 }
 
+#: Scenes that press keys after their lines (and a pause): the I/O grid, a trend.
+KEYED_SCENES = {
+    "io-grid-80x24": (
+        (80, 24),
+        ["watch IO 0-7 inputs", "watch IO 128-143 gripper", "watch IO 20-63", "put IO 20 on"],
+        ["f5"],
+    ),
+    "io-grid-120x40": (
+        (120, 40),
+        ["watch IO 0-15", "watch IO 128 gripper closed", "watch IO 129-143", "watch P 0 pose"],
+        ["f5"],
+    ),
+    "trend-120x40": (
+        (120, 40),
+        ["watch P 0 current pose", "watch I 0 cycle", "watch F 0 motor temp", "watch J 0"],
+        ["f6", "down", "t"],
+    ),
+}
 
-async def take(name: str, size: tuple[int, int], lines: list[str], typed: str) -> None:
+
+async def take(
+    name: str, size: tuple[int, int], lines: list[str], typed: str, keys: list[str] | None = None
+) -> None:
     with tempfile.TemporaryDirectory() as home:
-        engine = Engine(None, interval=0.2)
+        engine = Engine(None, interval=0.2, cycles=True)
         app = RacConsoleApp(engine, History(Path(home) / "history"))
         async with app.run_test(size=size) as pilot:
             for line in lines:
@@ -65,6 +86,9 @@ async def take(name: str, size: tuple[int, int], lines: list[str], typed: str) -
                 await pilot.press("enter")
                 await pilot.pause(0.15)
             await pilot.pause(1.2)
+            if keys:
+                await pilot.press(*keys)
+                await pilot.pause(4.0)  # a trend of a few seconds
             if typed:
                 await pilot.press(*typed)
                 if name == "completion":
@@ -79,6 +103,8 @@ async def main() -> None:
     OUT.mkdir(exist_ok=True)
     for name, (size, lines, typed) in SCENES.items():
         await take(name, size, lines, typed)
+    for name, (size, lines, keys) in KEYED_SCENES.items():
+        await take(name, size, lines, "", keys)
 
 
 if __name__ == "__main__":

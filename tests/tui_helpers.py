@@ -36,6 +36,7 @@ def make_app(
         read_only=read_only,
         interval=interval,
         record=record or str(tmp_path / WIRE_RECORD),
+        cycles=True,  # as the console's engine: trends are drawn from its cycles
     )
     return RacConsoleApp(engine, History(tmp_path / "history"), watch_file)
 

@@ -9,6 +9,8 @@ from ..protocol import Variant, vt_name
 from ..protocol.text import scalar_text
 
 HIGHLIGHT_SECONDS = 1.0
+#: How a value that changed within :data:`HIGHLIGHT_SECONDS` is marked (table and I/O grid).
+CHANGED_STYLE = "bold on #4a4a10"
 
 
 #: Numbers are right-aligned in at least this many columns; a longer one widens its cell.
@@ -43,7 +45,7 @@ def value_cell(row: RowView, now: float) -> Text:
     if row.stale:
         text.stylize("dim italic")
     elif row.changed_at is not None and now - row.changed_at < HIGHLIGHT_SECONDS:
-        text.stylize("bold on #4a4a10")
+        text.stylize(CHANGED_STYLE)
     return text
 
 

@@ -31,11 +31,16 @@ from ..engine import (
 )
 from ..present.history import History
 from ..present.render import error_text, notice_text, outcome_text
+from ..present.row_actions import PendingToggles
 from ..present.status import status_text
+from ..present.trends import TrendStore
 from ..protocol.text import terminal_safe
 from .command_line import CommandLine
 from .frame_log import FrameLog
+from .io_panel import IoPanel, WatchArea
 from .status_bar import StatusBar
+from .table_actions import TableActions, TableFilter
+from .trend_view import TrendView
 from .watch_table import WatchTable
 
 #: The engine's outbox is drained this often: results, frames, rows, status.
@@ -46,7 +51,7 @@ MAX_CANDIDATE_LINES = 7
 TABLE_REFRESH_HZ = 5
 
 
-class RacConsoleApp(App[int]):
+class RacConsoleApp(TableActions, App[int]):
     CSS_PATH = "app.tcss"
     TITLE = "rac-console"
     BINDINGS: ClassVar[list[BindingType]] = [
@@ -54,7 +59,10 @@ class RacConsoleApp(App[int]):
         Binding("f2", "toggle_polling", "Pause polls", id="toggle-polling"),
         Binding("f3", "toggle_poll_frames", "Poll frames", id="toggle-poll-frames"),
         Binding("f4", "toggle_scroll", "Freeze log", id="toggle-scroll"),
+        Binding("f5", "toggle_io_grid", "I/O grid", id="toggle-io-grid"),
         Binding("ctrl+l", "clear_log", "Clear log", id="clear-log"),
+        Binding("f6", "focus_pane(1)", "Next pane", id="next-pane"),
+        Binding("shift+f6", "focus_pane(-1)", "Previous pane", id="previous-pane"),
     ]
 
     def __init__(self, engine: Engine, history: History, watch_file: str | None = None) -> None:
@@ -69,8 +77,13 @@ class RacConsoleApp(App[int]):
         self._status_line = Text()
         # Kept as attributes: timers and workers never query a DOM being torn down.
         self.status_bar = StatusBar(id="status")
-        self.table = WatchTable(id="watch")
+        self.trends = TrendStore()
+        self.toggles = PendingToggles()
+        self.table = WatchTable(self.trends, id="watch")
+        self.table_filter = TableFilter(self.table, id="table-filter")
+        self.trend_view = TrendView(self.trends, id="trend")
         self.frame_log = FrameLog(id="log")
+        self.io_panel = IoPanel(self.toggles.busy, id="io")
         self.completions = Static(id="completions")
         self.hint = Static(id="hint")
         self.results = RichLog(
@@ -85,8 +98,12 @@ class RacConsoleApp(App[int]):
 
     def compose(self) -> ComposeResult:
         yield self.status_bar
-        yield self.table
+        with WatchArea(id="watch-area"):
+            yield self.table
+            yield self.io_panel
+        yield self.table_filter
         yield self.frame_log
+        yield self.trend_view
         yield self.completions
         yield self.results
         yield self.hint
@@ -94,7 +111,6 @@ class RacConsoleApp(App[int]):
         yield Footer()
 
     async def on_mount(self) -> None:
-        self.table.border_title = "Watch"
         self.frame_log.border_title = "Frames (→ sent, ← received)"
         await asyncio.to_thread(self.engine.start)
         self.drain_outbox()
@@ -154,12 +170,14 @@ class RacConsoleApp(App[int]):
             self.status = batch.status
         batch.apply_rows(self.rows)
         self._removed |= batch.removed
+        self.forget_rows(batch.removed - batch.rows.keys())
         self._removed -= batch.rows.keys()
         for event in batch.events:
             if isinstance(event, Result):
+                self.take_result(event)
                 self._show_result(event)
             elif isinstance(event, Cycle):
-                pass  # trends: not drawn yet
+                self.take_cycle(event)
             else:
                 self.frame_log.add(event)
                 if isinstance(event, Alert):
@@ -183,6 +201,8 @@ class RacConsoleApp(App[int]):
     def refresh_table(self) -> None:
         removed, self._removed = self._removed, set()
         self.table.refresh_rows(self.rows, removed, time.monotonic())
+        self.redraw_trend()
+        self.io_panel.refresh_rows(self.rows, time.monotonic())
         if self.status is None:
             return
         line = status_text(self.status, self.engine.outbox.waiting_since, self.frames_per_second())
@@ -292,6 +312,18 @@ class RacConsoleApp(App[int]):
         log.border_title = "Frames" + ("" if log.auto_scroll else " (FROZEN: F4 follows)")
         if log.auto_scroll:
             log.scroll_end(animate=False)
+
+    @on(IoPanel.Toggle)
+    def toggle_from_grid(self, event: IoPanel.Toggle) -> None:
+        """Space in the I/O grid: the table's toggle, with the same in-flight guard."""
+        self._toggle(event.row)
+
+    def action_toggle_io_grid(self) -> None:
+        """IO rows move from the table to the grid, or back."""
+        shown = not self.io_panel.display
+        self.io_panel.show(shown)
+        self.table.set_hide_io(shown)
+        self.refresh_table()
 
     def action_clear_log(self) -> None:
         self.frame_log.clear()

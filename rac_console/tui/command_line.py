@@ -71,7 +71,9 @@ class CommandLine(Input):
         self, history: History, seen: Callable[[], Iterable[tuple[str, int]]], **kwargs: object
     ) -> None:
         suggester = HintSuggester(history, lambda *hint: self.post_message(self.Hint(*hint)))
-        super().__init__(suggester=suggester, **kwargs)  # type: ignore[arg-type]
+        # Focus coming back (F6, Enter on a table row) leaves the cursor where it is: a
+        # selected line would be replaced whole by the next key typed.
+        super().__init__(suggester=suggester, select_on_focus=False, **kwargs)  # type: ignore[arg-type]
         self.history = history
         self._seen = seen
         self._position: int | None = None

@@ -4,8 +4,10 @@ from __future__ import annotations
 
 import time
 from collections import deque
+from typing import ClassVar
 
 from rich.cells import cell_len
+from textual.binding import Binding, BindingType
 from textual.widgets import Log
 
 from ..engine import Alert, Note
@@ -23,6 +25,12 @@ MAX_LINES_PER_FLUSH = 500
 class FrameLog(Log):
     """Frames are queued as they cross the wire and written by :meth:`flush` at ~20 Hz:
     one ``write_lines`` per screen refresh instead of one per frame."""
+
+    BINDINGS: ClassVar[list[BindingType]] = [
+        Binding("escape", "app.focus_command_line", "Command line", id="log-leave"),
+        Binding("tab", "app.focus_pane(1)", "Next pane", show=False, id="log-next-pane"),
+        Binding("shift+tab", "app.focus_pane(-1)", "Previous pane", show=False, id="log-prev"),
+    ]
 
     def __init__(self, **kwargs: object) -> None:
         super().__init__(max_lines=MAX_LINES, auto_scroll=True, **kwargs)  # type: ignore[arg-type]

@@ -1,70 +1,253 @@
-"""The live watch table: keyed rows, updated in place, only the cells that changed."""
+"""The live watch table: keyed rows, updated in place, only the cells that changed.
+
+Rows are keyed by variable name (``P10``), so the cursor follows its variable through
+sorting, filtering and rows coming and going. Keys on a row do not act themselves:
+they post :class:`WatchTable.RowAction` and the app decides (a key never writes to a
+controller without going through the same path as a typed line).
+"""
 
 from __future__ import annotations
 
+import itertools
+from typing import ClassVar
+
 from rich.text import Text
+from textual.binding import Binding, BindingType
+from textual.message import Message
 from textual.widgets import DataTable
 
 from ..commands.language import VarRef
 from ..engine import RowView
 from ..present.cells import age_text, status_cell, type_text, value_cell
+from ..present.table_rows import SortMode, visible_keys
+from ..present.trends import TrendStore, field_labels, has_trend, sparkline_text
 from ..protocol.text import terminal_safe
 
-#: Status and age before the value, so they stay in view when a long P or J value is
-#: cut off on a narrow terminal.
+#: Status, age and trend before the value, so they stay in view when a long P or J
+#: value is cut off on a narrow terminal.
 COLUMNS = (
     ("var", "Variable"),
     ("label", "Label"),
     ("status", "Status"),
     ("changed", "Changed"),
+    ("trend", "Trend"),
     ("value", "Value"),
     ("type", "VARTYPE"),
 )
+#: Bars in a trend cell; a field's label (``Rz``, ``Fig``) takes the first 4 cells.
+SPARK_WIDTH = 16
+FIELD_WIDTH = 4
 
 
 class WatchTable(DataTable[object]):
-    """Rows are keyed by variable name (``P10``); the app calls :meth:`refresh_rows` at ~5 Hz."""
+    """The app calls :meth:`refresh_rows` at ~5 Hz with every row it holds."""
 
-    def __init__(self, **kwargs: object) -> None:
+    BINDINGS: ClassVar[list[BindingType]] = [
+        Binding("enter", "row('put')", "Put line", id="row-put"),
+        Binding("space", "row('toggle')", "Toggle IO", id="row-toggle"),
+        Binding("delete", "row('unwatch')", "Unwatch", id="row-unwatch"),
+        Binding("slash", "row('filter')", "Filter", id="row-filter"),
+        Binding("s", "cycle_sort", "Sort", id="row-sort"),
+        Binding("f", "cycle_field", "Trend field", id="row-field"),
+        Binding("t", "row('trend')", "Trend view", id="row-trend"),
+        Binding("escape", "app.focus_command_line", "Command line", id="row-leave"),
+        Binding("tab", "app.focus_pane(1)", "Next pane", show=False, id="row-next-pane"),
+        Binding("shift+tab", "app.focus_pane(-1)", "Previous pane", show=False, id="row-prev-pane"),
+    ]
+
+    class RowAction(Message):
+        """A key on a row (``put``, ``toggle``, ``unwatch``, ``trend``), or ``filter``."""
+
+        def __init__(self, action: str, row: RowView | None) -> None:
+            super().__init__()
+            self.action = action
+            self.row = row  # as shown when the key was pressed; None on an empty table
+
+    def __init__(self, trends: TrendStore, **kwargs: object) -> None:
         super().__init__(cursor_type="row", zebra_stripes=True, **kwargs)  # type: ignore[arg-type]
+        self.trends = trends
+        #: The field each V P J T row's trend follows (index into its labels); `f` cycles it.
+        self.fields: dict[VarRef, int] = {}
         self._shown: dict[str, tuple[object, ...]] = {}
+        self._views: dict[str, RowView] = {}  # every row held, as last refreshed
+        self._order: list[str] = []  # the keys as the DataTable holds them
+        self._added: dict[str, int] = {}
+        self._count = itertools.count()
         self._widths: dict[str, int] = {}
+        self._filter = ""  # as typed
+        self._needle = ""  # as matched
+        self._hide_io = False
+        self.sort_mode = SortMode.ADDED
+        self._title: Text | None = None
+        self._now = 0.0  # the clock of the last refresh, for a re-filter between two
 
     def on_mount(self) -> None:
         for key, label in COLUMNS:
             self.add_column(label, key=key)
+        self._update_title()
+        self.show_cursor = False
+
+    def on_focus(self) -> None:
+        """The row cursor shows only while keys go to the table: elsewhere a highlighted
+        row would read as selected, and it would hide that row's colours."""
+        self.show_cursor = True
+
+    def on_blur(self) -> None:
+        self.show_cursor = False
+
+    # ------------------------------------------------------------- choices
+
+    def set_filter(self, text: str) -> None:
+        """Show only rows whose name or label contains ``text`` (any case)."""
+        self._filter = text
+        self._needle = text.strip().lower()
+        self._apply()
+
+    @property
+    def filter_text(self) -> str:
+        return self._filter
+
+    @property
+    def title_text(self) -> str:
+        """The border title as plain text: the filter, rows shown of all, the sort."""
+        return self._title.plain if self._title is not None else ""
+
+    def set_hide_io(self, hidden: bool) -> None:
+        """Hide all IO rows (while an I/O bit grid shows them), with the filter still applied."""
+        self._hide_io = hidden
+        self._apply()
+
+    def action_cycle_sort(self) -> None:
+        self.sort_mode = self.sort_mode.next()
+        self._apply()
+
+    def action_cycle_field(self) -> None:
+        row = self.cursor_view()
+        if row is not None:
+            self.cycle_field(row.var)
+            self._apply()
+
+    def cycle_field(self, var: VarRef) -> None:
+        """The next field of a V P J T row's trend (X → Y → Z → …); others have one."""
+        labels = field_labels(var.kind)
+        if labels:
+            self.fields[var] = (self.fields.get(var, 0) + 1) % len(labels)
+
+    def field_of(self, var: VarRef) -> int:
+        return self.fields.get(var, 0)
+
+    def action_row(self, action: str) -> None:
+        self.post_message(self.RowAction(action, self.cursor_view()))
+
+    def cursor_view(self) -> RowView | None:
+        key = self._cursor_key()
+        return self._views.get(key) if key is not None else None
+
+    def _cursor_key(self) -> str | None:
+        if not self._order:
+            return None
+        return self._order[min(max(self.cursor_row, 0), len(self._order) - 1)]
+
+    # ------------------------------------------------------------- refresh
 
     def refresh_rows(self, rows: dict[VarRef, RowView], removed: set[VarRef], now: float) -> None:
-        """Bring the table in line with the rows (every row, each time: ages and the
-        change highlight move with the clock); untouched cells are not redrawn."""
+        """Bring the table in line with the rows (every row, each time: ages, trends and
+        the change highlight move with the clock); untouched cells are not redrawn."""
         for var in removed:
             key = str(var)
-            if key in self._shown:
-                self.remove_row(key)
-                del self._shown[key]
-        for var, row in rows.items():
-            key = str(var)
-            cells = (
-                key,
-                Text(terminal_safe(row.label), no_wrap=True),  # never read as markup
-                status_cell(row),
-                age_text(row, now),
-                value_cell(row, now),
-                type_text(row),
-            )
-            shown = self._shown.get(key)
-            if shown is None:
-                self.add_row(*cells, key=key)
-            else:
-                for (column, _), old, new in zip(COLUMNS, shown, cells, strict=True):
-                    if _differs(old, new):
-                        # Widening costs a pass over every row: only when a column grows.
-                        width = len(str(new))
-                        wider = width > self._widths.get(column, 0)
-                        if wider:
-                            self._widths[column] = width
-                        self.update_cell(key, column, new, update_width=wider)
-            self._shown[key] = cells
+            self._added.pop(key, None)
+            self._views.pop(key, None)
+            self.fields.pop(var, None)
+        for row in rows.values():
+            if row.key not in self._added:
+                self._added[row.key] = next(self._count)
+            self._views[row.key] = row
+        self._apply(now)
+
+    def _apply(self, now: float | None = None) -> None:
+        """Show the rows that pass the filter, in order, keeping the cursor on its variable."""
+        if now is None:
+            now = self._now
+        self._now = now
+        cursor = self._cursor_key()
+        wanted = visible_keys(
+            self._views.values(), self._added, self.sort_mode, self._needle, self._hide_io
+        )
+        keep = set(wanted)
+        for key in [key for key in self._order if key not in keep]:
+            self.remove_row(key)
+            del self._shown[key]
+        self._order = [key for key in self._order if key in keep]
+        for key in wanted:
+            self._show(key, self._views[key], now)
+        if self._order != wanted:  # only a real change of order costs a sort
+            rank = {key: n for n, key in enumerate(wanted)}
+            self.sort("var", key=lambda key: rank[key])
+            self._order = wanted
+        if cursor is not None and cursor in keep:
+            index = self._order.index(cursor)
+            if index != self.cursor_row:
+                self.move_cursor(row=index, animate=False)
+        self._update_title()
+
+    def _show(self, key: str, row: RowView, now: float) -> None:
+        cells = (
+            key,
+            Text(terminal_safe(row.label), no_wrap=True),  # never read as markup
+            status_cell(row),
+            age_text(row, now),
+            self._trend_cell(row),
+            value_cell(row, now),
+            type_text(row),
+        )
+        shown = self._shown.get(key)
+        if shown is None:
+            self.add_row(*cells, key=key)
+            self._order.append(key)
+        else:
+            for (column, _), old, new in zip(COLUMNS, shown, cells, strict=True):
+                if _differs(old, new):
+                    # Widening costs a pass over every row: only when a column grows.
+                    width = len(str(new))
+                    wider = width > self._widths.get(column, 0)
+                    if wider:
+                        self._widths[column] = width
+                    self.update_cell(key, column, new, update_width=wider)
+        self._shown[key] = cells
+
+    def _trend_cell(self, row: RowView) -> Text:
+        var = row.var
+        if not has_trend(var.kind) or var not in self.trends:
+            return Text("")
+        labels = field_labels(var.kind)
+        field = self.field_of(var)
+        text = Text(no_wrap=True, overflow="crop")
+        width = SPARK_WIDTH
+        if labels:
+            text.append(f"{labels[field]:<{FIELD_WIDTH - 1}} ", style="dim")
+            width -= FIELD_WIDTH
+        io = var.kind.code == "IO"
+        values = self.trends.last(var, field, width)
+        bars = sparkline_text(values, width, *((0.0, 1.0) if io else (None, None)))
+        text.append(bars, style="dim" if row.stale else "cyan")
+        return text
+
+    def _update_title(self) -> None:
+        total = len(self._views)
+        title = Text("Watch")
+        if self._needle:
+            title.append("  filter ")
+            title.append(f'"{terminal_safe(self._filter.strip())}"', style="bold")
+        if self._needle or self._hide_io:
+            title.append(f"  {len(self._order)} of {total} rows")
+        else:
+            title.append(f"  {total} row{'s' * (total != 1)}")
+        if self._hide_io:
+            title.append(" (IO hidden)")
+        title.append(f"  sort: {self.sort_mode.value}")
+        if title != self._title:
+            self._title = title
+            self.border_title = title
 
 
 def _differs(old: object, new: object) -> bool:

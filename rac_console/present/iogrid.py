@@ -1,0 +1,310 @@
+"""The I/O grid: watched IO bits as lines of 8 or 16 with each line's word.
+
+Pure (rich only for the finished text), so grouping, words and layout are tested
+without a screen. A line starts at a multiple of its width (IO 128-143 is one line of
+16) and its word is read the way DENSO reads IOW/IOB words: **the lowest index of the
+line is bit 0 (the LSB)**, so IO 128, 130 and 131 ON in line 128-143 make 0x000D = 13.
+
+A bit with no value (not watched, not polled yet, or failed before any value) makes
+its hex digit ``?`` and the decimal ``—``: a word is never shown with guessed bits.
+A stale bit keeps its last value, as the table does, and marks the word stale.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass
+from enum import Enum
+
+from rich.cells import cell_len, set_cell_size
+from rich.text import Text
+
+from ..commands.language import VarRef
+from ..engine.events import RowView
+from ..protocol.text import terminal_safe
+from .cells import CHANGED_STYLE, HIGHLIGHT_SECONDS
+
+GLYPH_ON = "●"
+GLYPH_OFF = "○"
+GLYPH_UNKNOWN = "?"
+GLYPH_UNWATCHED = "·"
+NO_DECIMAL = "—"
+
+#: A label cut shorter than this says nothing: below it, no labels are shown.
+MIN_LABEL = 4
+MAX_LABEL = 16
+
+STYLE_ON = "bold bright_green"
+STYLE_OFF = "dim"
+STYLE_UNKNOWN = "dim"
+STYLE_STALE = "dim italic"
+STYLE_UNWATCHED = "dim"
+STYLE_HEX = "bold cyan"
+STYLE_CURSOR = "reverse"
+STYLE_PENDING = "underline"
+
+
+class BitState(Enum):
+    UNWATCHED = "unwatched"
+    UNKNOWN = "unknown"  # watched, no value yet
+    ON = "on"
+    OFF = "off"
+
+
+@dataclass(frozen=True, slots=True)
+class Bit:
+    index: int
+    state: BitState
+    label: str = ""
+    stale: bool = False
+    changed: bool = False
+
+    @property
+    def has_value(self) -> bool:
+        return self.state in (BitState.ON, BitState.OFF)
+
+
+@dataclass(frozen=True, slots=True)
+class Word:
+    """A line's bits as a number: bit n is the line's n-th index (the LSB its lowest)."""
+
+    value: int  # the bits that have one; unknown bits are 0 here
+    known: int  # mask of the bits that have a value
+    width: int  # 8 or 16
+    stale: bool = False
+    changed: bool = False
+
+    @property
+    def complete(self) -> bool:
+        return self.known == (1 << self.width) - 1
+
+    def hex_text(self) -> str:
+        """``0x000D``; a hex digit with any unknown bit is ``?`` (``0x??0D``)."""
+        digits = []
+        for nibble in reversed(range(self.width // 4)):
+            shift = nibble * 4
+            if (self.known >> shift) & 0xF == 0xF:
+                digits.append(f"{(self.value >> shift) & 0xF:X}")
+            else:
+                digits.append("?")
+        return "0x" + "".join(digits)
+
+    def dec_text(self) -> str:
+        return str(self.value) if self.complete else NO_DECIMAL
+
+
+@dataclass(frozen=True, slots=True)
+class GridLine:
+    start: int
+    bits: tuple[Bit, ...]
+    word: Word
+
+
+@dataclass(frozen=True, slots=True)
+class Layout:
+    """How the lines are drawn in a given width; chosen by :func:`choose_layout`."""
+
+    per_line: int  # 8 or 16
+    index_width: int
+    sep: int = 0  # spaces between cells
+    label_width: int = 0  # 0: no labels
+    byte_gap: int = 0  # an extra space between the two bytes of a 16-bit line
+    word_gap: int = 1  # spaces before the word
+
+    @property
+    def cell_width(self) -> int:
+        return 1 + self.index_width + (1 + self.label_width if self.label_width else 0)
+
+    @property
+    def word_width(self) -> int:
+        """`` 0x000D 65535``: the gap, the hex, a space, the decimal right-aligned."""
+        return self.word_gap + 2 + self.per_line // 4 + 1 + len(str((1 << self.per_line) - 1))
+
+    @property
+    def width(self) -> int:
+        cells = self.per_line * self.cell_width + (self.per_line - 1) * self.sep
+        return cells + self.byte_gap + self.word_width
+
+
+def bits_from_rows(rows: Mapping[VarRef, RowView], now: float) -> dict[int, Bit]:
+    """The watched IO bits by index, each with its state (other kinds are left out)."""
+    bits: dict[int, Bit] = {}
+    for var, row in rows.items():
+        if var.kind.code != "IO":
+            continue
+        variant = row.variant
+        if variant is None:
+            state = BitState.UNKNOWN
+        else:
+            state = BitState.ON if bool(variant.value) else BitState.OFF
+        changed = (
+            not row.stale
+            and row.changed_at is not None
+            and now - row.changed_at < HIGHLIGHT_SECONDS
+        )
+        bits[var.index] = Bit(var.index, state, row.label, row.stale, changed)
+    return bits
+
+
+def grid_lines(bits: Mapping[int, Bit], per_line: int) -> list[GridLine]:
+    """Lines of ``per_line`` bits, each starting at a multiple of it, for every block
+    holding a watched bit; the unwatched bits of such a line are filled in."""
+    starts = sorted({index - index % per_line for index in bits})
+    lines = []
+    for start in starts:
+        line = tuple(
+            bits.get(index, Bit(index, BitState.UNWATCHED))
+            for index in range(start, start + per_line)
+        )
+        lines.append(GridLine(start, line, word_of(line)))
+    return lines
+
+
+def word_of(bits: tuple[Bit, ...]) -> Word:
+    """The word of one line: ``bits[0]`` (the lowest index) is bit 0."""
+    value = known = 0
+    for n, bit in enumerate(bits):
+        if bit.has_value:
+            known |= 1 << n
+            if bit.state is BitState.ON:
+                value |= 1 << n
+    return Word(
+        value,
+        known,
+        len(bits),
+        stale=any(bit.stale for bit in bits),
+        changed=any(bit.changed for bit in bits),
+    )
+
+
+def choose_layout(width: int, indices: Iterable[int], labels: Iterable[str] = ()) -> Layout:
+    """16 bits a line when 16 bare cells fit in ``width`` columns, else 8; then a space
+    between cells, a gap between bytes and labels, each only where the width allows."""
+    index_width = max((len(str(i)) for i in indices), default=3)
+    index_width = max(index_width, 3)
+    per_line = 16 if Layout(16, index_width).width <= width else 8
+    layout = Layout(per_line, index_width)
+    byte_gap = 1 if per_line == 16 else 0
+    for step in (
+        Layout(per_line, index_width, word_gap=2),
+        Layout(per_line, index_width, sep=1, word_gap=2),
+        Layout(per_line, index_width, sep=1, byte_gap=byte_gap, word_gap=2),
+    ):
+        if step.width <= width:
+            layout = step
+    longest = min(max((cell_len(terminal_safe(label)) for label in labels), default=0), MAX_LABEL)
+    if longest:
+        spare = (width - layout.width) // per_line - 1  # a label costs a space and itself
+        label_width = min(longest, spare)
+        if label_width >= min(MIN_LABEL, longest):
+            layout = Layout(
+                per_line, index_width, layout.sep, label_width, layout.byte_gap, layout.word_gap
+            )
+    return layout
+
+
+def bit_style(bit: Bit) -> str:
+    if bit.state is BitState.UNWATCHED:
+        return STYLE_UNWATCHED
+    if bit.stale:
+        return STYLE_STALE
+    style = {
+        BitState.ON: STYLE_ON,
+        BitState.OFF: STYLE_OFF,
+        BitState.UNKNOWN: STYLE_UNKNOWN,
+    }[bit.state]
+    return f"{style} {CHANGED_STYLE}" if bit.changed else style
+
+
+def cell_text(bit: Bit, layout: Layout) -> str:
+    """``●128``, ``○129 vacuum``, ``?130`` (no value), ``   ·`` (not watched); the
+    glyph sits just before the digits (``  ●5``) and the digits are right-aligned."""
+    if bit.state is BitState.UNWATCHED:
+        return f"{GLYPH_UNWATCHED:>{1 + layout.index_width}}".ljust(layout.cell_width)
+    glyph = {
+        BitState.ON: GLYPH_ON,
+        BitState.OFF: GLYPH_OFF,
+        BitState.UNKNOWN: GLYPH_UNKNOWN,
+    }[bit.state]
+    if bit.stale and not bit.has_value:
+        glyph = GLYPH_UNKNOWN
+    text = f"{glyph}{bit.index}".rjust(1 + layout.index_width)
+    if layout.label_width:
+        text += " " + fit_label(bit.label, layout.label_width)
+    return text
+
+
+def fit_label(label: str, width: int) -> str:
+    """The label made safe, cut with ``…`` to ``width`` cells (wide characters count 2)."""
+    safe = terminal_safe(label)
+    if cell_len(safe) > width:
+        safe = set_cell_size(safe, width - 1) + "…"
+    return set_cell_size(safe, width)
+
+
+def word_text(word: Word, gap: int = 2) -> Text:
+    text = Text(" " * gap)
+    text.append(word.hex_text(), style=STYLE_HEX)
+    digits = len(str((1 << word.width) - 1))
+    text.append(f" {word.dec_text():>{digits}}")
+    if word.stale:
+        text.stylize(STYLE_STALE, gap)
+    elif word.changed:
+        text.stylize(CHANGED_STYLE, gap)
+    return text
+
+
+def render_grid(
+    lines: list[GridLine],
+    layout: Layout,
+    cursor: int | None = None,
+    pending: frozenset[int] = frozenset(),
+) -> Text:
+    """The grid as one Text, a line per :class:`GridLine`; ``cursor`` (an index) is
+    drawn reversed, bits with a write in flight underlined."""
+    text = Text(no_wrap=True, overflow="crop", end="")
+    for n, line in enumerate(lines):
+        if n:
+            text.append("\n")
+        for k, bit in enumerate(line.bits):
+            if k:
+                text.append(" " * layout.sep)
+                if k == 8 and layout.byte_gap:
+                    text.append(" " * layout.byte_gap)
+            style = bit_style(bit)
+            if bit.index in pending:
+                style += f" {STYLE_PENDING}"
+            if bit.index == cursor:
+                style += f" {STYLE_CURSOR}"
+            text.append(cell_text(bit, layout), style=style)
+        text.append_text(word_text(line.word, layout.word_gap))
+    return text
+
+
+@dataclass(frozen=True, slots=True)
+class Grid:
+    """What the panel draws: the lines, the layout they were made for, the text."""
+
+    lines: tuple[GridLine, ...]
+    layout: Layout
+    text: Text
+
+    def bit(self, index: int) -> Bit | None:
+        for line in self.lines:
+            if line.start <= index < line.start + len(line.bits):
+                return line.bits[index - line.start]
+        return None
+
+
+def build_grid(
+    rows: Mapping[VarRef, RowView],
+    now: float,
+    width: int,
+    cursor: int | None = None,
+    pending: frozenset[int] = frozenset(),
+) -> Grid:
+    """The grid of the watched IO rows for a panel ``width`` columns wide."""
+    bits = bits_from_rows(rows, now)
+    layout = choose_layout(width, bits, (bit.label for bit in bits.values()))
+    lines = grid_lines(bits, layout.per_line)
+    return Grid(tuple(lines), layout, render_grid(lines, layout, cursor, pending))

@@ -1,0 +1,171 @@
+"""The I/O panel: watched IO bits as a grid (F5), beside the table or under it.
+
+The grid is built by :mod:`rac_console.present.iogrid`; this widget only draws it when
+its text changed, at the table's refresh rate. Its cursor's Space asks the app to write
+the opposite of the bit shown, which the app does as for a table row: through
+:meth:`Engine.submit`, like a typed line, with one write per bit in flight.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Mapping
+from typing import ClassVar
+
+from rich.text import Text
+from textual import events
+from textual.app import ComposeResult
+from textual.binding import Binding, BindingType
+from textual.containers import Container, VerticalScroll
+from textual.geometry import Region
+from textual.message import Message
+from textual.widgets import Static
+
+from ..commands.language import VarRef
+from ..engine import RowView
+from ..present.iogrid import Grid, build_grid
+from ..protocol import kind_of
+from ..protocol.text import terminal_safe
+
+#: From this many columns the panel sits beside the table; below, under it.
+WIDE_COLUMNS = 160
+
+IO = kind_of("IO")
+TITLE = "I/O (word: bit 0 = lowest index)"
+EMPTY_TEXT = Text("No IO bits watched: try watch IO 128-143", style="dim", end="")
+
+
+class WatchArea(Container):
+    """The watch table and the I/O panel; its own width decides how they share it
+    (it is always the screen's width, so the choice never feeds back on itself)."""
+
+    def on_resize(self, event: events.Resize) -> None:
+        self.set_class(event.size.width >= WIDE_COLUMNS, "-wide")
+
+
+class IoPanel(VerticalScroll, can_focus=True):
+    """The grid, scrolled when it has more lines than room; hidden until F5."""
+
+    BINDINGS: ClassVar[list[BindingType]] = [
+        Binding("left", "move(-1, 0)", "Left", show=False, id="io-left"),
+        Binding("right", "move(1, 0)", "Right", show=False, id="io-right"),
+        Binding("up", "move(0, -1)", "Up", show=False, id="io-up"),
+        Binding("down", "move(0, 1)", "Down", show=False, id="io-down"),
+        Binding("space", "toggle_bit", "Toggle bit", id="io-toggle-bit"),
+        Binding("escape", "app.focus_command_line", "Command line", id="io-leave"),
+    ]
+
+    class Toggle(Message):
+        """Space on a watched bit: the app writes its opposite (as a typed line)."""
+
+        def __init__(self, row: RowView) -> None:
+            super().__init__()
+            self.row = row
+
+    def __init__(self, busy: Callable[[VarRef], bool], **kwargs: str | None) -> None:
+        """``busy`` says whether a bit's last toggle is still in flight (underlined)."""
+        super().__init__(**kwargs)  # type: ignore[arg-type]
+        self._busy = busy
+        self._body = Static(EMPTY_TEXT, id="io-grid")
+        self._rows: Mapping[VarRef, RowView] = {}
+        self._text: Text = EMPTY_TEXT
+        self.grid: Grid | None = None
+        self.cursor: int | None = None
+
+    def compose(self) -> ComposeResult:
+        yield self._body
+
+    def on_mount(self) -> None:
+        self.border_title = TITLE
+
+    def show(self, shown: bool) -> None:
+        """Show or hide the grid; the watch area gives it room while it shows."""
+        self.display = shown
+        if self.parent is not None:
+            self.parent.set_class(shown, "-io-grid")
+
+    # ---------------------------------------------------------------- drawing
+
+    def refresh_rows(self, rows: Mapping[VarRef, RowView], now: float) -> None:
+        """Called with the table's refresh; costs nothing while the panel is hidden."""
+        self._rows = rows
+        if self.display:
+            self._draw(now)
+
+    def _draw(self, now: float) -> None:
+        rows = self._rows
+        grid = build_grid(
+            rows,
+            now,
+            self.scrollable_content_region.width,
+            self.cursor if self.has_focus else None,
+            frozenset(var.index for var in rows if var.kind is IO and self._busy(var)),
+        )
+        self.grid = grid
+        text = grid.text if grid.lines else EMPTY_TEXT
+        if text.plain != self._text.plain or text.spans != self._text.spans:
+            self._text = text
+            self._body.update(text)
+        self._show_cursor_label()
+
+    def _show_cursor_label(self) -> None:
+        """The bit under the cursor, with its label, in the bottom border: labels are
+        readable there however narrow the cells are."""
+        subtitle = Text()
+        row = self._rows.get(VarRef(IO, self.cursor)) if self.cursor is not None else None
+        if self.has_focus and self.cursor is not None:
+            subtitle.append(f"IO {self.cursor}")
+            if row is None:
+                subtitle.append(" not watched", style="dim")
+            elif row.label:
+                subtitle.append(f" {terminal_safe(row.label)}")
+        if subtitle.plain != str(self.border_subtitle or ""):
+            self.border_subtitle = subtitle
+
+    def on_resize(self, event: events.Resize) -> None:
+        if self.display:
+            self._draw(time.monotonic())
+
+    def on_focus(self, event: events.Focus) -> None:
+        grid = self.grid
+        if self.cursor is None and grid is not None and grid.lines:
+            bits = [bit for line in grid.lines for bit in line.bits]
+            self.cursor = next((b.index for b in bits if b.has_value), bits[0].index)
+        self._draw(time.monotonic())
+
+    def on_blur(self, event: events.Blur) -> None:
+        self._draw(time.monotonic())
+
+    # ---------------------------------------------------------------- actions
+
+    def action_move(self, dx: int, dy: int) -> None:
+        """Arrows: left and right run on through the lines, up and down keep the column."""
+        grid = self.grid
+        if grid is None or not grid.lines:
+            return
+        starts = [line.start for line in grid.lines]
+        per_line = grid.layout.per_line
+        cursor = self.cursor if self.cursor is not None else starts[0]
+        row = next((n for n, start in enumerate(starts) if start <= cursor < start + per_line), 0)
+        column = cursor - starts[row] + dx
+        if column < 0 and row > 0:
+            row, column = row - 1, per_line - 1
+        elif column >= per_line and row < len(starts) - 1:
+            row, column = row + 1, 0
+        row = min(max(row + dy, 0), len(starts) - 1)
+        column = min(max(column, 0), per_line - 1)
+        self.cursor = starts[row] + column
+        self._draw(time.monotonic())
+        self.scroll_to_region(Region(0, row, 1, 1), animate=False, immediate=True)
+
+    def action_toggle_bit(self) -> None:
+        """Space: hand the bit under the cursor to the app, which refuses while its last
+        toggle is in flight (a burst of Space must not write a value nobody meant)."""
+        index = self.cursor
+        if index is None or not self.has_focus:
+            return
+        row = self._rows.get(VarRef(IO, index))
+        if row is None:
+            self.notify(f"IO {index} is not watched: nothing to toggle", severity="warning")
+            return
+        self.post_message(self.Toggle(row))

@@ -1,0 +1,206 @@
+"""What the console does with keys on the watch table, its filter and the trend view.
+
+A mixin of :class:`~rac_console.tui.app.RacConsoleApp`, kept apart so the app stays a
+composition. Everything that reaches the controller goes through ``engine.submit``,
+the path of a typed line (read-only refusal, frame log, record, result echo); a line
+put on the command line is never sent without the user's own Enter.
+"""
+
+from __future__ import annotations
+
+from typing import ClassVar
+
+from textual.binding import Binding, BindingType
+from textual.widget import Widget
+from textual.widgets import Input
+
+from ..commands.language import VarRef
+from ..engine import Cycle, Engine, Feedback, Message, Result, RowView, Status
+from ..present.row_actions import PendingToggles, put_line, toggle_line
+from ..present.trends import TrendStore, has_trend
+from ..protocol.text import terminal_safe
+from .command_line import CommandLine
+from .frame_log import FrameLog
+from .io_panel import IoPanel
+from .trend_view import TrendView
+from .watch_table import WatchTable
+
+
+class TableFilter(Input):
+    """The watch table's filter line, shown by ``/``; filters as you type."""
+
+    BINDINGS: ClassVar[list[BindingType]] = [
+        Binding("escape", "clear", "Clear filter", id="filter-clear"),
+        Binding("enter", "done", "Keep filter", id="filter-done"),
+    ]
+
+    def __init__(self, table: WatchTable, **kwargs: object) -> None:
+        super().__init__(placeholder="filter rows: name or label", **kwargs)  # type: ignore[arg-type]
+        self.table = table
+
+    def on_input_changed(self, event: Input.Changed) -> None:
+        event.stop()  # the command line's own handlers are not for this line
+        self.table.set_filter(event.value)
+
+    def open(self) -> None:
+        self.add_class("-visible")
+        self.focus()
+
+    def action_clear(self) -> None:
+        self.value = ""
+        self.table.set_filter("")
+        self.remove_class("-visible")
+        self.table.focus()
+
+    def action_done(self) -> None:
+        """Back to the table; the filter stays (its border title shows it; ``/`` edits it)."""
+        self.remove_class("-visible")
+        self.table.focus()
+
+
+class TableActions:
+    """Pane focus, row keys, IO toggles, the trend store and view."""
+
+    engine: Engine
+    status: Status | None
+    command_line: CommandLine
+    table: WatchTable
+    frame_log: FrameLog
+    table_filter: TableFilter
+    io_panel: IoPanel  # the I/O bit grid (F5), a pane while shown
+    trend_view: TrendView
+    trends: TrendStore
+    toggles: PendingToggles
+
+    def show(self, feedback: Feedback) -> None:
+        raise NotImplementedError  # the app's
+
+    # --------------------------------------------------------------- focus
+
+    def _panes(self) -> list[Widget]:
+        panes: list[Widget] = [self.command_line, self.table]
+        if self.io_panel.display:
+            panes.append(self.io_panel)
+        if self.trend_view.has_class("-open"):
+            panes.append(self.trend_view)
+        else:
+            panes.append(self.frame_log)
+        return panes
+
+    def action_focus_pane(self, step: int) -> None:
+        """F6 / Shift+F6: command line → table (→ I/O grid) → frame log or trend → back."""
+        panes = self._panes()
+        focused = self.focused  # type: ignore[attr-defined]
+        if focused is self.table_filter:
+            focused = self.table
+        index = panes.index(focused) if focused in panes else 0
+        panes[(index + step) % len(panes)].focus()
+
+    def action_focus_command_line(self) -> None:
+        self.command_line.focus()
+
+    # ------------------------------------------------------------ row keys
+
+    def on_watch_table_row_action(self, event: WatchTable.RowAction) -> None:
+        row = event.row
+        if event.action == "filter":
+            self.table_filter.value = self.table.filter_text
+            self.table_filter.open()
+        elif row is None:
+            self.show(Message("the table has no rows: watch TYPE INDEX adds one"))
+        elif event.action == "put":
+            self._put_on_line(row)
+        elif event.action == "toggle":
+            self._toggle(row)
+        elif event.action == "unwatch":
+            self.engine.submit(f"unwatch {row.var.kind.code} {row.var.index}")
+        elif event.action == "trend" and not has_trend(row.var.kind):
+            self.show(Message(f"{row.var} has no trend: t draws numbers, IO bits and positions"))
+        elif event.action == "trend":
+            self._trend(row)
+
+    def _put_on_line(self, row: RowView) -> None:
+        line = put_line(row.var, row.variant)
+        if line.problem:
+            self.show(Message(line.problem, "error"))
+        command_line = self.command_line
+        command_line.value = line.text
+        command_line.cursor_position = len(line.text)
+        command_line.focus()
+
+    def _toggle(self, row: RowView) -> None:
+        """Space: write the opposite of the value shown, as a typed ``put IO N off``.
+
+        While the row has not shown the effect of the last toggle, another Space is
+        refused: it would toggle from a value already being replaced.
+        """
+        var = row.var
+        line = toggle_line(var, row.variant)
+        if line is None:
+            why = "is not an IO row" if var.kind.code != "IO" else "has no value read yet"
+            self.show(Message(f"Space toggles an IO bit: {var} {why}; nothing sent"))
+            return
+        if self.toggles.busy(var):
+            paused = self.status is not None and self.status.paused
+            wait = " (polling is paused: F2 resumes it)" if paused else ""
+            self.show(Message(f"{var}: the last toggle has not come back yet{wait}; nothing sent"))
+            return
+        seq = self.engine.submit(line)
+        self.toggles.start(var, seq, not bool(row.variant and row.variant.value))
+
+    # --------------------------------------------------------------- trends
+
+    def take_cycle(self, cycle: Cycle) -> None:
+        """A poll cycle from the outbox: its values go to the trends."""
+        self.trends.add_cycle(cycle)
+        if self.toggles.cycle(cycle):
+            self.refresh_table()
+
+    def take_result(self, result: Result) -> None:
+        if self.toggles.result(result):
+            self.refresh_table()
+
+    def forget_rows(self, removed: set[VarRef]) -> None:
+        """Unwatched rows: their trends and toggles go, and their trend view closes."""
+        for var in removed:
+            self.trends.forget(var)
+            self.toggles.forget(var)
+            if self.trend_view.var == var and self.trend_view.has_class("-open"):
+                self._close_trend()
+
+    def refresh_table(self) -> None:
+        raise NotImplementedError  # the app's
+
+    def _trend(self, row: RowView) -> None:
+        view = self.trend_view
+        if view.has_class("-open") and view.var == row.var:
+            self._close_trend()
+            return
+        view.show_row(row.var, terminal_safe(row.label), self.table.field_of(row.var))
+        view.add_class("-open")
+        self.frame_log.add_class("-under-trend")
+        view.focus()
+
+    def _close_trend(self) -> None:
+        """Back to the frame log; focus goes back to the table only from the view."""
+        had_focus = self.trend_view.has_focus
+        self.trend_view.remove_class("-open")
+        self.frame_log.remove_class("-under-trend")
+        if had_focus:
+            self.table.focus()
+
+    def on_trend_view_closed(self, event: TrendView.Closed) -> None:
+        self._close_trend()
+
+    def on_trend_view_field_cycled(self, event: TrendView.FieldCycled) -> None:
+        self.table.cycle_field(event.var)
+        view = self.trend_view
+        view.field = self.table.field_of(event.var)
+        view.redraw()
+
+    def redraw_trend(self) -> None:
+        """At the table's refresh rate: the open view follows its row's field choice."""
+        view = self.trend_view
+        if view.has_class("-open") and view.var is not None:
+            view.field = self.table.field_of(view.var)
+            view.redraw()
