@@ -58,7 +58,7 @@ SCENES = {
 KEYED_SCENES = {
     "io-grid-80x24": (
         (80, 24),
-        ["watch IO 0-7 inputs", "watch IO 128-143 gripper", "watch IO 20-63", "put IO 20 on"],
+        ["watch IO 0-31", "watch IO 128-159", "watch I 0 cycle", "put IO 20 on", "put IO 129 on"],
         ["f5"],
     ),
     "io-grid-120x40": (

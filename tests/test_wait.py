@@ -146,13 +146,14 @@ def test_watched_rows_are_polled_during_a_wait(front: Front) -> None:
     front.run("watch I 0")
     front.until(lambda: "I0" in front.rows and front.rows["I0"].status == "OK", "I0's value")
     start = len(front.frames)
-    outcome = run_outcome(front, "wait I 1 >= 100 within 0.5")
+    # Polls run while the deadline is more than a timeout (1 s here) away.
+    outcome = run_outcome(front, "wait I 1 >= 100 within 1.5")
     assert outcome.waited is not None and not outcome.waited.met
     during = [f for f in front.frames[start:] if f.direction == "tx"]
     first_read = next(n for n, f in enumerate(during) if f.data == b"GET:RC8:1:I:\r")
     last_read = max(n for n, f in enumerate(during) if f.data == b"GET:RC8:1:I:\r")
     polls = [f for f in during[first_read:last_read] if f.poll and f.data == b"GET:RC8:0:I:\r"]
-    assert len(polls) >= 3  # interval 0.05 s over half a second
+    assert len(polls) >= 3  # interval 0.05 s over the first half second
 
 
 def test_cancel_ends_a_long_wait(front: Front) -> None:
@@ -240,3 +241,92 @@ def test_a_wait_on_a_bit_completes_its_conditions() -> None:
 
     assert [c.text for c in complete("wait IO 128 ")] == ["on", "off", "changes"]
     assert [c.text for c in complete("wait I 1 ")] == ["changes"]
+
+
+def test_a_value_that_could_not_be_written_cannot_be_waited_for() -> None:
+    with pytest.raises(InputError, match="control character"):
+        parse_wait("S 0 == \x1b[31mRED\x07")
+
+
+def test_a_condition_reaches_the_terminal_escaped() -> None:
+    from rac_console.commands.outcome import Waited
+    from rac_console.present.render import outcome_text
+
+    outcome = Outcome(
+        "GET:RC8:0:S:",
+        ExitStatus.OK,
+        parse_wait("S 0 changes").var,
+        "0,8,x",
+        None,
+        waited=Waited("S0 == \x1b[31mRED\x07", True, 0.1, 3, 1.0),
+    )
+    shown = outcome_text(outcome).plain
+    assert "\x1b" not in shown and "\x07" not in shown
+    assert "\\x1b[31mRED\\x07" in shown
+
+
+def test_no_poll_that_could_outlast_the_deadline_starts_during_a_wait() -> None:
+    """A slow watched row can take up to a timeout per poll: a wait must not start one
+    that could end after its deadline (it would end late, saying "not met within ...")."""
+    import time
+
+    from servers import RecordingServer
+
+    def reply(line: bytes) -> bytes | None:
+        if line.startswith(b"GET:RC8:5:I:"):
+            time.sleep(0.3)  # the controller's slow answer, within the timeout
+        return b"0,3,1\r"
+
+    server = RecordingServer(reply)
+    timeout, within = 0.4, 2.0
+    engine = Engine("127.0.0.1", server.port, interval=0.05, timeout=timeout)
+    engine.start()
+    front = Front(engine)
+    try:
+        front.run("watch I 5")
+        front.until(lambda: b"GET:RC8:5:I:\r" in front.sent(), "the silent row's first poll")
+        outcome = run_outcome(front, f"wait I 1 >= 100 within {within}")
+        assert outcome.waited is not None and not outcome.waited.met
+        tx = [f for f in front.frames if f.direction == "tx"]
+        reads = [f for f in tx if f.data == b"GET:RC8:1:I:\r"]
+        assert len(reads) == outcome.waited.reads
+        deadline = reads[0].time + within
+        polls = [f for f in tx if f.poll and reads[0].time < f.time < reads[-1].time]
+        assert polls, "the watched row is polled during the wait"
+        assert all(f.time + timeout <= deadline + 0.05 for f in polls), [
+            round(deadline - f.time, 3) for f in polls
+        ]
+    finally:
+        engine.stop()
+        server.close()
+
+
+def test_an_error_answer_ends_the_wait_at_once(front: Front) -> None:
+    outcome = run_outcome(front, "wait I 30000 == 1 within 5")  # no such I in the simulator
+    assert outcome.status == ExitStatus.CONTROLLER_ERROR
+    assert outcome.waited is not None and outcome.waited.reads == 1
+    assert "controller answered" in (outcome.error or "")
+
+
+def test_an_unreachable_controller_is_said_as_such() -> None:
+    import socket
+
+    with socket.socket() as probe:  # a port nobody listens on
+        probe.bind(("127.0.0.1", 0))
+        port = probe.getsockname()[1]
+    engine = Engine("127.0.0.1", port, timeout=0.5)
+    engine.start(connect=False)
+    front = Front(engine)
+    try:
+        outcome = run_outcome(front, "wait I 1 >= 5 within 3")
+    finally:
+        engine.stop()
+    assert outcome.status == ExitStatus.TRANSPORT
+    assert outcome.waited is not None and outcome.waited.reads == 1
+    assert "not met within" not in (outcome.error or "")
+
+
+@pytest.mark.parametrize("number", ["1_000", "0x10", "1e400", "+-1"])
+def test_a_threshold_is_a_plain_number(number: str) -> None:
+    with pytest.raises(InputError, match="needs one number"):
+        parse_wait(f"I 1 >= {number}")

@@ -10,6 +10,7 @@ import math
 import re
 
 from ..protocol import InputError, Variant
+from ..protocol.variables import encode_value
 from .language import (
     CsvLog,
     Op,
@@ -58,7 +59,8 @@ def parse_wait(rest: str) -> Wait:
     if not value_text:
         raise InputError(f"{symbol} needs a value: wait {var} {symbol} 100")
     if op in (Op.EQ, Op.NE):
-        return Wait(var, op, var.kind.value_from_text(value_text), within, value_text)
+        variant, _ = encode_value(var.kind, value_text)  # refused as a put would be
+        return Wait(var, op, variant, within, value_text)
     if var.kind.code not in NUMERIC_KINDS:
         raise InputError(
             f"{symbol} compares numbers (I F D); wait for {var} with ==, != or changes"
@@ -66,11 +68,12 @@ def parse_wait(rest: str) -> Wait:
     return Wait(var, op, _number(value_text, symbol), within, value_text)
 
 
+_NUMBER_RE = re.compile(r"[+-]?(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][+-]?\d+)?", re.ASCII)
+
+
 def _number(text: str, symbol: str) -> float:
-    try:
-        value = float(text) if text.isascii() else math.nan
-    except ValueError:
-        value = math.nan
+    """A plain decimal number (no ``1_000``, no hex), finite."""
+    value = float(text) if _NUMBER_RE.fullmatch(text) else math.nan
     if not math.isfinite(value):
         raise InputError(f"{symbol} needs one number, e.g. >= 100, got {text!r}")
     return value

@@ -22,7 +22,7 @@ from .execute import execute
 READ_EVERY = 0.01
 
 
-def _sleep_until(until: float) -> None:
+def _sleep_until(until: float, deadline: float) -> None:
     time.sleep(max(0.0, until - time.perf_counter()))
 
 
@@ -33,11 +33,12 @@ def wait_for(
     line: str | None = None,
     read_only: bool = False,
     cancelled: Callable[[], bool] = lambda: False,
-    between: Callable[[float], None] = _sleep_until,
+    between: Callable[[float, float], None] = _sleep_until,
 ) -> Outcome:
     """Read ``wait.var`` until the condition holds, ``wait.within`` seconds pass, the
     controller cannot be reached, or ``cancelled()``; the last read's outcome, with how
-    it went. ``between(until)`` passes the time to the next read (the engine polls)."""
+    it went. ``between(until, deadline)`` passes the time to the next read (the engine
+    polls the watched rows then, but starts no poll that could outlast the deadline)."""
     get = Get(wait.var)
     started = time.perf_counter()
     deadline = started + wait.within
@@ -53,13 +54,18 @@ def wait_for(
             if holds(wait, variant, first):
                 return _ended(outcome, wait, True, now - started, reads)
             first = first if first is not None else variant
-        if isinstance(outcome.failure, ConnectFailed) or outcome.status == ExitStatus.REFUSED:
-            return _ended(outcome, wait, False, now - started, reads)
+        # Unreachable, refused, or an error answer (no such variable): reading again
+        # would only say the same thing, at up to 100 requests a second.
+        if isinstance(outcome.failure, ConnectFailed) or outcome.status in (
+            ExitStatus.REFUSED,
+            ExitStatus.CONTROLLER_ERROR,
+        ):
+            return _ended(outcome, wait, False, now - started, reads, ended=True)
         if now >= deadline:
             return _ended(outcome, wait, False, now - started, reads)
         if cancelled():
             return _ended(outcome, wait, False, now - started, reads, "wait cancelled")
-        between(min(sent_at + READ_EVERY, deadline))
+        between(min(sent_at + READ_EVERY, deadline), deadline)
 
 
 def _ended(
@@ -69,12 +75,18 @@ def _ended(
     seconds: float,
     reads: int,
     why: str | None = None,
+    *,
+    ended: bool = False,
 ) -> Outcome:
     waited = Waited(wait.condition, met, seconds, reads, wait.within)
     if met:
         return replace(outcome, waited=waited)
     # Not met: the last read's own failure says most; else the condition is the error.
     status = outcome.status if not outcome.ok else ExitStatus.CONTROLLER_ERROR
+    if ended:  # the read's failure ended the wait before its time
+        error = f"{wait.condition}: wait ended after {reads} read{'s' * (reads != 1)}: "
+        error += outcome.error or ""
+        return replace(outcome, status=status, error=error, waited=waited)
     error = why or waited.text()
     if outcome.error:
         error += f"; the last read failed: {outcome.error}"

@@ -101,6 +101,9 @@ class Engine:
         self._events_at = 0.0  # perf_counter() of the last flush
         self._inbox: queue.SimpleQueue[tuple[int, str | Command] | None] = queue.SimpleQueue()
         self._seq = itertools.count(1)
+        self._seq_lock = threading.Lock()
+        self._last_seq = 0  # the last line or command submitted
+        self.skip_through = 0  # lines submitted up to this one were cancelled: not run
         self._connect_first = True
         self._started = threading.Event()
         self._stopping = threading.Event()
@@ -118,14 +121,16 @@ class Engine:
 
     def submit(self, line: str) -> int:
         """Queue a typed line; its :class:`Result` comes out with the number returned."""
-        seq = next(self._seq)
+        with self._seq_lock:
+            seq = self._last_seq = next(self._seq)
         self._inbox.put((seq, line))
         return seq
 
     def submit_command(self, command: Command) -> int:
         """Queue a command a front end made itself (F2's pause, the REPL's end of a
         live watch): run like a typed line, with no line to echo."""
-        seq = next(self._seq)
+        with self._seq_lock:
+            seq = self._last_seq = next(self._seq)
         self._inbox.put((seq, command))
         return seq
 
@@ -140,9 +145,14 @@ class Engine:
             session.interrupt()
         self._thread.join(timeout)
 
-    def cancel(self) -> None:
+    def cancel(self, queued: bool = False) -> None:
         """Cut short the command running now (Ctrl-C at the REPL): a request in flight
-        fails at once, a latency run ends; polling and later lines go on."""
+        fails at once, a latency run or a wait ends; polling goes on. With ``queued``
+        (Esc in the console), the lines submitted so far behind it are not run either:
+        a write typed during a long wait must not go out once the user said stop."""
+        if queued:
+            with self._seq_lock:
+                self.skip_through = self._last_seq
         self._cancelled.set()
         session = self.session
         if session is not None:
@@ -490,17 +500,20 @@ class Engine:
         if changed:
             self.show_row(row)
 
-    def poll_until(self, until: float) -> None:
+    def poll_until(self, until: float, deadline: float) -> None:
         """Until ``time.perf_counter()`` reaches ``until`` (between a wait's reads): poll
-        the watched rows that are due, sleep when none is."""
+        the watched rows that are due, sleep when none is. A poll may take a whole
+        timeout: none starts that could end after the wait's ``deadline``."""
         while not self.stopping:
             now = time.perf_counter()
             if now >= until:
                 return
             wait = self._wait_time()
-            if wait == 0:
+            if wait == 0 and deadline - now > self.timeout:
                 self._poll_once()
                 continue
+            if wait == 0:
+                wait = None  # no time for a poll: sleep to the next read
             remaining = until - now
             time.sleep(remaining if wait is None else min(remaining, wait))
 

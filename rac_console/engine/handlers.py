@@ -45,7 +45,11 @@ def handle(engine: Engine, seq: int, what: str | Command) -> None:
     engine.begin_command()
     try:
         command = parse_command(what) if isinstance(what, str) else what
-        feedback = run(engine, command, line) if command is not None else []
+        feedback: list[Feedback]
+        if seq <= engine.skip_through:
+            feedback = [Message("not run: cancelled (Esc) before it started", "error")]
+        else:
+            feedback = run(engine, command, line) if command is not None else []
     except InputError as exc:
         feedback = [Message(str(exc), "error")]
     except Exception as exc:  # a bug must not end the session at the cell

@@ -72,7 +72,7 @@ def outcome_text(outcome: Outcome) -> Text:
     detail.append(rtt_text(outcome))
     line.append("   " + "  ".join(d for d in detail if d), style="dim")
     if outcome.waited is not None:
-        line.append(f"   ✓ {outcome.waited.text()}", style="green")
+        line.append(f"   ✓ {terminal_safe(outcome.waited.text())}", style="green")
     return line
 
 

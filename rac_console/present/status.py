@@ -11,11 +11,21 @@ from ..protocol.text import terminal_safe
 
 #: A reply is shown as awaited once it is this late (seconds): quicker ones would flicker.
 WAITING_SHOWN_AFTER = 0.2
+#: A typed line is shown as running once it has run this long (seconds).
+RUNNING_SHOWN_AFTER = 0.5
+#: Characters of a running line shown.
+RUNNING_WIDTH = 32
 
 
-def status_text(status: Status, waiting_since: float | None, frames_per_second: float) -> Text:
+def status_text(
+    status: Status,
+    waiting_since: float | None,
+    frames_per_second: float,
+    running: tuple[str, float, int] | None = None,
+) -> Text:
     """The line for ``status``; ``waiting_since`` is when the request in flight left
-    (``time.perf_counter()``), from the outbox."""
+    (``time.perf_counter()``), from the outbox; ``running``: the typed line running for
+    how many seconds, and how many lines wait behind it."""
     text = Text()
     if not status.has_session:
         style = "bold white on grey35"
@@ -49,6 +59,14 @@ def status_text(status: Status, waiting_since: float | None, frames_per_second: 
         text.append("connecting…", style="yellow")
     else:
         text.append("idle" if status.has_session else "disconnected", style="dim")
+    if running is not None and running[1] >= RUNNING_SHOWN_AFTER:
+        line, seconds, queued = running
+        shown = line if len(line) <= RUNNING_WIDTH else line[: RUNNING_WIDTH - 1] + "…"
+        behind = f", {queued} queued" if queued else ""
+        text.append(
+            f" · running {terminal_safe(shown)} {seconds:.0f} s{behind} (Esc cancels)",
+            style="bold yellow",
+        )
     connected = state == "connected" and status.has_session
     rtt = status.rtt if connected else None
     text.append(f" · rtt {rtt * 1000:.2f} ms" if rtt is not None else " · rtt –")

@@ -63,6 +63,7 @@ class RacConsoleApp(TableActions, App[int]):
         Binding("ctrl+l", "clear_log", "Clear log", id="clear-log"),
         Binding("f6", "focus_pane(1)", "Next pane", id="next-pane"),
         Binding("shift+f6", "focus_pane(-1)", "Previous pane", id="previous-pane"),
+        Binding("escape", "cancel_command", "Cancel command", id="cancel-command"),
     ]
 
     def __init__(self, engine: Engine, history: History, watch_file: str | None = None) -> None:
@@ -73,6 +74,8 @@ class RacConsoleApp(TableActions, App[int]):
         self.status: Status | None = None
         self.rows: dict[VarRef, RowView] = {}
         self._removed: set[VarRef] = set()
+        #: Lines handed to the engine and not answered yet: seq -> (line, when), in order.
+        self.lines_pending: dict[int, tuple[str, float]] = {}
         self._flushes: deque[tuple[float, int]] = deque(maxlen=LOG_FLUSH_HZ * 2)
         self._status_line = Text()
         # Kept as attributes: timers and workers never query a DOM being torn down.
@@ -174,6 +177,8 @@ class RacConsoleApp(TableActions, App[int]):
         self._removed -= batch.rows.keys()
         for event in batch.events:
             if isinstance(event, Result):
+                if self.lines_pending.pop(event.seq, None) is not None and not self.lines_pending:
+                    self.refresh_bindings()  # Esc has nothing to cancel any more
                 self.take_result(event)
                 self._show_result(event)
             elif isinstance(event, Cycle):
@@ -205,7 +210,12 @@ class RacConsoleApp(TableActions, App[int]):
         self.io_panel.refresh_rows(self.rows, time.monotonic())
         if self.status is None:
             return
-        line = status_text(self.status, self.engine.outbox.waiting_since, self.frames_per_second())
+        line = status_text(
+            self.status,
+            self.engine.outbox.waiting_since,
+            self.frames_per_second(),
+            running=self._running_line(),
+        )
         if line != self._status_line:  # an unchanged line costs no repaint
             self._status_line = line
             self.status_bar.update(line)
@@ -219,7 +229,29 @@ class RacConsoleApp(TableActions, App[int]):
         if not event.line.strip():
             return
         self.command_line.remember(event.line)
-        self.engine.submit(event.line)
+        self.lines_pending[self.engine.submit(event.line)] = (event.line, time.monotonic())
+        if len(self.lines_pending) == 1:
+            self.refresh_bindings()
+
+    def _running_line(self) -> tuple[str, float, int] | None:
+        """The oldest line not answered yet (the one running: lines run in order), how
+        long ago it was typed, and how many wait behind it."""
+        if not self.lines_pending:
+            return None
+        line, since = next(iter(self.lines_pending.values()))
+        return line, time.monotonic() - since, len(self.lines_pending) - 1
+
+    def check_action(self, action: str, parameters: tuple[object, ...]) -> bool | None:
+        """Esc cancels only while a typed line is running (elsewhere it leaves a pane)."""
+        if action == "cancel_command":
+            return bool(self.lines_pending)
+        return True
+
+    def action_cancel_command(self) -> None:
+        """Esc: the running line ends (a wait, a latency run, a request in flight), and
+        the lines typed behind it are not run."""
+        if self.lines_pending:
+            self.engine.cancel(queued=True)
 
     def _show_result(self, result: Result) -> None:
         if result.line is not None:

@@ -1,0 +1,37 @@
+"""A long command in the console (a wait): shown while it runs, cancelled with Esc,
+and the lines typed behind it are not run once it is cancelled."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+from tui_helpers import FrameTap, make_app, results_text, type_line, until
+
+from rac_console.tui.status_bar import StatusBar
+
+pytestmark = pytest.mark.slow
+
+
+def status_line(app) -> str:  # type: ignore[no-untyped-def]
+    return str(app.query_one(StatusBar).render())
+
+
+async def test_esc_cancels_a_wait_and_the_lines_queued_behind_it(tmp_path: Path) -> None:
+    app = make_app(tmp_path)
+    tap = FrameTap(tmp_path)
+    async with app.run_test(size=(120, 30)) as pilot:
+        await type_line(pilot, "wait I 1 >= 100 within 60")
+        await until(pilot, lambda: b"GET:RC8:1:I:\r" in tap.sent, "the wait's first read")
+        await type_line(pilot, "put IO 20 on")  # typed while the wait runs: queued
+        await until(pilot, lambda: "running wait I 1 >= 100" in status_line(app), "the sign")
+        assert "Esc cancels" in status_line(app) and "1 queued" in status_line(app)
+        await pilot.press("escape")
+        await until(pilot, lambda: "not run" in results_text(app), "the queued line's answer")
+        results = results_text(app)
+        assert "wait cancelled" in results
+        assert "› put IO 20 on\n" in results + "\n"
+        assert not any(frame.startswith(b"PUT:") for frame in tap.sent)
+        await until(pilot, lambda: "running" not in status_line(app), "the sign gone")
+        await type_line(pilot, "put IO 20 on")  # a line typed after the cancel runs
+        await until(pilot, lambda: b"PUT:RC8:20:IO:11,-1\r" in tap.sent, "the new put")
