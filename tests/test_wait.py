@@ -33,7 +33,7 @@ from rac_console.session import Session
         ("wait I[10] < -5 within 0.5s", Op.LT, 0.5),
         ("wait P 0 changes within 5", Op.CHANGES, 5.0),
         ("wait F 1 = 0.5", Op.EQ, 10.0),
-        ("wait S 1 != \"part OK\" within 1", Op.NE, 1.0),
+        ('wait S 1 != "part OK" within 1', Op.NE, 1.0),
         ("wait P 1 == 350 0 450 180 0 180 5", Op.EQ, 10.0),
     ],
 )
