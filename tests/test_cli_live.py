@@ -4,8 +4,10 @@ built-in simulator and servers written here (127.0.0.1 port 0), read as a pipe r
 
 from __future__ import annotations
 
+import csv
 import itertools
 import json
+import os
 import queue
 import re
 import signal
@@ -152,7 +154,9 @@ def test_the_moving_counter_moves_across_repetitions(env: dict[str, str]) -> Non
     assert values == sorted(set(values)), values
 
 
-def test_the_interval_runs_from_start_to_start(env: dict[str, str]) -> None:
+def test_the_interval_spaces_the_repetitions(env: dict[str, str]) -> None:
+    """A smoke test: the CLI follows the schedule (start to start, pinned by
+    test_live_schedule.py on a clock of its own)."""
     result = cli(env, "--json", "get", "I", "0", "-r", "4", "-i", "0.25")
     assert result.returncode == 0, result.stderr
     assert all(gap >= 0.24 for gap in gaps([d["time"] for d in json_lines(result.stdout)]))
@@ -233,7 +237,8 @@ def test_watch_text_is_time_then_tab_separated_name_value_fields(env: dict[str, 
         assert len([float(v) for v in values["P0"].split(",")]) == 7
 
 
-def test_watch_cycles_run_start_to_start(env: dict[str, str]) -> None:
+def test_watch_cycles_are_spaced_by_every(env: dict[str, str]) -> None:
+    """A smoke test, as for get -r: the schedule itself is test_live_schedule.py's."""
     result = cli(env, "--json", "watch", "P", "0", "J", "0", "--every", "0.25", "--count", "3")
     assert result.returncode == 0, result.stderr
     assert all(gap >= 0.24 for gap in gaps([d["time"] for d in json_lines(result.stdout)]))
@@ -350,6 +355,145 @@ def test_ctrl_c_cuts_a_repeated_get_short_with_130(env: dict[str, str], tmp_path
     assert running.finish() == 130
     assert "interrupted" in running.stderr()
     no_traceback(running.stderr())
+
+
+# ------------------------------------------------------------- watch --log-csv
+
+
+def csv_rows(path: Path) -> list[list[str]]:
+    with path.open(encoding="utf-8", newline="") as handle:
+        return list(csv.reader(handle))
+
+
+@pytest.mark.parametrize("before", [True, False], ids=["option-first", "option-last"])
+def test_watch_logs_each_cycle_as_a_csv_row(
+    env: dict[str, str], tmp_path: Path, before: bool
+) -> None:
+    log = tmp_path / "watch.csv"
+    words = ["watch", "I", "1", "IO", "128-129", "P", "0", "--count", "3", "--every", "0"]
+    option = ["--log-csv", str(log)]
+    result = cli(env, "--json", *(option + words if before else words + option))
+    assert result.returncode == 0, result.stderr
+    header, *rows = csv_rows(log)
+    assert header[:4] == ["time", "I1", "IO128", "IO129"]
+    assert header[4:] == [f"P0.{label}" for label in ("X", "Y", "Z", "Rx", "Ry", "Rz", "Fig")]
+    assert len(rows) == 3
+    for row, cycle in zip(rows, json_lines(result.stdout), strict=True):
+        stamp(row[0])
+        values = cycle["values"]
+        assert row[1:4] == ["1", str(int(values["IO128"])), str(int(values["IO129"]))]
+        assert [float(cell) for cell in row[4:]] == pytest.approx(values["P0"])
+
+
+def test_the_csv_log_appends_and_leaves_a_failed_read_empty(
+    env: dict[str, str], tmp_path: Path, recording: Callable[..., RecordingServer]
+) -> None:
+    server = recording(
+        answer_by_line({b"GET:RC8:1:I:": b"0,3,7\r", b"GET:RC8:10:I:": E_INVALIDARG})
+    )
+    log = tmp_path / "watch.csv"
+    words = ["watch", "I", "1", "I", "10", "--every", "0", "--log-csv", str(log)]
+    assert cli(env, *server.args, *words, "--count", "2").returncode == 1
+    assert cli(env, *server.args, *words, "--count", "1").returncode == 1
+    header, *rows = csv_rows(log)
+    assert header == ["time", "I1", "I10"]  # once: the second run appended
+    assert [row[1:] for row in rows] == [["7", ""]] * 3
+
+
+def test_a_csv_log_with_other_columns_is_refused_before_sending(
+    env: dict[str, str], tmp_path: Path, recording: Callable[..., RecordingServer]
+) -> None:
+    server = recording(fixed_reply(b"0,3,1\r"))
+    log = tmp_path / "watch.csv"
+    log.write_text("time,I2\r\n", encoding="utf-8")
+    result = cli(env, *server.args, "watch", "I", "1", "--count", "1", "--log-csv", str(log))
+    assert result.returncode == 2
+    assert str(log) in shared.one_error_line(result)  # why is csvlog's to say
+    assert server.connections() == []
+    assert log.read_bytes() == b"time,I2\r\n"
+
+
+@pytest.mark.skipif(not os.path.exists("/dev/full"), reason="needs /dev/full, a full disk")
+def test_a_failing_csv_log_is_said_once_and_exit_4(env: dict[str, str]) -> None:
+    words = ["watch", "I", "1", "--count", "3", "--every", "0", "--log-csv", "/dev/full"]
+    result = cli(env, "--json", *words)
+    assert result.returncode == 4
+    assert len(json_lines(result.stdout)) == 3  # the watch went on
+    said = [line for line in result.stderr.splitlines() if "/dev/full" in line]
+    assert len(said) == 1, result.stderr
+    no_traceback(result.stderr)
+
+
+@pytest.mark.parametrize(
+    "words",
+    [
+        ["get", "I", "0", "-r", "2"],
+        ["get", "I", "0"],
+        ["--json", "put", "I", "0", "5"],
+        ["run", "-"],
+        ["latency", "--count", "2"],
+    ],
+)
+def test_log_csv_with_another_command_is_refused(
+    env: dict[str, str],
+    tmp_path: Path,
+    recording: Callable[..., RecordingServer],
+    words: list[str],
+) -> None:
+    server = recording(fixed_reply(b"0,3,1\r"))
+    log = tmp_path / "ignored.csv"
+    result = cli(env, *server.args, "--log-csv", str(log), *words, stdin="get I 0\n")
+    assert result.returncode == 2
+    assert "rac-console watch" in shared.one_error_line(result)
+    assert result.stdout == ""
+    assert server.connections() == []
+    assert not log.exists()
+
+
+# ----------------------------------------------------------- a closed stderr
+
+
+def with_stderr_closed(env: dict[str, str], *args: str) -> subprocess.CompletedProcess[str]:
+    """The CLI with stderr a pipe whose reader has gone before it starts: every write
+    to stderr fails (EPIPE), as with ``2> >(head -c 0)``."""
+    read_end, write_end = os.pipe()
+    os.close(read_end)
+    try:
+        return subprocess.run(
+            [sys.executable, "-m", "rac_console", *args],
+            env=env,
+            stdin=subprocess.DEVNULL,
+            stdout=subprocess.PIPE,
+            stderr=write_end,
+            text=True,
+            encoding="utf-8",
+            timeout=20,
+        )
+    finally:
+        os.close(write_end)
+
+
+def test_a_closed_stderr_keeps_the_status_of_a_repeated_get(env: dict[str, str]) -> None:
+    refused = ["-H", "127.0.0.1", "-p", str(unused_port())]
+    result = with_stderr_closed(env, *refused, "--json", "get", "I", "0", "-r", "2")
+    assert result.returncode == 3
+    assert [(d["repetition"], d["ok"]) for d in json_lines(result.stdout)] == [
+        (1, False),
+        (2, False),
+    ]
+    result = with_stderr_closed(env, *refused, "get", "I", "0", "-r", "2")
+    assert (result.returncode, result.stdout) == (3, "")
+
+
+def test_a_closed_stderr_leaves_the_lines_on_stdout(env: dict[str, str]) -> None:
+    """The built-in simulator's notice goes to stderr first: its failure must not end
+    the watch or take stdout with it."""
+    result = with_stderr_closed(env, "watch", "I", "1", "--count", "2", "--every", "0")
+    assert result.returncode == 0
+    assert [line.split("\t")[1] for line in result.stdout.splitlines()] == ["I1=1"] * 2
+
+    result = with_stderr_closed(env, "watch", "Q", "0")  # refused: said on stderr
+    assert result.returncode == 2
 
 
 # ------------------------------------------------------ refused before sending

@@ -12,21 +12,23 @@ from __future__ import annotations
 import argparse
 import contextlib
 import errno
+import io
 import json
 import os
 import sys
 import time
 from collections.abc import Callable, Iterator
 from datetime import datetime
-from typing import Any
+from typing import Any, TextIO, cast
 
 from ..commands.argv import exchange_from_words, input_line
 from ..commands.language import Get, VarRef, _parse_var_list
 from ..commands.outcome import ExitStatus, Outcome, refused, worst
 from ..engine.backoff import Backoff
+from ..engine.csvlog import CsvLog
 from ..engine.execute import execute
 from ..present.render import error_text, outcome_text, print_error
-from ..protocol import InputError, hresult_name
+from ..protocol import InputError, Variant, hresult_name
 from ..session import BadReply, ConnectFailed, RequestTimeout, Session
 from .oneshot import Output
 from .target import open_session
@@ -41,39 +43,42 @@ _READER_GONE = {errno.EPIPE, *([errno.EINVAL] if sys.platform == "win32" else []
 class Schedule:
     """When each repetition (or watch cycle) starts: ``interval`` seconds start to start.
 
-    Starts are counted from the previous *scheduled* start, so a slow reply does not
-    push the later ones back. A start that is already late begins at once and the
-    count goes on from it: missed starts are never made up in a burst. After a
-    transport failure the next start waits at least the poller's backoff (0.5 s
-    doubling to 5 s), so a controller that is down is not asked in a tight loop.
+    Pure: it is told the clock's readings (``time.monotonic()`` in :func:`run_live`, a
+    test's own numbers in test_live_schedule.py). Starts are counted from the previous
+    *scheduled* start, so a slow reply does not push the later ones back. A start that
+    is already late begins at once and the count goes on from it: missed starts are
+    never made up in a burst. After a transport failure the next start waits at least
+    the poller's backoff (0.5 s doubling to 5 s), so a controller that is down is not
+    asked in a tight loop.
     """
 
     def __init__(self, interval: float) -> None:
         self.interval = interval
-        self._next: float | None = None
+        self._due: float | None = None  # when the next start is due; None: at once
         self._backoff = Backoff()
 
-    def wait(self) -> None:
-        """Sleep until the next start is due (the first one is due at once)."""
-        now = time.monotonic()
-        if self._next is not None and now < self._next:
-            time.sleep(self._next - now)
-            now = self._next  # on the grid: the sleep's own lateness does not add up
-        self._next = now + self.interval
+    def start(self, now: float) -> float:
+        """When the next start is, asked at ``now``: when it is due, or ``now`` when
+        that has passed. The caller sleeps until then; the start after it is due an
+        interval later, however late that sleep wakes."""
+        start = now if self._due is None else max(self._due, now)
+        self._due = start + self.interval
+        return start
 
-    def ended(self, outcomes: list[Outcome]) -> None:
-        """What came of the requests since the last start."""
-        if any(o.status == ExitStatus.TRANSPORT for o in outcomes):
-            assert self._next is not None
-            self._next = max(self._next, time.monotonic() + self._backoff.next_delay())
+    def ended(self, now: float, *, connection_failed: bool) -> None:
+        """The requests of the start before ``now`` are done; ``connection_failed``:
+        one of them failed on the connection (connect, timeout, bad reply)."""
+        if connection_failed:
+            due = now if self._due is None else self._due
+            self._due = max(due, now + self._backoff.next_delay())
         else:
             self._backoff.good()
 
 
-def timestamp() -> str:
-    """Now as ISO 8601 local time with milliseconds and the UTC offset (unambiguous
-    across time zones and daylight saving): ``2026-11-22T01:02:03.456+01:00``."""
-    return datetime.now().astimezone().isoformat(timespec="milliseconds")
+def timestamp(wall: float) -> str:
+    """A ``time.time()`` as ISO 8601 local time with milliseconds and the UTC offset
+    (unambiguous across time zones and daylight saving): ``2026-11-22T01:02:03.456+01:00``."""
+    return datetime.fromtimestamp(wall).astimezone().isoformat(timespec="milliseconds")
 
 
 def write_line(text: str) -> None:
@@ -82,21 +87,72 @@ def write_line(text: str) -> None:
     sys.stdout.flush()
 
 
-def _reader_gone(exc: OSError) -> bool:
-    """True when stdout's reader has gone; stdout then points at the null device,
-    so nothing more (Python's last flush at exit included) can fail on it."""
+def _reader_gone(exc: OSError, stream: TextIO | None = None) -> bool:
+    """True when the reader of ``stream`` (stdout by default) has gone; the stream then
+    points at the null device, so nothing more (Python's last flush at exit included)
+    can fail on it."""
     if exc.errno not in _READER_GONE:
         return False
-    with contextlib.suppress(OSError, ValueError):  # ValueError: stdout has no descriptor
-        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+    with contextlib.suppress(OSError, ValueError):  # ValueError: the stream has no descriptor
+        null = os.open(os.devnull, os.O_WRONLY)
+        try:
+            os.dup2(null, (stream or sys.stdout).fileno())
+        finally:
+            os.close(null)
     return True
+
+
+class _Stderr:
+    """stderr for a live run, as Rich and ``print`` see it: the real one until its reader
+    goes (``2> >(head -1)``), then the null device, and the run goes on with stdout.
+
+    Rich would instead end the process with status 1 (and point stdout at the null
+    device too); stdout's lines and the status the run earned matter more than its
+    messages. With no stderr at all (None), what is written goes nowhere.
+    """
+
+    def __init__(self, real: TextIO | None) -> None:
+        self._real = real
+
+    def __getattr__(self, name: str) -> Any:  # encoding, fileno, errors...: the real one's
+        if self._real is None:
+            raise AttributeError(name)
+        return getattr(self._real, name)
+
+    def isatty(self) -> bool:
+        return self._real is not None and self._real.isatty()
+
+    def write(self, text: str) -> int:
+        with self._unless_gone() as real:
+            real.write(text)
+        return len(text)
+
+    def flush(self) -> None:
+        with self._unless_gone() as real:
+            real.flush()
+
+    @contextlib.contextmanager
+    def _unless_gone(self) -> Iterator[TextIO]:
+        real = self._real if self._real is not None else io.StringIO()
+        try:
+            yield real
+        except OSError as exc:
+            if not _reader_gone(exc, real):
+                raise
+
+
+@contextlib.contextmanager
+def _stderr_may_close() -> Iterator[None]:
+    """Run with stderr as :class:`_Stderr` (as a decorator: the whole command)."""
+    with contextlib.redirect_stderr(cast(TextIO, _Stderr(sys.stderr))):
+        yield
 
 
 # ------------------------------------------------------------ the shared loop
 
-Tick = Callable[[Session, int, str], list[Outcome]]
-"""One repetition or cycle: given the session, its number and start time, it reads,
-prints its line and returns what came of its requests."""
+Tick = Callable[[Session, int, float], list[Outcome]]
+"""One repetition or cycle: given the session, its number and start time (``time.time()``),
+it reads, prints its line and returns what came of its requests."""
 
 
 def run_live(
@@ -119,9 +175,13 @@ def run_live(
     try:
         with open_session(args, output.local_failure) as session:
             for number in _ticks(count):
-                schedule.wait()
-                outcomes = tick(session, number, timestamp())
-                schedule.ended(outcomes)
+                now = time.monotonic()
+                start = schedule.start(now)
+                if start > now:
+                    time.sleep(start - now)
+                outcomes = tick(session, number, time.time())
+                failed = any(o.status == ExitStatus.TRANSPORT for o in outcomes)
+                schedule.ended(time.monotonic(), connection_failed=failed)
                 statuses += [o.status for o in outcomes]
     except KeyboardInterrupt:
         if not until_ctrl_c:
@@ -146,6 +206,7 @@ def _ticks(count: int | None) -> Iterator[int]:
 # ------------------------------------------------------------------ get -r N
 
 
+@_stderr_may_close()
 def repeat_get(args: argparse.Namespace) -> ExitStatus:
     """``get TYPE INDEX -r N [-i S]``: N results, one a line, each with its time."""
     output = Output(args.json)
@@ -163,9 +224,9 @@ def repeat_get(args: argparse.Namespace) -> ExitStatus:
         output.show(refused(line, str(exc)))
         return ExitStatus.REFUSED
 
-    def repetition(session: Session, number: int, started: str) -> list[Outcome]:
+    def repetition(session: Session, number: int, wall: float) -> list[Outcome]:
         outcome = execute(session, command, read_only=args.read_only, line=line)
-        _show_repetition(output, outcome, number, started)
+        _show_repetition(output, outcome, number, timestamp(wall))
         return [outcome]
 
     interval = args.repeat_interval or 0.0
@@ -201,31 +262,58 @@ def watch_variables(words: list[str]) -> tuple[VarRef, ...]:
     return variables
 
 
+@_stderr_may_close()
 def watch(args: argparse.Namespace) -> ExitStatus:
-    """``watch VAR... [--every S] [--count N]``: one line a cycle until N cycles or Ctrl-C.
+    """``watch VAR... [--every S] [--count N] [--log-csv FILE]``: one line a cycle until
+    N cycles or Ctrl-C, and with --log-csv one CSV row a cycle, as the console logs.
 
     Ctrl-C is how a watch without --count ends, so it is no failure: the status is
     the worst one seen (0 when every read succeeded). A connection that fails is
-    tried again the next cycle, the failure shown in that cycle's line.
+    tried again the next cycle, the failure shown in that cycle's line. A CSV log
+    that fails is said once and the watch goes on (exit status 4, as for --record).
     """
     output = Output(args.json)
     try:
         variables = watch_variables(args.variables)
+        log = _csv_log(args.log_csv, variables, output)
     except InputError as exc:
         print_error(output.err, str(exc))
         return ExitStatus.REFUSED
     reported: dict[VarRef, str] = {}  # each variable's failure, said on stderr once
 
-    def cycle(session: Session, number: int, started: str) -> list[Outcome]:
+    def cycle(session: Session, number: int, wall: float) -> list[Outcome]:
         results = _read_cycle(session, variables, args.read_only)
         _report_failures(output, results, reported)
+        started = timestamp(wall)
         if output.as_json:
             write_line(json.dumps(_cycle_json(number, started, results)))
         else:
             write_line(_cycle_text(started, results))
+        if log is not None:
+            log.write(wall, {var: _good_value(outcome) for var, outcome in results.items()})
         return [o for o in results.values() if o is not None]
 
-    return run_live(args, output, cycle, count=args.count, interval=args.every, until_ctrl_c=True)
+    try:
+        return run_live(
+            args, output, cycle, count=args.count, interval=args.every, until_ctrl_c=True
+        )
+    finally:
+        if log is not None:
+            log.close()
+
+
+def _csv_log(path: str | None, variables: tuple[VarRef, ...], output: Output) -> CsvLog | None:
+    """The ``--log-csv`` log with a column per field of each variable, as the console's
+    ``log FILE.csv``: appended to when the file has the same header, refused
+    (InputError) when it has other columns or cannot be opened."""
+    if path is None:
+        return None
+    return CsvLog(path, list(dict.fromkeys(variables)), output.local_failure)
+
+
+def _good_value(outcome: Outcome | None) -> Variant | None:
+    """What a CSV row holds of a read: its value, or nothing (an empty cell) when it failed."""
+    return outcome.variant if outcome is not None and outcome.ok else None
 
 
 def _read_cycle(

@@ -235,6 +235,16 @@ def _watch_options(watch: argparse.ArgumentParser) -> None:
         metavar="N",
         help="stop after N cycles (default: until Ctrl-C)",
     )
+    watch.add_argument(
+        "--log-csv",
+        metavar="FILE",
+        default=argparse.SUPPRESS,  # or the one given before the command
+        help="also log each cycle to FILE as a CSV row, as the console's log FILE.csv",
+    )
+
+
+LOG_CSV_COMMANDS = (None, "repl", "watch")
+"""Where ``--log-csv`` means something: the console, the REPL and ``watch``."""
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -503,6 +513,13 @@ def _dispatch(args: argparse.Namespace) -> int:
         print(
             f"rac-console: -p {args.port} needs -H HOST: without -H every command talks "
             "to a built-in simulator of its own",
+            file=sys.stderr,
+        )
+        return 2
+    if getattr(args, "log_csv", None) is not None and args.command not in LOG_CSV_COMMANDS:
+        print(
+            "rac-console: --log-csv logs watched values: use it with the console, "
+            "the REPL or rac-console watch",
             file=sys.stderr,
         )
         return 2
