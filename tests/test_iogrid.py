@@ -2,16 +2,23 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import pytest
 from rich.cells import cell_len
+from rich.style import Style
+from rich.text import Text
 
 from rac_console.commands.language import VarRef
 from rac_console.engine.events import RowView
 from rac_console.present.iogrid import (
     NO_DECIMAL,
+    STYLE_OFF,
+    STYLE_ON,
     Bit,
     BitState,
     Layout,
+    bit_style,
     bits_from_rows,
     build_grid,
     cell_text,
@@ -203,7 +210,7 @@ def test_a_labelled_grid_fits_its_width() -> None:
 
 @pytest.mark.parametrize(
     ("width", "per_line"),
-    [(40, 8), (60, 8), (76, 8), (77, 16), (118, 16), (198, 16)],
+    [(40, 8), (60, 8), (75, 8), (76, 16), (118, 16), (198, 16)],
 )
 def test_16_bits_a_line_when_the_width_allows_else_8(width: int, per_line: int) -> None:
     assert choose_layout(width, range(64)).per_line == per_line
@@ -215,14 +222,93 @@ def test_80_columns_show_64_bits_in_4_lines() -> None:
     lines = grid.text.plain.split("\n")
     assert len(lines) == 4
     assert lines[0] == (
-        "  ●0  ○1  ●2  ●3  ○4  ○5  ○6  ○7  ○8  ○9 ○10 ○11 ○12 ○13 ○14 ○15  0x000D    13"
+        "  0   1   2   3   4   5   6   7    8   9  10  11  12  13  14  15  0x000D    13"
     )
+
+
+def cells_of(line: Text, layout: Layout) -> list[tuple[str, str]]:
+    """The (text, style) of each cell of a rendered line, read back from its spans."""
+    return [
+        (line.plain[span.start : span.end], str(span.style))
+        for span in line.spans[: layout.per_line]
+    ]
+
+
+def test_at_80_columns_io_128_to_191_make_4_lines_of_separated_cells() -> None:
+    """The issue: ``●128○129●130●131○132…`` ran together at 80 columns."""
+    rows = rows_of(*(row(i, i in (128, 130, 131)) for i in range(128, 192)))
+    grid = build_grid(rows, NOW, 78)
+    lines = grid.text.split("\n")
+    assert len(lines) == 4 and grid.layout.per_line == 16
+    assert all(len(line.plain) <= 78 for line in lines)
+    cells = cells_of(lines[0], grid.layout)
+    assert [text for text, _ in cells] == [str(i) for i in range(128, 144)]
+    # Every two cells have an unstyled blank between them: never `128129`.
+    for first, second in zip(lines[0].spans[:15], lines[0].spans[1:16], strict=True):
+        between = lines[0].plain[first.end : second.start]
+        assert between.strip() == "" and len(between) >= 1
+    assert "128 129 130 131" in lines[0].plain
+    assert [style for _, style in cells[:4]] == [STYLE_ON, STYLE_OFF, STYLE_ON, STYLE_ON]
+
+
+def test_the_symbol_stays_where_there_is_room() -> None:
+    rows = rows_of(*(row(i, i == 128) for i in range(128, 144)))
+    wide = build_grid(rows, NOW, 118)
+    assert wide.layout.glyph
+    assert wide.text.plain.startswith("●128 ○129 ○130")
+    assert not build_grid(rows, NOW, 78).layout.glyph
+
+
+@pytest.mark.parametrize("width", [40, 60, 78, 100, 118, 160, 240])
+@pytest.mark.parametrize("indices", [range(0, 64), range(128, 192), range(1000, 1064)])
+def test_cells_are_always_separated(width: int, indices: range) -> None:
+    layout = choose_layout(width, indices)
+    assert layout.sep == 1
+    rows = rows_of(*(row(i, i % 2 == 0) for i in indices))
+    grid = build_grid(rows, NOW, width)
+    for line in grid.text.split("\n"):
+        for first, second in zip(line.spans, line.spans[1 : layout.per_line], strict=False):
+            assert line.plain[first.end : second.start].isspace()
+
+
+def test_four_digit_indices_at_80_columns_keep_a_blank_and_the_symbol() -> None:
+    layout = choose_layout(78, range(1000, 1064))
+    assert (layout.per_line, layout.sep, layout.glyph) == (8, 1, True)
+
+
+def test_without_the_symbol_every_mark_is_its_own_style() -> None:
+    """ON, OFF, no value, stale ON/OFF, changed ON/OFF, unwatched, cursor ON/OFF and a
+    write in flight: each drawn differently when the cell is only digits."""
+    styles = {
+        "on": bit_style(Bit(1, BitState.ON)),
+        "off": bit_style(Bit(1, BitState.OFF)),
+        "no value": bit_style(Bit(1, BitState.UNKNOWN)),
+        "stale on": bit_style(Bit(1, BitState.ON, stale=True)),
+        "stale off": bit_style(Bit(1, BitState.OFF, stale=True)),
+        "changed on": bit_style(Bit(1, BitState.ON, changed=True)),
+        "changed off": bit_style(Bit(1, BitState.OFF, changed=True)),
+        "cursor on": bit_style(Bit(1, BitState.ON), cursor=True),
+        "cursor off": bit_style(Bit(1, BitState.OFF), cursor=True),
+        "in flight on": bit_style(Bit(1, BitState.ON), pending=True),
+        "in flight off": bit_style(Bit(1, BitState.OFF), pending=True),
+    }
+    parsed = {name: Style.parse(style) for name, style in styles.items()}
+    assert len(set(parsed.values())) == len(parsed)
+    assert parsed["on"].reverse and parsed["on"].bold
+    assert parsed["off"].dim
+    assert parsed["no value"].strike
+    assert parsed["stale on"].italic and parsed["stale off"].italic
+    assert parsed["in flight on"].underline and parsed["in flight off"].underline
+    # The unwatched cell is a `·`, never digits: told apart by its text.
+    assert cell_text(Bit(7, BitState.UNWATCHED), Layout(16, 3, glyph=False)) == "  ·"
 
 
 def test_four_digit_indices_widen_every_cell() -> None:
     layout = choose_layout(200, [1000, 1001])
     assert layout.index_width == 4
     assert cell_text(Bit(1000, BitState.ON), layout) == "●1000"
+    assert cell_text(Bit(1000, BitState.ON), replace(layout, glyph=False)) == "1000"
+    assert cell_text(Bit(5, BitState.UNKNOWN), replace(layout, glyph=False)) == "   5"
 
 
 def test_the_grid_knows_each_bit() -> None:

@@ -13,6 +13,7 @@ from pathlib import Path
 import pytest
 from tui_helpers import make_app, type_line, until
 
+from rac_console.engine import Cycle
 from rac_console.protocol import kind_of
 from rac_console.session import Frame
 from rac_console.tui.app import RacConsoleApp
@@ -66,6 +67,11 @@ def stage(app: RacConsoleApp) -> None:
     for n, (direction, data, rtt) in enumerate(STAGED_FRAMES):
         app.frame_log.add(Frame(1_700_000_000.125 + n * 0.001, direction, data, rtt))  # type: ignore[arg-type]
     app.command_line.cursor_blink = False
+    # The sparklines: as many samples as polling gathered would vary from run to run.
+    app.trends.clear()
+    samples = tuple((var, view.variant) for var, view in app.rows.items())
+    for n in range(20):
+        app.take_cycle(Cycle(1_700_000_000 + n / 2, 1000 + n / 2, samples))
 
 
 def test_main_screen(snap_compare, tmp_path: Path, utc: None) -> None:

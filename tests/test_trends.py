@@ -15,8 +15,11 @@ from rac_console.present.table_rows import SortMode, visible_keys
 from rac_console.present.trends import (
     GAP,
     TrendStore,
+    bar_lines,
+    bin_window,
     field_value,
     number_text,
+    span_text,
     sparkline_text,
 )
 from rac_console.protocol import Variant, kind_of
@@ -143,6 +146,103 @@ def test_sparkline_gaps_and_a_fixed_scale() -> None:
     assert sparkline_text([0, None, 1], 3, 0.0, 1.0) == f"▁{GAP}█"
     assert sparkline_text([1, 1, 1], 3, 0.0, 1.0) == "███"  # IO: all ON stays on top
     assert sparkline_text([5], 0) == ""
+
+
+# ------------------------------------------------------------ binning by time
+
+
+def fed(seconds: float, every: float, value, var: VarRef = I0, start: float = 0.0) -> TrendStore:
+    """A store with a sample every ``every`` s for ``seconds`` s; ``value(t)`` gives each."""
+    store = TrendStore()
+    for n in range(round(seconds / every) + 1):
+        t = start + n * every
+        store.add_cycle(
+            cycle(t, (var, Variant(VT.BOOL, value(t)) if var is IO130 else i4(value(t))))
+        )
+    return store
+
+
+@pytest.mark.parametrize("width", [20, 37, 76, 80])
+def test_93_s_of_data_in_a_5_min_window_fill_only_the_last_slices(width: int) -> None:
+    """The issue: 93 s of samples were stretched over the whole 5 min sparkline."""
+    store = fed(93.0, 0.2, lambda t: int(t) % 7)
+    window = store.window(I0, 0, 300.0)
+    bins = bin_window(window, width)
+    assert len(bins) == width
+    filled = [n for n, b in enumerate(bins) if b is not None]
+    assert filled == list(range(width - math.ceil(93 / 300 * width), width))
+    assert window.covered == pytest.approx(93.0)
+    lines = bar_lines(bins, 3, window.low, window.high)
+    empty = width - len(filled)
+    assert all(line[:empty] == " " * empty for line in lines)  # no data: blank
+
+
+def test_a_full_window_covers_its_seconds_and_a_slice_is_a_fixed_time() -> None:
+    store = fed(20.0, 0.5, lambda t: t)
+    window = store.window(I0, 0, 10.0)
+    assert window.covered == 10.0  # there are samples before it: it is all data
+    bins = bin_window(window, 10)  # 1 s a slice
+    assert all(b is not None for b in bins)
+    assert [b.high for b in bins if b is not None] == [10.5 + n for n in range(9)] + [20.0]
+    assert bins[0] is not None and bins[0].low == 10.0
+
+
+def test_a_bit_toggling_faster_than_a_slice_shows_both_levels() -> None:
+    """IO toggling every 0.2 s, polled every 0.1 s, 10 s in a 10 s window 20 wide: each
+    slice (0.5 s) was both ON and OFF, so each column spans bottom to top; a steady ON
+    is a block at the top only and a steady OFF a line at the bottom (as a logic
+    analyser draws a signal)."""
+    toggling = fed(10.0, 0.1, lambda t: int(t / 0.2 + 1e-9) % 2 == 1, var=IO130)
+    window = toggling.window(IO130, 0, 10.0)
+    bins = bin_window(window, 20)
+    assert all(b is not None and (b.low, b.high) == (0.0, 1.0) for b in bins)
+    assert all(b is not None and 0.3 < b.mean < 0.7 for b in bins)
+    assert bar_lines(bins, 3, 0.0, 1.0) == ["█" * 20] * 3
+    steady_on = bin_window(fed(10.0, 0.1, lambda t: True, var=IO130).window(IO130, 0, 10.0), 20)
+    assert bar_lines(steady_on, 3, 0.0, 1.0) == ["█" * 20, " " * 20, " " * 20]
+    steady_off = bin_window(fed(10.0, 0.1, lambda t: False, var=IO130).window(IO130, 0, 10.0), 20)
+    assert bar_lines(steady_off, 3, 0.0, 1.0) == [" " * 20, " " * 20, "▁" * 20]
+    # One line has no room for a range: there a column is the slice's mean (duty cycle).
+    assert set(bar_lines(bins, 1, 0.0, 1.0)[0]) <= set("▃▄▅▆")
+    assert bar_lines(steady_on, 1, 0.0, 1.0) == ["█" * 20]
+
+
+def test_a_short_on_inside_a_slice_still_shows() -> None:
+    store = fed(10.0, 0.1, lambda t: 4.0 <= t < 4.15, var=IO130)  # ON for 2 polls
+    bins = bin_window(store.window(IO130, 0, 10.0), 10)
+    lines = bar_lines(bins, 2, 0.0, 1.0)
+    assert lines[0][4] == "█" and lines[1][4] == "█"
+    assert lines[0].count("█") == 1
+
+
+def test_slices_with_only_failed_polls_are_gaps() -> None:
+    store = TrendStore()
+    store.add_cycle(cycle(0.0, (I0, i4(1))))
+    store.add_cycle(cycle(5.0, (I0, None)))
+    store.add_cycle(cycle(9.9, (I0, i4(3))))
+    bins = bin_window(store.window(I0, 0, 10.0), 10)
+    assert bins[5] is not None and bins[5].high is None and bins[5].failed == 1
+    lines = bar_lines(bins, 2, 1.0, 3.0)
+    assert lines[-1][5] == GAP
+    assert [line[1] for line in lines] == [" ", "▁"]  # 1 held until the next poll
+    assert [line[6] for line in lines] == [" ", " "]  # after a failed poll: unknown
+
+
+def test_slices_between_polls_hold_the_last_value() -> None:
+    """Polls every 0.5 s, slices of 0.13 s: a slice with no poll shows the value polled
+    before it (also from before the window), not a hole."""
+    store = fed(20.0, 0.5, lambda t: 5 if t < 15 else 9)
+    bins = bin_window(store.window(I0, 0, 10.0), 77)
+    assert all(b is not None for b in bins)
+    assert bins[0] is not None and bins[0].high == 5.0  # held from before the window
+    assert bins[-1] is not None and bins[-1].high == 9.0
+
+
+def test_span_text() -> None:
+    assert span_text(93.0000001) == "93 s"
+    assert span_text(4.25) == "4.2 s"
+    assert span_text(150) == "2 min 30 s"
+    assert span_text(120) == "2 min"
 
 
 def test_number_text() -> None:

@@ -24,14 +24,14 @@ async def test_esc_cancels_a_wait_and_the_lines_queued_behind_it(tmp_path: Path)
         await type_line(pilot, "wait I 1 >= 100 within 60")
         await until(pilot, lambda: b"GET:RC8:1:I:\r" in tap.sent, "the wait's first read")
         await type_line(pilot, "put IO 20 on")  # typed while the wait runs: queued
-        await until(pilot, lambda: "running wait I 1 >= 100" in status_line(app), "the sign")
-        assert "Esc cancels" in status_line(app) and "1 queued" in status_line(app)
+        await until(pilot, lambda: "Esc cancels: wait I 1 >= 100" in status_line(app), "the sign")
+        assert "+1 queued" in status_line(app)
         await pilot.press("escape")
         await until(pilot, lambda: "not run" in results_text(app), "the queued line's answer")
         results = results_text(app)
         assert "wait cancelled" in results
         assert "› put IO 20 on\n" in results + "\n"
         assert not any(frame.startswith(b"PUT:") for frame in tap.sent)
-        await until(pilot, lambda: "running" not in status_line(app), "the sign gone")
+        await until(pilot, lambda: "Esc cancels" not in status_line(app), "the sign gone")
         await type_line(pilot, "put IO 20 on")  # a line typed after the cancel runs
         await until(pilot, lambda: b"PUT:RC8:20:IO:11,-1\r" in tap.sent, "the new put")

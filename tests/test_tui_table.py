@@ -2,12 +2,14 @@
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 import pytest
 from textual.pilot import Pilot
 from tui_helpers import FrameTap, make_app, results_text, type_line, until
 
+from rac_console.present.trends import span_text
 from rac_console.tui.app import RacConsoleApp
 from rac_console.tui.trend_view import TrendView
 
@@ -291,8 +293,16 @@ async def test_trend_view_of_a_moving_value(tmp_path: Path) -> None:
         await until(pilot, lambda: figures().startswith(f"last {window.last:g}"), "the figures")
         text = figures()
         assert f"min {window.low:g}" in text and f"max {window.high:g}" in text
-        assert f"10 s  ·  {window.count} samples" in text
-        assert view.sparkline.data == numbers
+        # Seconds of samples in a 10 s window: the header says so, and the bars are
+        # blank over the part not polled yet instead of stretched over the width.
+        assert window.covered < 10
+        assert f"10 s  ·  {span_text(window.covered)} of data  ·  {window.count} samples" in text
+        lines = view.bars.lines()
+        width = view.bars.size.width
+        assert len(lines) == view.bars.size.height >= 2 and width > 40
+        blank = width - math.ceil(window.covered / 10 * width) - 1
+        assert all(line[:blank].isspace() for line in lines)
+        assert any(not line[-1].isspace() for line in lines)  # the newest slice drawn
         assert "Trend I0" in str(view.border_title)
         await pilot.press("w")
         await until(pilot, lambda: "1 min" in figures(), "the 1 min window")
@@ -303,3 +313,33 @@ async def test_trend_view_of_a_moving_value(tmp_path: Path) -> None:
         assert app.focused is app.table
         await pilot.press("t", "escape")
         assert not view.display and app.focused is app.table
+
+
+async def test_a_command_typed_while_the_table_has_focus_goes_to_the_command_line(
+    tmp_path: Path,
+) -> None:
+    """Typing `get IO 5` with the table focused must not open a trend (`t`) nor toggle
+    the bit under the cursor (the space): the letters go to the command line."""
+    app = make_app(tmp_path)
+    tap = FrameTap(tmp_path)
+    async with app.run_test(size=SIZE) as pilot:
+        await watch(pilot, "watch IO 128-129", 2)
+        await pilot.press("f6")
+        assert app.focused is app.table
+        for key in [*"get IO 5", "enter"]:  # queued at once, as a fast typist's
+            app.simulate_key(key)
+        await until(pilot, lambda: "IO5 = " in results_text(app), "the get's answer")
+        assert "› get IO 5" in results_text(app)
+        assert app.focused is app.command_line
+        assert not app.query_one(TrendView).display
+        assert not any(frame.startswith(b"PUT:") for frame in tap.sent)
+
+
+async def test_keys_right_after_f6_go_to_the_new_pane(tmp_path: Path) -> None:
+    app = make_app(tmp_path)
+    async with app.run_test(size=SIZE) as pilot:
+        await watch(pilot, "watch I 1-3", 3)
+        for key in ("f6", "down", "down"):  # queued at once, as a fast typist's
+            app.simulate_key(key)
+        await until(pilot, lambda: app.table.cursor_row == 2, "the cursor two rows down")
+        assert app.command_line.value == ""  # no history recalled by the downs

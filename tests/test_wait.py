@@ -239,8 +239,11 @@ def test_the_hint_says_what_a_wait_still_needs(typed: str, needs: str) -> None:
 def test_a_wait_on_a_bit_completes_its_conditions() -> None:
     from rac_console.commands.completion import complete
 
-    assert [c.text for c in complete("wait IO 128 ")] == ["on", "off", "changes"]
-    assert [c.text for c in complete("wait I 1 ")] == ["changes"]
+    assert [c.text for c in complete("wait IO 128 ")] == ["on", "off", "changes", "==", "!="]
+    assert [c.text for c in complete("wait I 1 ")] == [
+        "changes", "==", "!=", "<", "<=", ">", ">="
+    ]  # fmt: skip
+    assert [c.text for c in complete("wait P 0 ")] == ["changes", "==", "!="]
 
 
 def test_a_value_that_could_not_be_written_cannot_be_waited_for() -> None:

@@ -86,6 +86,9 @@ def complete(text: str, seen: Iterable[tuple[str, int]] = ()) -> list[Candidate]
         options = [("changes", "until the value differs from the first read")]
         if kind.code == "IO":
             options[:0] = [("on", "until the bit is set"), ("off", "until it is clear")]
+        options += [("==", "until it equals VALUE"), ("!=", "until it differs from VALUE")]
+        if kind.code in ("I", "F", "D"):
+            options += [(op, f"until it is {op} NUMBER") for op in ("<", "<=", ">", ">=")]
         return matching(options)
     return []
 

@@ -3,8 +3,10 @@
 The columns are ``time`` (ISO 8601, local time with its offset, milliseconds), then one
 per field: ``I10``, ``IO128`` (1 or 0), ``P10.X`` … ``P10.Fig``. They are fixed when
 logging starts. An existing file is appended to when its header is the same, refused
-when not. Each row is one unbuffered write (flushed each cycle); a write that fails
-stops the log for good, told once, like ``--record``.
+when not (a UTF-8 byte order mark before it, as Excel writes one, is no difference);
+a last line without its line end is ended first. A named pipe is opened only when a
+program reads it (never waited for). Each row is one unbuffered write (flushed each
+cycle); a write that fails stops the log for good, told once, like ``--record``.
 """
 
 from __future__ import annotations
@@ -58,30 +60,53 @@ def timestamp(wall: float) -> str:
     return datetime.fromtimestamp(wall).astimezone().isoformat(timespec="milliseconds")
 
 
-def check_writable(path: str) -> None:
-    """Refuse at start (InputError) a CSV log that could not be written at all."""
+def open_for_append(path: str) -> int:
+    """The log file opened to append to, created owner-only when missing (InputError:
+    it cannot be). A named pipe with no program reading it is refused, not waited for."""
+    flags = os.O_WRONLY | os.O_CREAT | os.O_APPEND | getattr(os, "O_BINARY", 0)
     try:
-        fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_APPEND, 0o600)
+        fifo = stat.S_ISFIFO(os.stat(path).st_mode)
+    except OSError:
+        fifo = False
+    if fifo:  # a blocking open would wait, the engine with it, until a reader comes
+        flags |= getattr(os, "O_NONBLOCK", 0)
+    try:
+        fd = os.open(path, flags, 0o600)
     except OSError as exc:
+        if fifo and exc.errno == errno.ENXIO:
+            raise InputError(
+                f"no program is reading the pipe {path}: start the reader first"
+            ) from None
         raise InputError(f"cannot write the CSV log {path}: {exc.strerror}") from None
-    os.close(fd)
+    if fifo and hasattr(os, "set_blocking"):
+        os.set_blocking(fd, True)  # each row whole, as the reader takes them
+    return fd
 
 
-def _existing_header(path: str) -> list[str] | None:
-    """The first row of a file that has one; None for a missing or empty file, and
-    for a device or a pipe (another program reading the rows as they come)."""
+def _existing(path: str) -> tuple[list[str] | None, bytes]:
+    """The first row of a file that has one (None for a missing or empty file, and for
+    a device or a pipe: another program reading the rows as they come), and its last
+    byte. A UTF-8 byte order mark before the header is not part of it."""
     try:
         if not stat.S_ISREG(os.stat(path).st_mode):
-            return None
-        with open(path, encoding="utf-8", newline="", errors="replace") as handle:
+            return None, b""
+        with open(path, "rb") as handle:
             first = handle.readline(MAX_HEADER)
+            size = handle.seek(0, os.SEEK_END)
+            handle.seek(max(0, size - 1))
+            last = handle.read(1)
     except FileNotFoundError:
-        return None
+        return None, b""
     except OSError as exc:
         raise InputError(f"cannot read the CSV log {path}: {exc.strerror}") from None
-    if not first:
-        return None
-    return next(csv.reader([first]), [])
+    text = first.decode("utf-8", "replace").removeprefix("\ufeff")
+    line = io.StringIO(text, newline="").readline()  # up to a CR, an LF or both
+    if not line:  # empty, or a byte order mark alone: the header still to write
+        return None, last
+    try:
+        return next(csv.reader([line]), []), last
+    except csv.Error:  # not CSV at all: one odd column, refused
+        return [line.rstrip("\r\n")], last
 
 
 class CsvLog:
@@ -92,32 +117,44 @@ class CsvLog:
         path: str,
         variables: list[VarRef],
         on_failure: Callable[[str], None] | None = None,
+        fd: int | None = None,
     ) -> None:
-        """Raises InputError when the file cannot be opened, or holds other columns."""
+        """Raises InputError when the file cannot be opened, or holds other columns.
+
+        ``fd``: the file opened already (:func:`open_for_append`), now this log's. A
+        write that fails, the header's too, sets :attr:`failure` and calls
+        ``on_failure`` with it."""
         self.path = path
         self.variables = variables
         self.rows = 0
         self.failure: str | None = None
         self._on_failure = on_failure
+        self._started = False  # a write failing before is the header's: nothing written
         self._buffer = io.StringIO()
         self._writer = csv.writer(self._buffer, lineterminator="\r\n")
         self._cells: dict[VarRef, tuple[Variant | None, list[str]]] = {}
         header = columns_of(variables)
-        existing = _existing_header(path)
-        if existing is not None and existing != header:
-            raise InputError(
-                f"{path} holds other columns ({_columns_text(existing)}), not these "
-                f"({_columns_text(header)}): log to a new file, or watch the same variables"
-            )
         try:
-            self._fd: int | None = os.open(
-                path, os.O_WRONLY | os.O_CREAT | os.O_APPEND | getattr(os, "O_BINARY", 0), 0o600
-            )
-        except OSError as exc:
-            raise InputError(f"cannot write the CSV log {path}: {exc.strerror}") from None
+            existing, last = _existing(path)
+            if existing is not None and existing != header:
+                raise InputError(
+                    f"{path} holds other columns: {_difference(existing, header)}: log to a "
+                    "new file, or watch the same variables"
+                )
+            if fd is None:
+                fd = open_for_append(path)
+        except InputError:
+            if fd is not None:
+                os.close(fd)
+            raise
+        self._fd: int | None = fd
         self.appending = existing is not None
-        if not self.appending:
+        # A header or a row someone cut short of its line end: end that line first.
+        if self.appending and last != b"\n":
+            self._write(b"\n" if last == b"\r" else b"\r\n")
+        if not self.appending and self._fd is not None:
             self._write_row(header)
+        self._started = True
 
     def write(self, wall: float, values: dict[VarRef, Variant | None]) -> None:
         """One row: the time, then each column's value (empty: unknown or failed)."""
@@ -140,14 +177,17 @@ class CsvLog:
         buffer.seek(0)
         buffer.truncate()
         self._writer.writerow(row)
-        data = buffer.getvalue().encode("utf-8", "surrogateescape")
+        return self._write(buffer.getvalue().encode("utf-8", "surrogateescape"))
+
+    def _write(self, data: bytes) -> bool:
         fd = self._fd
         if fd is None:
             return False
         try:
             written = os.write(fd, data)
             if written != len(data):  # a short write: the disk filled up mid-row
-                os.ftruncate(fd, os.lseek(fd, 0, os.SEEK_END) - written)
+                with contextlib.suppress(OSError):  # a pipe cannot be cut: the reader sees it
+                    os.ftruncate(fd, os.lseek(fd, 0, os.SEEK_END) - written)
                 raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
         except OSError as exc:
             self._fail(exc)
@@ -156,7 +196,12 @@ class CsvLog:
 
     def _fail(self, exc: OSError) -> None:
         reason = exc.strerror or str(exc)
-        self.failure = f"CSV log stopped: {reason} after {self.rows} rows ({self.path})"
+        if not self._started:
+            self.failure = f"CSV log not started: cannot write the CSV log {self.path}: {reason}"
+        else:
+            self.failure = (
+                f"CSV log stopped: {reason} after {_count(self.rows, 'row')} ({self.path})"
+            )
         self.close()
         if self._on_failure is not None:
             self._on_failure(self.failure)
@@ -168,7 +213,38 @@ class CsvLog:
                 os.close(fd)
 
 
-def _columns_text(columns: list[str]) -> str:
-    shown = ", ".join(columns[1:6])
-    more = len(columns) - 6
-    return shown + (f" and {more} more" if more > 0 else "") if shown else "none"
+def _count(n: int, noun: str) -> str:
+    return f"{n} {noun}{'s' * (n != 1)}"
+
+
+def _difference(existing: list[str], header: list[str]) -> str:
+    """The first place the file's header and this log's differ, then both from there,
+    cut short. The file's cells are quoted with repr: whatever they hold shows."""
+    at = next(
+        (
+            n
+            for n, (theirs, ours) in enumerate(zip(existing, header, strict=False))
+            if theirs != ours
+        ),
+        min(len(existing), len(header)),
+    )
+    if at < min(len(existing), len(header)):
+        what = f"column {at + 1} is {_cell(existing[at])}, this log's is {_cell(header[at])}"
+    else:
+        what = f"it has {_count(len(existing), 'column')}, this log has {len(header)}"
+    return (
+        f"{what} (from column {at + 1} it has {_columns_text(existing[at:])}; "
+        f"this log has {_columns_text(header[at:])})"
+    )
+
+
+def _cell(text: str) -> str:
+    return repr(text if len(text) <= 40 else text[:39] + "…")
+
+
+def _columns_text(columns: list[str], shown: int = 4) -> str:
+    if not columns:
+        return "none"
+    text = ", ".join(_cell(column) for column in columns[:shown])
+    more = len(columns) - shown
+    return text + (f" and {more} more" if more > 0 else "")

@@ -5,25 +5,32 @@ Owned by the engine's thread, like everything the engine holds.
 
 from __future__ import annotations
 
+import contextlib
+import os
 from collections.abc import Callable
 
 from ..commands.language import VarRef
 from ..protocol import InputError, Variant
-from .csvlog import CsvLog, check_writable
+from .csvlog import CsvLog, open_for_append
 from .events import OK
 from .watch import WatchRow
 
 
 class CsvSink:
     """At most one :class:`CsvLog`; a path given with nothing watched waits (``pending``)
-    for the first cycle with rows, whose variables become its columns."""
+    for the first cycle with rows, whose variables become its columns. A path starting
+    with ``~`` is under the home directory, as for ``save`` and ``load``."""
 
     def __init__(self, alert: Callable[[str], None], changed: Callable[[], None]) -> None:
         self._alert = alert
         self._changed = changed  # the status line must say so
         self.log: CsvLog | None = None
         self.pending: str | None = None
-        self.failure: str | None = None  # why the last log stopped on its own
+        self._pending_fd: int | None = None  # held open: a pipe's reader sees no end
+        self._starting = False  # a log failing as it starts: its starter says so
+        #: Why a log failed on its own (a write, or a start at the first cycle); kept
+        #: when another log starts, for the exit status.
+        self.failure: str | None = None
 
     @property
     def path(self) -> str | None:
@@ -32,22 +39,31 @@ class CsvSink:
 
     def wait_for_rows(self, path: str) -> None:
         """Log to ``path`` from the first cycle (InputError: it cannot be written)."""
-        check_writable(path)
-        self.pending = path
+        path = os.path.expanduser(path)
+        fd = open_for_append(path)
+        self._close_pending()
+        self.pending, self._pending_fd = path, fd
         self._changed()
 
-    def start(self, path: str, variables: list[VarRef]) -> CsvLog:
-        """Log ``variables`` to ``path`` from now on (InputError: it cannot)."""
-        self.pending, self.failure = None, None
-        self._changed()
-        log = CsvLog(path, variables, self._failed)
-        if log.failure is None:  # its header may have failed already
+    def start(self, path: str, variables: list[VarRef], fd: int | None = None) -> CsvLog:
+        """Log ``variables`` to ``path`` from now on (InputError: it cannot). A log
+        whose header failed is returned with its ``failure`` set, for the caller to
+        tell, and not kept; :attr:`failure` keeps it for the exit status."""
+        self._close_pending()
+        self._starting = True
+        try:
+            log = CsvLog(os.path.expanduser(path), variables, self._failed, fd)
+        finally:
+            self._starting = False
+            self._changed()
+        if log.failure is None:
             self.log = log
         return log
 
     def stop(self) -> CsvLog | None:
         """End the log (or the one waiting for its first cycle); the one ended."""
-        log, self.log, self.pending = self.log, None, None
+        log, self.log = self.log, None
+        self._close_pending()
         if log is not None:
             log.close()
         self._changed()
@@ -56,10 +72,17 @@ class CsvSink:
     def cycle_ended(self, wall: float, rows: dict[VarRef, WatchRow]) -> None:
         """One row: each column's last good value, empty when its last poll failed."""
         if self.pending is not None:
+            path, fd = self.pending, self._pending_fd
+            self.pending = self._pending_fd = None
             try:
-                self.start(self.pending, list(rows))
+                started = self.start(path, list(rows), fd)
             except InputError as exc:
-                self._alert(f"CSV log not started: {exc}")
+                self.failure = f"CSV log not started: {exc}"
+                self._alert(self.failure)
+                self._changed()
+                return
+            if started.failure is not None:
+                self._alert(started.failure)
         log = self.log
         if log is None:
             return
@@ -70,7 +93,14 @@ class CsvSink:
             values[var] = row.variant if good and row is not None else None
         log.write(wall, values)
 
+    def _close_pending(self) -> None:
+        fd, self._pending_fd, self.pending = self._pending_fd, None, None
+        if fd is not None:
+            with contextlib.suppress(OSError):
+                os.close(fd)
+
     def _failed(self, text: str) -> None:
         self.failure, self.log = text, None
-        self._alert(text)
-        self._changed()
+        if not self._starting:
+            self._alert(text)
+            self._changed()

@@ -444,6 +444,8 @@ class Engine:
                     self.show_row(failed)
                 self.note(f"connection lost: {exc}")
             self._cycle.clear()
+            if self.csv.path is not None:  # a row per try, its cells empty: no connection
+                self.csv.cycle_ended(time.time(), self.watch.rows)
             self._early_drop = False  # this failure has its own wait
             self._begin_retry("lost")
             return

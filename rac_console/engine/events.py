@@ -104,7 +104,7 @@ class Status:
     record_failure: str | None
     seen: frozenset[tuple[str, int]]
     csv_log: str | None = None  # the CSV log's path while logging
-    csv_failure: str | None = None  # why the CSV log stopped on its own
+    csv_failure: str | None = None  # why a CSV log failed, kept after a new one starts
 
     def exit_status(self, status: int) -> int:
         """A front end's exit status: 4 (a local I/O error) when it would be 0 but the

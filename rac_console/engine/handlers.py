@@ -174,19 +174,22 @@ def _unwatch(engine: Engine, variables: tuple[VarRef, ...]) -> Message:
 
 
 def _csv_log(engine: Engine, command: CsvLog) -> Message:
+    def _count(n: int, noun: str) -> str:
+        return f"{n} {noun}{'s' * (n != 1)}"
+
     sink = engine.csv
     current, log = sink.path, sink.log
     if command.stop:
         ended = sink.stop()
         if ended is not None:
-            return Message(f"CSV log stopped: {ended.rows} rows in {ended.path}")
+            return Message(f"CSV log stopped: {_count(ended.rows, 'row')} in {ended.path}")
         if current is not None:
             return Message(f"CSV log to {current} stopped before its first row")
         return Message("no CSV log to stop", "error")
     if command.path is None:
         if log is not None:
-            count = len(log.variables)
-            return Message(f"logging {count} variables to {log.path}: {log.rows} rows so far")
+            count = _count(len(log.variables), "variable")
+            return Message(f"logging {count} to {log.path}: {_count(log.rows, 'row')} so far")
         if current is not None:
             return Message(f"logging to {current} from the first poll cycle")
         return Message("not logging: log FILE.csv starts a CSV log of the watched values")
@@ -196,16 +199,17 @@ def _csv_log(engine: Engine, command: CsvLog) -> Message:
         if not engine.watch.rows:
             sink.wait_for_rows(command.path)
             return Message(
-                f"logging to {command.path} from the first poll cycle: "
+                f"logging to {sink.pending} from the first poll cycle: "
                 "the variables watched then are its columns"
             )
         started = sink.start(command.path, list(engine.watch.rows))
     except InputError as exc:
         return Message(f"CSV log not started: {exc}", "error")
+    if started.failure is not None:  # its header failed: said here, not as an alert too
+        return Message(started.failure, "error")
     how = "appending to" if started.appending else "logging to"
-    count = len(started.variables)
     return Message(
-        f"{how} {started.path}: {count} variable{'s' * (count != 1)}, "
+        f"{how} {started.path}: {_count(len(started.variables), 'variable')}, "
         "one row per poll cycle (log stop ends it)"
     )
 

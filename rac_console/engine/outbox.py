@@ -14,9 +14,9 @@ from dataclasses import dataclass, field
 
 from ..commands.language import VarRef
 from ..session import Frame
-from .events import Event, RowView, Status
+from .events import Cycle, Event, RowView, Status
 
-#: Events kept for a reader that does not drain; past it the oldest frames go first.
+#: Events kept for a reader that does not drain; past it the oldest frames and cycles go.
 MAX_EVENTS = 100_000
 
 
@@ -29,6 +29,7 @@ class Batch:
     removed: set[VarRef] = field(default_factory=set)
     status: Status | None = None
     frames_dropped: int = 0
+    cycles_dropped: int = 0  # poll cycles shed (for trends): the reader fell behind
 
     def apply_rows(self, rows: dict[VarRef, RowView]) -> None:
         """Bring a front end's copy of the watched rows up to date."""
@@ -115,15 +116,21 @@ class Outbox:
                 notify()
 
     def _shed_frames(self) -> None:
-        """Drop the oldest half of the frames (never a result, note or alert)."""
-        events = self._batch.events
+        """Drop the oldest half of the frames and of the cycles (never a result, note or
+        alert): a reader that stopped draining costs a bounded queue, not all memory."""
+        batch = self._batch
+        events = batch.events
         frames = sum(1 for event in events if isinstance(event, Frame))
-        shed = frames // 2
+        cycles = sum(1 for event in events if isinstance(event, Cycle))
+        shed_frames, shed_cycles = frames // 2, cycles // 2
         kept: list[Event] = []
         for event in events:
-            if shed and isinstance(event, Frame):
-                shed -= 1
-                self._batch.frames_dropped += 1
-                continue
-            kept.append(event)
-        self._batch.events = kept
+            if shed_frames and isinstance(event, Frame):
+                shed_frames -= 1
+                batch.frames_dropped += 1
+            elif shed_cycles and isinstance(event, Cycle):
+                shed_cycles -= 1
+                batch.cycles_dropped += 1
+            else:
+                kept.append(event)
+        batch.events = kept

@@ -8,12 +8,34 @@ line is bit 0 (the LSB)**, so IO 128, 130 and 131 ON in line 128-143 make 0x000D
 A bit with no value (not watched, not polled yet, or failed before any value) makes
 its hex digit ``?`` and the decimal ``—``: a word is never shown with guessed bits.
 A stale bit keeps its last value, as the table does, and marks the word stale.
+
+Cells are always apart: a blank between every two cells (and one more between the
+bytes of a 16-bit line where it fits). Each cell is its index, right-aligned, drawn in
+the style of its state; the ``●``/``○`` symbol before the digits is an extra, shown only
+where it fits (at 80 columns 16 cells of 3-digit indices fit only without it). So the
+state is always read from the style alone:
+
+====================  ===================================================  =============
+state                 style                                                text
+====================  ===================================================  =============
+ON                    bold reverse green (a green block)                   ``●130``
+OFF                   dim                                                  ``○130``
+no value yet          struck through                                       ``?130``
+stale ON / OFF        italic on dark green / dim italic (value kept)       as ON / OFF
+changed (1 s)         the table's highlight: olive background, ON's
+                      digits green on it                                   as ON / OFF
+not watched           dim                                                  ``·``
+cursor                blue background, ON's digits bold green, OFF's plain as ON / OFF
+write in flight       underlined, over any of the above                    as ON / OFF
+====================  ===================================================  =============
+
+The cursor's bit, its state and its label are also said in the panel's bottom border.
 """
 
 from __future__ import annotations
 
 from collections.abc import Iterable, Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from enum import Enum
 
 from rich.cells import cell_len, set_cell_size
@@ -34,13 +56,17 @@ NO_DECIMAL = "—"
 MIN_LABEL = 4
 MAX_LABEL = 16
 
-STYLE_ON = "bold bright_green"
+#: Each state has its own style, so a cell reads without its symbol (see the table above).
+STYLE_ON = "bold reverse green"
 STYLE_OFF = "dim"
-STYLE_UNKNOWN = "dim"
-STYLE_STALE = "dim italic"
+STYLE_UNKNOWN = "strike"
+STYLE_STALE = "dim italic"  # the word's, and a stale OFF bit's
+STYLE_STALE_ON = "italic on dark_green"
+STYLE_CHANGED_ON = f"bright_green {CHANGED_STYLE}"
 STYLE_UNWATCHED = "dim"
 STYLE_HEX = "bold cyan"
-STYLE_CURSOR = "reverse"
+STYLE_CURSOR = "on blue"
+STYLE_CURSOR_ON = "bold bright_green"
 STYLE_PENDING = "underline"
 
 
@@ -110,10 +136,12 @@ class Layout:
     label_width: int = 0  # 0: no labels
     byte_gap: int = 0  # an extra space between the two bytes of a 16-bit line
     word_gap: int = 1  # spaces before the word
+    glyph: bool = True  # the ●/○ symbol before the digits (the style shows the state anyway)
 
     @property
     def cell_width(self) -> int:
-        return 1 + self.index_width + (1 + self.label_width if self.label_width else 0)
+        label = 1 + self.label_width if self.label_width else 0
+        return self.glyph + self.index_width + label
 
     @property
     def word_width(self) -> int:
@@ -178,15 +206,17 @@ def word_of(bits: tuple[Bit, ...]) -> Word:
 
 
 def choose_layout(width: int, indices: Iterable[int], labels: Iterable[str] = ()) -> Layout:
-    """16 bits a line when 16 bare cells fit in ``width`` columns, else 8; then a space
-    between cells, a gap between bytes and labels, each only where the width allows."""
+    """16 bits a line when 16 cells of bare digits, a blank apart, fit in ``width``
+    columns, else 8; then the widest of: a gap between the bytes, the ``●``/``○`` symbol,
+    labels, each only where the width allows. Cells are never drawn touching."""
     index_width = max((len(str(i)) for i in indices), default=3)
     index_width = max(index_width, 3)
-    per_line = 16 if Layout(16, index_width).width <= width else 8
-    layout = Layout(per_line, index_width)
+    per_line = 16 if Layout(16, index_width, sep=1, glyph=False).width <= width else 8
+    layout = Layout(per_line, index_width, sep=1, glyph=False)
     byte_gap = 1 if per_line == 16 else 0
-    for step in (
-        Layout(per_line, index_width, word_gap=2),
+    for step in (  # each wider than the last
+        Layout(per_line, index_width, sep=1, word_gap=2, glyph=False),
+        Layout(per_line, index_width, sep=1, byte_gap=byte_gap, word_gap=2, glyph=False),
         Layout(per_line, index_width, sep=1, word_gap=2),
         Layout(per_line, index_width, sep=1, byte_gap=byte_gap, word_gap=2),
     ):
@@ -197,38 +227,47 @@ def choose_layout(width: int, indices: Iterable[int], labels: Iterable[str] = ()
         spare = (width - layout.width) // per_line - 1  # a label costs a space and itself
         label_width = min(longest, spare)
         if label_width >= min(MIN_LABEL, longest):
-            layout = Layout(
-                per_line, index_width, layout.sep, label_width, layout.byte_gap, layout.word_gap
-            )
+            layout = replace(layout, label_width=label_width)
     return layout
 
 
-def bit_style(bit: Bit) -> str:
+def bit_style(bit: Bit, cursor: bool = False, pending: bool = False) -> str:
+    """The style that alone tells a cell's state (see the module's table)."""
+    on = bit.state is BitState.ON
     if bit.state is BitState.UNWATCHED:
-        return STYLE_UNWATCHED
-    if bit.stale:
-        return STYLE_STALE
-    style = {
-        BitState.ON: STYLE_ON,
-        BitState.OFF: STYLE_OFF,
-        BitState.UNKNOWN: STYLE_UNKNOWN,
-    }[bit.state]
-    return f"{style} {CHANGED_STYLE}" if bit.changed else style
+        parts = [STYLE_UNWATCHED]
+    elif not bit.has_value:
+        parts = [STYLE_UNKNOWN, "italic" if bit.stale else ""]
+    elif cursor:
+        parts = [STYLE_CURSOR_ON if on else "", "italic" if bit.stale else ""]
+    elif bit.stale:
+        parts = [STYLE_STALE_ON if on else STYLE_STALE]
+    elif bit.changed:
+        parts = [STYLE_CHANGED_ON if on else f"{STYLE_OFF} {CHANGED_STYLE}"]
+    else:
+        parts = [STYLE_ON if on else STYLE_OFF]
+    if cursor:
+        parts.append(STYLE_CURSOR)
+    if pending:
+        parts.append(STYLE_PENDING)
+    return " ".join(part for part in parts if part)
 
 
 def cell_text(bit: Bit, layout: Layout) -> str:
-    """``●128``, ``○129 vacuum``, ``?130`` (no value), ``   ·`` (not watched); the
-    glyph sits just before the digits (``  ●5``) and the digits are right-aligned."""
+    """``128`` (no symbol: the style tells the state), ``●128``, ``○129 vacuum``,
+    ``?130`` (no value), ``  ·`` (not watched); the digits are right-aligned, the symbol
+    just before them (``  ●5``)."""
+    digits = 1 + layout.index_width if layout.glyph else layout.index_width
     if bit.state is BitState.UNWATCHED:
-        return f"{GLYPH_UNWATCHED:>{1 + layout.index_width}}".ljust(layout.cell_width)
-    glyph = {
-        BitState.ON: GLYPH_ON,
-        BitState.OFF: GLYPH_OFF,
-        BitState.UNKNOWN: GLYPH_UNKNOWN,
-    }[bit.state]
-    if bit.stale and not bit.has_value:
-        glyph = GLYPH_UNKNOWN
-    text = f"{glyph}{bit.index}".rjust(1 + layout.index_width)
+        return f"{GLYPH_UNWATCHED:>{digits}}".ljust(layout.cell_width)
+    glyph = ""
+    if layout.glyph:
+        glyph = {
+            BitState.ON: GLYPH_ON,
+            BitState.OFF: GLYPH_OFF,
+            BitState.UNKNOWN: GLYPH_UNKNOWN,
+        }[bit.state]
+    text = f"{glyph}{bit.index}".rjust(digits)
     if layout.label_width:
         text += " " + fit_label(bit.label, layout.label_width)
     return text
@@ -260,8 +299,9 @@ def render_grid(
     cursor: int | None = None,
     pending: frozenset[int] = frozenset(),
 ) -> Text:
-    """The grid as one Text, a line per :class:`GridLine`; ``cursor`` (an index) is
-    drawn reversed, bits with a write in flight underlined."""
+    """The grid as one Text, a line per :class:`GridLine`, the blanks between cells
+    unstyled; ``cursor`` (an index) and the bits with a write in flight (``pending``)
+    drawn as :func:`bit_style` says."""
     text = Text(no_wrap=True, overflow="crop", end="")
     for n, line in enumerate(lines):
         if n:
@@ -271,11 +311,7 @@ def render_grid(
                 text.append(" " * layout.sep)
                 if k == 8 and layout.byte_gap:
                     text.append(" " * layout.byte_gap)
-            style = bit_style(bit)
-            if bit.index in pending:
-                style += f" {STYLE_PENDING}"
-            if bit.index == cursor:
-                style += f" {STYLE_CURSOR}"
+            style = bit_style(bit, bit.index == cursor, bit.index in pending)
             text.append(cell_text(bit, layout), style=style)
         text.append_text(word_text(line.word, layout.word_gap))
     return text

@@ -14,7 +14,7 @@ WAITING_SHOWN_AFTER = 0.2
 #: A typed line is shown as running once it has run this long (seconds).
 RUNNING_SHOWN_AFTER = 0.5
 #: Characters of a running line shown.
-RUNNING_WIDTH = 32
+RUNNING_WIDTH = 24
 
 
 def status_text(
@@ -41,12 +41,22 @@ def status_text(
     if status.record_failure is not None:
         text.append(" ")
         text.append(" RECORDING STOPPED ", style="bold white on red")
-    if status.csv_failure is not None:
-        text.append(" ")
-        text.append(" CSV LOG STOPPED ", style="bold white on red")
-    elif status.csv_log is not None:
+    if status.csv_log is not None:  # a new log runs: an earlier failure is for the exit
         text.append(" ")
         text.append(" CSV ", style="bold black on green")
+    elif status.csv_failure is not None:
+        text.append(" ")
+        text.append(" CSV LOG STOPPED ", style="bold white on red")
+    if running is not None and running[1] >= RUNNING_SHOWN_AFTER:
+        # Before the figures: on 80 columns the way out must not be cut off.
+        line, seconds, queued = running
+        shown = line if len(line) <= RUNNING_WIDTH else line[: RUNNING_WIDTH - 1] + "…"
+        text.append(" ")
+        text.append(
+            f" Esc cancels: {terminal_safe(shown)} ({seconds:.0f} s) ", style="bold black on yellow"
+        )
+        if queued:
+            text.append(f" +{queued} queued", style="bold yellow")
     text.append(" ")
     state = status.connection
     if state in ("lost", "dropped") and status.retry_at is not None:
@@ -59,14 +69,6 @@ def status_text(
         text.append("connecting…", style="yellow")
     else:
         text.append("idle" if status.has_session else "disconnected", style="dim")
-    if running is not None and running[1] >= RUNNING_SHOWN_AFTER:
-        line, seconds, queued = running
-        shown = line if len(line) <= RUNNING_WIDTH else line[: RUNNING_WIDTH - 1] + "…"
-        behind = f", {queued} queued" if queued else ""
-        text.append(
-            f" · running {terminal_safe(shown)} {seconds:.0f} s{behind} (Esc cancels)",
-            style="bold yellow",
-        )
     connected = state == "connected" and status.has_session
     rtt = status.rtt if connected else None
     text.append(f" · rtt {rtt * 1000:.2f} ms" if rtt is not None else " · rtt –")

@@ -9,6 +9,17 @@ Memory is bounded per variable: the newest :data:`RAW_SAMPLES` samples, every on
 a long record thinned to one sample per :data:`COARSE_STEP` seconds over
 :data:`HORIZON` seconds. A window longer than the raw samples reach is read from the
 long record (``Window.thinned``): a spike between two kept samples is not in it.
+
+The trend view draws a window by time, not by sample: :func:`bin_window` cuts it into
+one slice per column (``seconds / width`` each), so a window only partly polled shows its
+empty part blank instead of stretching what there is over the whole width. Each column
+(:func:`bar_lines`) spans the lowest to the highest value polled in its slice, as a
+logic analyser draws a signal: an IO bit that stayed ON is a block at the top, one that
+stayed OFF a line at the bottom, and one that was both in the slice fills the column, so
+neither a short ON nor a short OFF is lost and a fast-toggling bit never reads as steady
+(max alone would draw it solid ON, the mean alone would hide a short pulse). A number
+is drawn the same way, its column the slice's range. In a one-line view there is no
+room for a range: a column is the slice's mean there (a bit's duty cycle).
 """
 
 from __future__ import annotations
@@ -16,7 +27,7 @@ from __future__ import annotations
 import math
 from collections import deque
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from itertools import islice
 from typing import TYPE_CHECKING, Any
 
@@ -81,6 +92,14 @@ class Window:
     high: float | None
     last: float | None
     thinned: bool  # older than the raw samples reach: one sample per COARSE_STEP
+    times: list[float] = field(default_factory=list)  # each value's monotonic() time
+    end: float = 0.0  # the window ends here (the newest cycle)
+    #: Seconds of the window with data: ``seconds`` when samples reach back before it,
+    #: else from its first sample to its end.
+    covered: float = 0.0
+    #: The value polled just before the window (None: none, or that poll failed): it
+    #: holds until the window's first sample.
+    before: float | None = None
 
     @property
     def count(self) -> int:
@@ -150,8 +169,10 @@ class TrendStore:
         start = self.latest - seconds
         raw = one.raw
         samples: list[Sample] = []
+        prior: Sample | None = None
         for sample in reversed(raw):
             if sample[0] < start:
+                prior = sample
                 break
             samples.append(sample)
         samples.reverse()
@@ -161,7 +182,9 @@ class TrendStore:
             first = raw[0][0]
             older = [s for s in one.coarse if start <= s[0] < first]
             samples = older + samples
+            prior = next((s for s in reversed(one.coarse) if s[0] < start), None)
         values = [field_value(value, field) for _, value in samples]
+        covered = seconds if prior is not None or not samples else self.latest - samples[0][0]
         numbers = [value for value in values if value is not None]
         last = next((value for value in reversed(values) if value is not None), None)
         return Window(
@@ -171,7 +194,100 @@ class TrendStore:
             max(numbers) if numbers else None,
             last,
             thinned,
+            [t for t, _ in samples],
+            self.latest,
+            covered if samples else 0.0,
+            None if prior is None else field_value(prior[1], field),
         )
+
+
+@dataclass(frozen=True, slots=True)
+class Bin:
+    """The samples of one slice of a window: their range and mean (None when every poll
+    in it failed) and how many failed."""
+
+    low: float | None
+    high: float | None
+    mean: float | None
+    failed: int
+
+
+def bin_window(window: Window, width: int) -> list[Bin | None]:
+    """``width`` slices of ``window.seconds / width`` seconds each, the last ending at the
+    window's end. A slice with no poll holds the value polled before it (a value is what
+    it was last read until the next poll, and slices are often shorter than the poll
+    interval); None where nothing was polled yet, or the last poll failed."""
+    if width <= 0:
+        return []
+    step = window.seconds / width
+    start = window.end - window.seconds
+    groups: list[list[float | None] | None] = [None] * width
+    for t, value in zip(window.times, window.values, strict=True):
+        n = min(width - 1, max(0, int((t - start) / step)))
+        group = groups[n]
+        if group is None:
+            group = groups[n] = []
+        group.append(value)
+    bins: list[Bin | None] = []
+    held = window.before
+    for group in groups:
+        if group is None:
+            bins.append(None if held is None else Bin(held, held, held, 0))
+            continue
+        held = group[-1]
+        numbers = [value for value in group if value is not None]
+        failed = len(group) - len(numbers)
+        if numbers:
+            bins.append(Bin(min(numbers), max(numbers), math.fsum(numbers) / len(numbers), failed))
+        else:
+            bins.append(Bin(None, None, None, failed))
+    return bins
+
+
+def bar_lines(
+    bins: Sequence[Bin | None], height: int, low: float | None, high: float | None
+) -> list[str]:
+    """``height`` lines (the top first) drawing each slice as a column from its lowest
+    to its highest value on the scale ``low`` to ``high`` (IO: 0 to 1), in eighths of a
+    line at the top: blank where nothing was polled, ``·`` at the bottom where every poll
+    failed. A flat scale puts everything at mid height; one line draws the mean."""
+    if height <= 0:
+        return []
+    top = len(BARS) * height - 1
+    lo = low if low is not None else 0.0
+    span = (high if high is not None else lo) - lo
+
+    def level(value: float) -> int:
+        if span <= 0:
+            return top // 2
+        return min(top, max(0, round((value - lo) / span * top)))
+
+    rows = [[" "] * len(bins) for _ in range(height)]  # rows[0] is the bottom
+    for column, one in enumerate(bins):
+        if one is None:
+            continue
+        if one.low is None or one.high is None or one.mean is None:
+            rows[0][column] = GAP
+            continue
+        if height == 1:
+            rows[0][column] = BARS[level(one.mean)]
+            continue
+        bottom, peak = level(one.low) // len(BARS), level(one.high)
+        for row in range(bottom, peak // len(BARS)):
+            rows[row][column] = "█"
+        rows[peak // len(BARS)][column] = BARS[peak % len(BARS)]
+    return ["".join(row) for row in reversed(rows)]
+
+
+def span_text(seconds: float) -> str:
+    """``4.2 s``, ``93 s``, ``2 min 30 s``: how much of a window has data."""
+    if seconds < 10:
+        return f"{math.floor(seconds * 10) / 10:g} s"
+    whole = round(seconds)
+    if whole < 120:  # 93 s reads quicker than 1 min 33 s
+        return f"{whole} s"
+    minutes, rest = divmod(whole, 60)
+    return f"{minutes} min {rest} s" if rest else f"{minutes} min"
 
 
 def sparkline_text(

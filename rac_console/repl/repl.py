@@ -218,6 +218,8 @@ class Repl:
         watched_before = set(self.rows)
         result = await self.submit(line)
         if isinstance(result.command, Watch) and not _failed(result):
+            if self.status is not None and self.status.csv_log is not None:
+                self._show_result(result)  # whether the CSV log has these columns
             await self.live_watch(result.command, watched_before)
             return True
         return self._show_result(result)

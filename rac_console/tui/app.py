@@ -61,8 +61,12 @@ class RacConsoleApp(TableActions, App[int]):
         Binding("f4", "toggle_scroll", "Freeze log", id="toggle-scroll"),
         Binding("f5", "toggle_io_grid", "I/O grid", id="toggle-io-grid"),
         Binding("ctrl+l", "clear_log", "Clear log", id="clear-log"),
-        Binding("f6", "focus_pane(1)", "Next pane", id="next-pane"),
-        Binding("shift+f6", "focus_pane(-1)", "Previous pane", id="previous-pane"),
+        # Priority: taken as the key arrives, so the keys typed right after it go to the
+        # new pane (without it they were already on their way to the old one).
+        Binding("f6", "focus_pane(1)", "Next pane", id="next-pane", priority=True),
+        Binding(
+            "shift+f6", "focus_pane(-1)", "Previous pane", id="previous-pane", priority=True
+        ),
         Binding("escape", "cancel_command", "Cancel command", id="cancel-command"),
     ]
 
@@ -82,7 +86,7 @@ class RacConsoleApp(TableActions, App[int]):
         self.status_bar = StatusBar(id="status")
         self.trends = TrendStore()
         self.toggles = PendingToggles()
-        self.table = WatchTable(self.trends, id="watch")
+        self.table = WatchTable(self.trends, self.type_on_command_line, id="watch")
         self.table_filter = TableFilter(self.table, id="table-filter")
         self.trend_view = TrendView(self.trends, id="trend")
         self.frame_log = FrameLog(id="log")
@@ -111,7 +115,7 @@ class RacConsoleApp(TableActions, App[int]):
         yield self.results
         yield self.hint
         yield self.command_line
-        yield Footer()
+        yield Footer(compact=True)
 
     async def on_mount(self) -> None:
         self.frame_log.border_title = "Frames (→ sent, ← received)"

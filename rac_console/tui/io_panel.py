@@ -35,6 +35,13 @@ TITLE = "I/O (word: bit 0 = lowest index)"
 EMPTY_TEXT = Text("No IO bits watched: try watch IO 128-143", style="dim", end="")
 
 
+def state_word(row: RowView) -> str:
+    """``ON``, ``OFF`` or ``no value``, and ``(stale)`` when the last poll failed."""
+    variant = row.variant
+    word = "no value" if variant is None else ("ON" if bool(variant.value) else "OFF")
+    return f"{word} (stale)" if row.stale else word
+
+
 class WatchArea(Container):
     """The watch table and the I/O panel; its own width decides how they share it
     (it is always the screen's width, so the choice never feeds back on itself)."""
@@ -109,16 +116,18 @@ class IoPanel(VerticalScroll, can_focus=True):
         self._show_cursor_label()
 
     def _show_cursor_label(self) -> None:
-        """The bit under the cursor, with its label, in the bottom border: labels are
-        readable there however narrow the cells are."""
+        """The bit under the cursor, its state and its label in the bottom border: said
+        in words there however narrow the cells are (the cursor's colour is its own)."""
         subtitle = Text()
         row = self._rows.get(VarRef(IO, self.cursor)) if self.cursor is not None else None
         if self.has_focus and self.cursor is not None:
             subtitle.append(f"IO {self.cursor}")
             if row is None:
                 subtitle.append(" not watched", style="dim")
-            elif row.label:
-                subtitle.append(f" {terminal_safe(row.label)}")
+            else:
+                subtitle.append(f" {state_word(row)}")
+                if row.label:
+                    subtitle.append(f" {terminal_safe(row.label)}")
         if subtitle.plain != str(self.border_subtitle or ""):
             self.border_subtitle = subtitle
 

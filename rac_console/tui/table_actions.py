@@ -50,12 +50,12 @@ class TableFilter(Input):
         self.value = ""
         self.table.set_filter("")
         self.remove_class("-visible")
-        self.table.focus()
+        focus_now(self.table)
 
     def action_done(self) -> None:
         """Back to the table; the filter stays (its border title shows it; ``/`` edits it)."""
         self.remove_class("-visible")
-        self.table.focus()
+        focus_now(self.table)
 
 
 class TableActions:
@@ -94,10 +94,17 @@ class TableActions:
         if focused is self.table_filter:
             focused = self.table
         index = panes.index(focused) if focused in panes else 0
-        panes[(index + step) % len(panes)].focus()
+        focus_now(panes[(index + step) % len(panes)])
 
     def action_focus_command_line(self) -> None:
-        self.command_line.focus()
+        focus_now(self.command_line)
+
+    def type_on_command_line(self, character: str) -> None:
+        """A character the table has no use for: the start of a command typed with the
+        table focused. It goes to the command line, and so do the keys after it."""
+        command_line = self.command_line
+        focus_now(command_line)
+        command_line.insert_text_at_cursor(character)
 
     # ------------------------------------------------------------ row keys
 
@@ -126,7 +133,7 @@ class TableActions:
         command_line = self.command_line
         command_line.value = line.text
         command_line.cursor_position = len(line.text)
-        command_line.focus()
+        focus_now(command_line)
 
     def _toggle(self, row: RowView) -> None:
         """Space: write the opposite of the value shown, as a typed ``put IO N off``.
@@ -187,7 +194,7 @@ class TableActions:
         self.trend_view.remove_class("-open")
         self.frame_log.remove_class("-under-trend")
         if had_focus:
-            self.table.focus()
+            focus_now(self.table)
 
     def on_trend_view_closed(self, event: TrendView.Closed) -> None:
         self._close_trend()
@@ -204,3 +211,9 @@ class TableActions:
         if view.has_class("-open") and view.var is not None:
             view.field = self.table.field_of(view.var)
             view.redraw()
+
+
+def focus_now(widget: Widget) -> None:
+    """Focus at once. ``Widget.focus`` waits behind the keys already queued, so keys
+    typed right after F6 (or after a key that leaves a pane) went to the old pane."""
+    widget.screen.set_focus(widget)

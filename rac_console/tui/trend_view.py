@@ -3,6 +3,11 @@
 It takes the frame log's place while open (same height, any terminal size) rather
 than squeezing a third pane into 24 lines; the log keeps collecting and is back on
 close. Redrawn with the table (5 Hz), from the app's trend store.
+
+The bars are drawn by time, each column a fixed slice of the window (window / width):
+a window only partly polled is blank where it has no data, and the header says how much
+has (``5 min  ·  93 s of data  ·  480 samples``). How a slice is drawn (its range, so a
+fast-toggling bit is never drawn steady) is in :mod:`rac_console.present.trends`.
 """
 
 from __future__ import annotations
@@ -14,10 +19,19 @@ from textual.app import ComposeResult
 from textual.binding import Binding, BindingType
 from textual.containers import Vertical
 from textual.message import Message
-from textual.widgets import Sparkline, Static
+from textual.widget import Widget
+from textual.widgets import Static
 
 from ..commands.language import VarRef
-from ..present.trends import TrendStore, Window, field_labels, number_text
+from ..present.trends import (
+    TrendStore,
+    Window,
+    bar_lines,
+    bin_window,
+    field_labels,
+    number_text,
+    span_text,
+)
 
 #: The windows `w` steps through, in seconds (the store reaches back 5 minutes).
 WINDOWS = (10.0, 60.0, 300.0)
@@ -28,7 +42,8 @@ def window_name(seconds: float) -> str:
 
 
 def stats_text(window: Window) -> Text:
-    """``last 36.5  min 35.1  max 37.9  ·  10 s  ·  48 samples``."""
+    """``last 36.5  min 35.1  max 37.9  ·  10 s  ·  48 samples``, with ``·  4.2 s of
+    data`` after the window when the samples do not reach back over all of it."""
     text = Text(no_wrap=True, overflow="ellipsis")
     for n, (name, value) in enumerate(
         (("last", window.last), ("min", window.low), ("max", window.high))
@@ -37,12 +52,41 @@ def stats_text(window: Window) -> Text:
             text.append("  ")
         text.append(f"{name} ", style="dim")
         text.append(number_text(value), style="bold")
-    text.append(f"  ·  {window_name(window.seconds)}  ·  {window.count} samples", style="dim")
+    text.append(f"  ·  {window_name(window.seconds)}", style="dim")
+    if window.covered < window.seconds:
+        text.append(f"  ·  {span_text(window.covered)} of data", style="dim")
+    text.append(f"  ·  {window.count} samples", style="dim")
     if window.failed:
         text.append(f" ({window.failed} failed)", style="red")
     if window.thinned:
         text.append("  (older ones 1 per 0.5 s)", style="dim")
     return text
+
+
+class TrendBars(Widget):
+    """The window's samples binned by time into one column per cell of its width."""
+
+    def __init__(self, **kwargs: str | None) -> None:
+        super().__init__(**kwargs)  # type: ignore[arg-type]
+        self.window: Window | None = None
+        self.scale: tuple[float | None, float | None] = (None, None)
+
+    def show(self, window: Window, scale: tuple[float | None, float | None]) -> None:
+        """Draw ``window`` on ``scale`` (low, high); a no-op when nothing changed."""
+        if window != self.window or scale != self.scale:
+            self.window, self.scale = window, scale
+            self.refresh()
+
+    def lines(self) -> list[str]:
+        """The bars as drawn now, the top line first."""
+        window = self.window
+        if window is None:
+            return []
+        width, height = self.size
+        return bar_lines(bin_window(window, width), height, *self.scale)
+
+    def render(self) -> Text:
+        return Text("\n".join(self.lines()), no_wrap=True, overflow="crop", end="")
 
 
 class TrendView(Vertical, can_focus=True):
@@ -73,14 +117,13 @@ class TrendView(Vertical, can_focus=True):
         self.field = 0
         self.window = WINDOWS[0]
         self.stats = Static(id="trend-stats")
-        self.sparkline = Sparkline([], id="trend-spark")
-        self._data: list[float] = []
+        self.bars = TrendBars(id="trend-spark")
         self._stats = Text()
         self._title = Text()
 
     def compose(self) -> ComposeResult:
         yield self.stats
-        yield self.sparkline
+        yield self.bars
 
     def show_row(self, var: VarRef, label: str, field: int) -> None:
         self.var, self.label, self.field = var, label, field
@@ -105,10 +148,8 @@ class TrendView(Vertical, can_focus=True):
         if stats != self._stats:
             self._stats = stats
             self.stats.update(stats)
-        data = [value for value in window.values if value is not None]
-        if data != self._data:
-            self._data = data
-            self.sparkline.data = data
+        io = var.kind.code == "IO"
+        self.bars.show(window, (0.0, 1.0) if io else (window.low, window.high))
 
     def action_cycle_window(self) -> None:
         self.window = WINDOWS[(WINDOWS.index(self.window) + 1) % len(WINDOWS)]

@@ -9,9 +9,11 @@ controller without going through the same path as a typed line).
 from __future__ import annotations
 
 import itertools
+from collections.abc import Callable
 from typing import ClassVar
 
 from rich.text import Text
+from textual import events
 from textual.binding import Binding, BindingType
 from textual.message import Message
 from textual.widgets import DataTable
@@ -43,13 +45,13 @@ class WatchTable(DataTable[object]):
     """The app calls :meth:`refresh_rows` at ~5 Hz with every row it holds."""
 
     BINDINGS: ClassVar[list[BindingType]] = [
-        Binding("enter", "row('put')", "Put line", id="row-put"),
-        Binding("space", "row('toggle')", "Toggle IO", id="row-toggle"),
+        Binding("enter", "row('put')", "Edit put", id="row-put"),
+        Binding("space", "row('toggle')", "Toggle", id="row-toggle"),
         Binding("delete", "row('unwatch')", "Unwatch", id="row-unwatch"),
         Binding("slash", "row('filter')", "Filter", id="row-filter"),
         Binding("s", "cycle_sort", "Sort", id="row-sort"),
-        Binding("f", "cycle_field", "Trend field", id="row-field"),
-        Binding("t", "row('trend')", "Trend view", id="row-trend"),
+        Binding("f", "cycle_field", "Field", id="row-field"),
+        Binding("t", "row('trend')", "Trend", id="row-trend"),
         Binding("escape", "app.focus_command_line", "Command line", id="row-leave"),
         Binding("tab", "app.focus_pane(1)", "Next pane", show=False, id="row-next-pane"),
         Binding("shift+tab", "app.focus_pane(-1)", "Previous pane", show=False, id="row-prev-pane"),
@@ -63,9 +65,34 @@ class WatchTable(DataTable[object]):
             self.action = action
             self.row = row  # as shown when the key was pressed; None on an empty table
 
-    def __init__(self, trends: TrendStore, **kwargs: object) -> None:
+    #: The printable keys the table acts on; any other goes to the command line.
+    ACTION_CHARACTERS = frozenset(" /sft")
+
+    def on_key(self, event: events.Key) -> None:
+        """Typing a command with the table focused must not fire row keys one by one
+        (`t` opens a trend, the space writes a bit): the first character no binding
+        takes moves it, and everything after it, to the command line."""
+        character = event.character
+        # Keys already on their way when the first one left for the command line follow it.
+        elsewhere = self.screen.focused is not self  # (has_focus waits for the Blur event)
+        if (
+            event.is_printable
+            and character
+            and (elsewhere or character not in self.ACTION_CHARACTERS)
+        ):
+            event.stop()
+            event.prevent_default()
+            # At once, not by a message: the keys queued behind this one must find the
+            # focus already moved.
+            self._on_typed(character)
+
+    def __init__(
+        self, trends: TrendStore, on_typed: Callable[[str], None], **kwargs: object
+    ) -> None:
+        """``on_typed(character)``: a key typed here that belongs on the command line."""
         super().__init__(cursor_type="row", zebra_stripes=True, **kwargs)  # type: ignore[arg-type]
         self.trends = trends
+        self._on_typed = on_typed
         #: The field each V P J T row's trend follows (index into its labels); `f` cycles it.
         self.fields: dict[VarRef, int] = {}
         self._shown: dict[str, tuple[object, ...]] = {}
