@@ -166,3 +166,22 @@ def test_ctrl_c_while_a_command_waits_cancels_it_and_keeps_the_repl() -> None:
         with contextlib.suppress(ChildProcessError):
             os.waitpid(pid, 0)
         os.close(fd)
+
+
+@pytest.mark.parametrize("sequence", ["\x1b[M", "\x1b[<0;1M", "\x1b[M!"])
+async def test_a_stray_mouse_sequence_is_ignored_not_a_traceback(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], sequence: str
+) -> None:
+    """A terminal (or a paste) can send a cut-short mouse report: prompt-toolkit's own
+    handler failed on it with a traceback and the REPL stopped reading."""
+    driver = Driver(tmp_path)
+
+    async def steps(d: Driver) -> None:
+        d.type(sequence + "abc\r")  # an X10 report takes the 3 bytes after ESC [ M
+        d.type("get I 1\r")
+        await d.until(lambda out: "I1 = 1" in out, "the get after the sequence")
+
+    await driver.run(steps)
+    captured = capsys.readouterr()
+    assert "Unhandled exception" not in captured.err + captured.out
+    assert "Traceback" not in captured.err + captured.out

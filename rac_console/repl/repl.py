@@ -11,6 +11,7 @@ from prompt_toolkit import PromptSession
 from prompt_toolkit.auto_suggest import AutoSuggestFromHistory
 from prompt_toolkit.formatted_text import FormattedText
 from prompt_toolkit.input import Input
+from prompt_toolkit.key_binding import KeyBindings, KeyPressEvent
 from prompt_toolkit.keys import Keys
 from prompt_toolkit.output import Output
 from rich.console import Console
@@ -41,6 +42,21 @@ from ..present.render import error_text, make_console, notice_text, outcome_text
 from ..protocol.text import terminal_safe
 from ..session import Frame
 from .prompt_parts import STYLE, HintProcessor, RacCompleter, RacLexer, SharedHistory
+
+
+def _no_mouse() -> KeyBindings:
+    """The REPL takes no mouse input. A cut-short mouse report (a paste, a terminal
+    that sends one anyway) made prompt-toolkit's own handler fail with a traceback
+    and stop reading: these events are dropped instead."""
+    bindings = KeyBindings()
+
+    @bindings.add(Keys.Vt100MouseEvent)
+    @bindings.add(Keys.WindowsMouseEvent)
+    def _(event: KeyPressEvent) -> None:
+        return None
+
+    return bindings
+
 
 STOP_KEYS = {Keys.Enter, Keys.ControlM, Keys.ControlJ, Keys.ControlC, Keys.ControlD, "q"}
 LIVE_REFRESH_SECONDS = 0.25
@@ -78,6 +94,7 @@ class Repl:
             lexer=RacLexer(),
             input_processors=[HintProcessor()],
             bottom_toolbar=self.toolbar,
+            key_bindings=_no_mouse(),
             style=STYLE,
             input=input,
             output=output,
