@@ -35,3 +35,21 @@ async def test_esc_cancels_a_wait_and_the_lines_queued_behind_it(tmp_path: Path)
         await until(pilot, lambda: "Esc cancels" not in status_line(app), "the sign gone")
         await type_line(pilot, "put IO 20 on")  # a line typed after the cancel runs
         await until(pilot, lambda: b"PUT:RC8:20:IO:11,-1\r" in tap.sent, "the new put")
+
+
+async def test_a_toggle_pressed_during_a_wait_is_queued_and_esc_drops_it(tmp_path: Path) -> None:
+    app = make_app(tmp_path)
+    tap = FrameTap(tmp_path)
+    async with app.run_test(size=(120, 30)) as pilot:
+        await type_line(pilot, "watch IO 128")
+        await until(pilot, lambda: len(app.rows) == 1 and app.table.row_count == 1, "the row")
+        await until(pilot, lambda: next(iter(app.rows.values())).status == "OK", "its value")
+        await type_line(pilot, "wait I 1 >= 100 within 60")
+        await until(pilot, lambda: b"GET:RC8:1:I:\r" in tap.sent, "the wait's first read")
+        await pilot.press("f6", "space")  # a toggle of IO128, queued behind the wait
+        await until(pilot, lambda: "+1 queued" in status_line(app), "the toggle counted")
+        await pilot.press("escape")  # from the table back to the command line
+        assert app.focused is app.command_line
+        await pilot.press("escape")
+        await until(pilot, lambda: "not run" in results_text(app), "the toggle dropped")
+        assert not any(frame.startswith(b"PUT:") for frame in tap.sent)

@@ -64,9 +64,7 @@ class RacConsoleApp(TableActions, App[int]):
         # Priority: taken as the key arrives, so the keys typed right after it go to the
         # new pane (without it they were already on their way to the old one).
         Binding("f6", "focus_pane(1)", "Next pane", id="next-pane", priority=True),
-        Binding(
-            "shift+f6", "focus_pane(-1)", "Previous pane", id="previous-pane", priority=True
-        ),
+        Binding("shift+f6", "focus_pane(-1)", "Previous pane", id="previous-pane", priority=True),
         Binding("escape", "cancel_command", "Cancel command", id="cancel-command"),
     ]
 
@@ -233,9 +231,16 @@ class RacConsoleApp(TableActions, App[int]):
         if not event.line.strip():
             return
         self.command_line.remember(event.line)
-        self.lines_pending[self.engine.submit(event.line)] = (event.line, time.monotonic())
+        self.submit_line(event.line)
+
+    def submit_line(self, line: str) -> int:
+        """Every line the console hands the engine (typed, or made by a key on a row):
+        counted as running or queued until its result, and cancelled by Esc."""
+        seq = self.engine.submit(line)
+        self.lines_pending[seq] = (line, time.monotonic())
         if len(self.lines_pending) == 1:
             self.refresh_bindings()
+        return seq
 
     def _running_line(self) -> tuple[str, float, int] | None:
         """The oldest line not answered yet (the one running: lines run in order), how

@@ -120,7 +120,7 @@ class TableActions:
         elif event.action == "toggle":
             self._toggle(row)
         elif event.action == "unwatch":
-            self.engine.submit(f"unwatch {row.var.kind.code} {row.var.index}")
+            self.submit_line(f"unwatch {row.var.kind.code} {row.var.index}")
         elif event.action == "trend" and not has_trend(row.var.kind):
             self.show(Message(f"{row.var} has no trend: t draws numbers, IO bits and positions"))
         elif event.action == "trend":
@@ -152,7 +152,7 @@ class TableActions:
             wait = " (polling is paused: F2 resumes it)" if paused else ""
             self.show(Message(f"{var}: the last toggle has not come back yet{wait}; nothing sent"))
             return
-        seq = self.engine.submit(line)
+        seq = self.submit_line(line)
         self.toggles.start(var, seq, not bool(row.variant and row.variant.value))
 
     # --------------------------------------------------------------- trends
@@ -176,6 +176,9 @@ class TableActions:
                 self._close_trend()
 
     def refresh_table(self) -> None:
+        raise NotImplementedError  # the app's
+
+    def submit_line(self, line: str) -> int:
         raise NotImplementedError  # the app's
 
     def _trend(self, row: RowView) -> None:
