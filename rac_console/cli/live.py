@@ -150,7 +150,10 @@ def _stderr_may_close() -> Iterator[None]:
 
 # ------------------------------------------------------------ the shared loop
 
-Tick = Callable[[Session, int, float], list[Outcome]]
+Tick = Callable[[Session, int, float, list[ExitStatus]], list[Outcome]]
+"""One repetition or cycle: ``tick(session, number, wall_time, seen)`` reads, adds the
+statuses to ``seen`` before it prints (a Ctrl-C during the print must not lose them),
+prints, and returns the outcomes."""
 """One repetition or cycle: given the session, its number and start time (``time.time()``),
 it reads, prints its line and returns what came of its requests."""
 
@@ -179,10 +182,9 @@ def run_live(
                 start = schedule.start(now)
                 if start > now:
                     time.sleep(start - now)
-                outcomes = tick(session, number, time.time())
+                outcomes = tick(session, number, time.time(), statuses)
                 failed = any(o.status == ExitStatus.TRANSPORT for o in outcomes)
                 schedule.ended(time.monotonic(), connection_failed=failed)
-                statuses += [o.status for o in outcomes]
     except KeyboardInterrupt:
         if not until_ctrl_c:
             raise
@@ -224,8 +226,11 @@ def repeat_get(args: argparse.Namespace) -> ExitStatus:
         output.show(refused(line, str(exc)))
         return ExitStatus.REFUSED
 
-    def repetition(session: Session, number: int, wall: float) -> list[Outcome]:
+    def repetition(
+        session: Session, number: int, wall: float, seen: list[ExitStatus]
+    ) -> list[Outcome]:
         outcome = execute(session, command, read_only=args.read_only, line=line)
+        seen.append(outcome.status)
         _show_repetition(output, outcome, number, timestamp(wall))
         return [outcome]
 
@@ -281,8 +286,10 @@ def watch(args: argparse.Namespace) -> ExitStatus:
         return ExitStatus.REFUSED
     reported: dict[VarRef, str] = {}  # each variable's failure, said on stderr once
 
-    def cycle(session: Session, number: int, wall: float) -> list[Outcome]:
+    def cycle(session: Session, number: int, wall: float, seen: list[ExitStatus]) -> list[Outcome]:
         results = _read_cycle(session, variables, args.read_only)
+        outcomes = [o for o in results.values() if o is not None]
+        seen += [o.status for o in outcomes]
         _report_failures(output, results, reported)
         started = timestamp(wall)
         if output.as_json:
@@ -291,7 +298,7 @@ def watch(args: argparse.Namespace) -> ExitStatus:
             write_line(_cycle_text(started, results))
         if log is not None:
             log.write(wall, {var: _good_value(outcome) for var, outcome in results.items()})
-        return [o for o in results.values() if o is not None]
+        return outcomes
 
     try:
         return run_live(
