@@ -6,10 +6,9 @@ Each test drains the outbox as a front end does and waits on conditions with a d
 from __future__ import annotations
 
 import time
-from collections.abc import Callable, Iterator
+from collections.abc import Callable
 from pathlib import Path
 
-import pytest
 from servers import RecordingServer
 
 from rac_console.engine import Alert, Engine, Message, Note, Result, RowView, Status
@@ -72,16 +71,6 @@ class Front:
 
     def sent(self) -> list[bytes]:
         return [f.data for f in self.frames if f.direction == "tx"]
-
-
-@pytest.fixture
-def front() -> Iterator[Front]:
-    engine = Engine(None, interval=0.05, timeout=1.0)
-    engine.start()
-    try:
-        yield Front(engine)
-    finally:
-        engine.stop()
 
 
 def test_starts_on_the_simulator_and_says_so(front: Front) -> None:

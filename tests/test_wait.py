@@ -7,7 +7,6 @@ import json
 import subprocess
 import sys
 import threading
-from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
@@ -80,16 +79,6 @@ def test_conditions_compare_values_as_read() -> None:
 
 
 # ------------------------------------------------------------------ engine
-
-
-@pytest.fixture
-def front() -> Iterator[Front]:
-    engine = Engine(None, interval=0.05, timeout=1.0)
-    engine.start()
-    try:
-        yield Front(engine)
-    finally:
-        engine.stop()
 
 
 def run_outcome(front: Front, line: str) -> Outcome:

@@ -18,14 +18,13 @@ import os
 import sys
 import time
 from collections.abc import Callable, Iterator
-from datetime import datetime
 from typing import Any, TextIO, cast
 
 from ..commands.argv import exchange_from_words, input_line
-from ..commands.language import Get, VarRef, _parse_var_list
+from ..commands.language import Get, VarRef, parse_var_list
 from ..commands.outcome import ExitStatus, Outcome, refused, worst
 from ..engine.backoff import Backoff
-from ..engine.csvlog import CsvLog
+from ..engine.csvlog import CsvLog, timestamp
 from ..engine.execute import execute
 from ..present.render import error_text, outcome_text, print_error
 from ..protocol import InputError, Variant, hresult_name
@@ -73,12 +72,6 @@ class Schedule:
             self._due = max(due, now + self._backoff.next_delay())
         else:
             self._backoff.good()
-
-
-def timestamp(wall: float) -> str:
-    """A ``time.time()`` as ISO 8601 local time with milliseconds and the UTC offset
-    (unambiguous across time zones and daylight saving): ``2026-11-22T01:02:03.456+01:00``."""
-    return datetime.fromtimestamp(wall).astimezone().isoformat(timespec="milliseconds")
 
 
 def write_line(text: str) -> None:
@@ -154,8 +147,6 @@ Tick = Callable[[Session, int, float, list[ExitStatus]], list[Outcome]]
 """One repetition or cycle: ``tick(session, number, wall_time, seen)`` reads, adds the
 statuses to ``seen`` before it prints (a Ctrl-C during the print must not lose them),
 prints, and returns the outcomes."""
-"""One repetition or cycle: given the session, its number and start time (``time.time()``),
-it reads, prints its line and returns what came of its requests."""
 
 
 def run_live(
@@ -258,7 +249,7 @@ def _show_repetition(output: Output, outcome: Outcome, number: int, started: str
 def watch_variables(words: list[str]) -> tuple[VarRef, ...]:
     """The variables the words name, in the console's ``watch`` syntax (``P 0``,
     ``IO 128-135``, several in a row); labels and ``every`` are the console's own."""
-    variables, rest, _ = _parse_var_list(" ".join(words), WATCH_USAGE)
+    variables, rest, _ = parse_var_list(" ".join(words), WATCH_USAGE)
     rest = rest.strip()
     if rest.lower().startswith("every"):
         raise InputError(f"write the period as an option: --every {rest[5:].strip() or '0.5'}")

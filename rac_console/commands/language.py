@@ -286,7 +286,7 @@ WATCH_USAGE = "watch TYPE INDEX [LABEL] [every SECONDS], e.g. watch IO 128-135"
 def parse_unwatch(rest: str) -> Unwatch:
     if rest.lower() == "all":
         return Unwatch(())
-    variables, extra, _ = _parse_var_list(rest, UNWATCH_USAGE)
+    variables, extra, _ = parse_var_list(rest, UNWATCH_USAGE)
     if extra.strip():
         raise InputError(f"unwatch takes variables only, not {extra.strip()!r}: {UNWATCH_USAGE}")
     return Unwatch(variables)
@@ -342,7 +342,7 @@ _TYPE_CODES = "|".join(sorted(KINDS, key=len, reverse=True))  # IO before I
 _NEXT_VAR_RE = re.compile(rf"\s*(?:{_TYPE_CODES})\s*\[?\s*\d", re.ASCII | re.IGNORECASE)
 
 
-def _parse_var_list(
+def parse_var_list(
     text: str, usage: str, counted: bool = False
 ) -> tuple[tuple[VarRef, ...], str, int]:
     """Variables and ranges one after another (``P 0 J 0 IO 128-135``), the text after
@@ -364,7 +364,7 @@ def parse_watch(text: str) -> Watch:
     Several variables are all watched; a label (quoted to keep it from being read
     as a variable) names one variable or range, never a list.
     """
-    variables, rest, specs = _parse_var_list(text, WATCH_USAGE, counted=True)
+    variables, rest, specs = parse_var_list(text, WATCH_USAGE, counted=True)
     label, every, rest = "", None, rest.strip()
     if rest[:1] in ("'", '"'):  # a quoted label is taken whole, "every" inside it too
         close = rest.find(rest[0], 1)

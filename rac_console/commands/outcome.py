@@ -11,6 +11,7 @@ from enum import IntEnum
 from typing import Any
 
 from ..protocol import Response, Variant, describe_hresult, hresult_name
+from ..protocol.text import counted
 from .language import VarRef
 
 
@@ -33,7 +34,7 @@ class Waited:
     within: float
 
     def text(self) -> str:
-        reads = f"{self.reads} read{'s' * (self.reads != 1)}"
+        reads = counted(self.reads, "read")
         if self.met:
             return f"{self.condition} after {self.seconds:.3f} s ({reads})"
         return f"{self.condition}: not met within {self.within:g} s ({reads})"

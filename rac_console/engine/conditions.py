@@ -14,6 +14,7 @@ from ..commands.conditions import holds
 from ..commands.language import Get, Wait
 from ..commands.outcome import ExitStatus, Outcome, Waited
 from ..protocol import Variant
+from ..protocol.text import counted
 from ..session import ConnectFailed, Session
 from .execute import execute
 
@@ -84,7 +85,7 @@ def _ended(
     # Not met: the last read's own failure says most; else the condition is the error.
     status = outcome.status if not outcome.ok else ExitStatus.CONTROLLER_ERROR
     if ended:  # the read's failure ended the wait before its time
-        error = f"{wait.condition}: wait ended after {reads} read{'s' * (reads != 1)}: "
+        error = f"{wait.condition}: wait ended after {counted(reads, 'read')}: "
         error += outcome.error or ""
         return replace(outcome, status=status, error=error, waited=waited)
     error = why or waited.text()

@@ -22,7 +22,8 @@ from datetime import datetime
 
 from ..commands.language import VarRef
 from ..protocol import InputError, Variant
-from ..protocol.text import scalar_text
+from ..protocol.text import counted, scalar_text
+from .recorder import append_whole
 
 #: Bytes of an existing file read to find its header.
 MAX_HEADER = 1 << 20
@@ -184,11 +185,7 @@ class CsvLog:
         if fd is None:
             return False
         try:
-            written = os.write(fd, data)
-            if written != len(data):  # a short write: the disk filled up mid-row
-                with contextlib.suppress(OSError):  # a pipe cannot be cut: the reader sees it
-                    os.ftruncate(fd, os.lseek(fd, 0, os.SEEK_END) - written)
-                raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+            append_whole(fd, data)
         except OSError as exc:
             self._fail(exc)
             return False
@@ -200,7 +197,7 @@ class CsvLog:
             self.failure = f"CSV log not started: cannot write the CSV log {self.path}: {reason}"
         else:
             self.failure = (
-                f"CSV log stopped: {reason} after {_count(self.rows, 'row')} ({self.path})"
+                f"CSV log stopped: {reason} after {counted(self.rows, 'row')} ({self.path})"
             )
         self.close()
         if self._on_failure is not None:
@@ -211,10 +208,6 @@ class CsvLog:
             fd, self._fd = self._fd, None
             with contextlib.suppress(OSError):
                 os.close(fd)
-
-
-def _count(n: int, noun: str) -> str:
-    return f"{n} {noun}{'s' * (n != 1)}"
 
 
 def _difference(existing: list[str], header: list[str]) -> str:
@@ -231,7 +224,7 @@ def _difference(existing: list[str], header: list[str]) -> str:
     if at < min(len(existing), len(header)):
         what = f"column {at + 1} is {_cell(existing[at])}, this log's is {_cell(header[at])}"
     else:
-        what = f"it has {_count(len(existing), 'column')}, this log has {len(header)}"
+        what = f"it has {counted(len(existing), 'column')}, this log has {len(header)}"
     return (
         f"{what} (from column {at + 1} it has {_columns_text(existing[at:])}; "
         f"this log has {_columns_text(header[at:])})"

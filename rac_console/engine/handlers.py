@@ -25,8 +25,10 @@ from ..commands.language import (
     Watch,
     WatchFile,
 )
+from ..commands.outcome import Outcome
 from ..commands.registry import help_lines, parse_command
 from ..protocol import InputError
+from ..protocol.text import counted
 from ..session import ConnectFailed, Disconnected, TransportError
 from . import watchlist
 from .conditions import wait_for
@@ -68,11 +70,7 @@ def run(engine: Engine, command: Command, line: str | None) -> list[Feedback]:
             if isinstance(command, Get | Put):
                 engine.see((command.var,))
             outcome = execute(session, command, read_only=engine.read_only, line=line)
-            if isinstance(outcome.failure, ConnectFailed):
-                engine.connect_failed()
-            if isinstance(outcome.failure, TransportError):
-                engine.mark_failure(outcome.failure)
-            return [outcome]
+            return [_noted(engine, outcome)]
         case Wait():
             session = engine.session
             if session is None:
@@ -86,11 +84,7 @@ def run(engine: Engine, command: Command, line: str | None) -> list[Feedback]:
                 cancelled=lambda: engine.stopping,
                 between=engine.poll_until,
             )
-            if isinstance(outcome.failure, ConnectFailed):
-                engine.connect_failed()
-            if isinstance(outcome.failure, TransportError):
-                engine.mark_failure(outcome.failure)
-            return [outcome]
+            return [_noted(engine, outcome)]
         case CsvLog():
             return [_csv_log(engine, command)]
         case Frames(on=on):
@@ -123,6 +117,16 @@ def run(engine: Engine, command: Command, line: str | None) -> list[Feedback]:
         case Simple(step=step):
             return [_step(engine, step)]
     raise AssertionError(f"no handler for {command!r}")  # the registry and this match agree
+
+
+def _noted(engine: Engine, outcome: Outcome) -> Outcome:
+    """A typed exchange that got no trustworthy reply is marked in the log (and one that
+    found the controller unreachable is no early drop of a connection)."""
+    if isinstance(outcome.failure, ConnectFailed):
+        engine.connect_failed()
+    if isinstance(outcome.failure, TransportError):
+        engine.mark_failure(outcome.failure)
+    return outcome
 
 
 def _step(engine: Engine, step: Step) -> Feedback:
@@ -166,7 +170,7 @@ def _unwatch(engine: Engine, variables: tuple[VarRef, ...]) -> Message:
         return Message(f"{names_text(variables)} not watched: nothing to stop", "error")
     removed = engine.watch.remove(variables)
     engine.outbox.put_removed(removed)
-    text = f"stopped watching {len(removed)} variable{'s' * (len(removed) != 1)}"
+    text = f"stopped watching {counted(len(removed), 'variable')}"
     if absent:
         verb = "was" if len(absent) == 1 else "were"
         text += f" ({names_text(tuple(absent))} {verb} not watched)"
@@ -174,22 +178,19 @@ def _unwatch(engine: Engine, variables: tuple[VarRef, ...]) -> Message:
 
 
 def _csv_log(engine: Engine, command: CsvLog) -> Message:
-    def _count(n: int, noun: str) -> str:
-        return f"{n} {noun}{'s' * (n != 1)}"
-
     sink = engine.csv
     current, log = sink.path, sink.log
     if command.stop:
         ended = sink.stop()
         if ended is not None:
-            return Message(f"CSV log stopped: {_count(ended.rows, 'row')} in {ended.path}")
+            return Message(f"CSV log stopped: {counted(ended.rows, 'row')} in {ended.path}")
         if current is not None:
             return Message(f"CSV log to {current} stopped before its first row")
         return Message("no CSV log to stop", "error")
     if command.path is None:
         if log is not None:
-            count = _count(len(log.variables), "variable")
-            return Message(f"logging {count} to {log.path}: {_count(log.rows, 'row')} so far")
+            count = counted(len(log.variables), "variable")
+            return Message(f"logging {count} to {log.path}: {counted(log.rows, 'row')} so far")
         if current is not None:
             return Message(f"logging to {current} from the first poll cycle")
         return Message("not logging: log FILE.csv starts a CSV log of the watched values")
@@ -209,7 +210,7 @@ def _csv_log(engine: Engine, command: CsvLog) -> Message:
         return Message(started.failure, "error")
     how = "appending to" if started.appending else "logging to"
     return Message(
-        f"{how} {started.path}: {_count(len(started.variables), 'variable')}, "
+        f"{how} {started.path}: {counted(len(started.variables), 'variable')}, "
         "one row per poll cycle (log stop ends it)"
     )
 

@@ -18,6 +18,16 @@ from ..protocol import InputError, escape_bytes
 from ..session import Frame
 
 
+def append_whole(fd: int, data: bytes) -> None:
+    """One unbuffered write of a whole line; a short one (a disk filled up mid-line) is
+    cut back where the file can be, and raised as ENOSPC: a file keeps whole lines."""
+    written = os.write(fd, data)
+    if written != len(data):
+        with contextlib.suppress(OSError):  # a pipe cannot be cut: its reader sees it
+            os.ftruncate(fd, os.lseek(fd, 0, os.SEEK_END) - written)
+        raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+
+
 def open_private(path: str, mode: str = "a") -> TextIO:
     """Open a text file to append (``"a"``) or rewrite (``"w"``), created owner-only."""
     flags = os.O_WRONLY | os.O_CREAT | (os.O_TRUNC if mode == "w" else os.O_APPEND)
@@ -67,10 +77,7 @@ class FrameRecorder:
             record["refused"] = frame.problem  # a reply the session would not take
         line = (json.dumps(record) + "\n").encode("ascii")
         try:
-            written = os.write(self._fd, line)
-            if written != len(line):  # a short write: the disk filled up mid-line
-                os.ftruncate(self._fd, os.lseek(self._fd, 0, os.SEEK_END) - written)
-                raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+            append_whole(self._fd, line)
         except OSError as exc:
             self._fail(exc)
             return

@@ -13,6 +13,11 @@ from .vartypes import vt_name
 CR_MARK = "↵"
 
 
+def counted(n: int, noun: str) -> str:
+    """``1 row``, ``3 rows``: a count and its noun, for messages."""
+    return f"{n} {noun}{'s' * (n != 1)}"
+
+
 def escape_bytes(data: bytes) -> str:
     """Printable ASCII as is; every other byte as ``\\xNN`` (backslash doubled)."""
     out = []

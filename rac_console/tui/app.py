@@ -34,7 +34,7 @@ from ..present.render import error_text, notice_text, outcome_text
 from ..present.row_actions import PendingToggles
 from ..present.status import status_text
 from ..present.trends import TrendStore
-from ..protocol.text import terminal_safe
+from ..protocol.text import counted, terminal_safe
 from .command_line import CommandLine
 from .frame_log import FrameLog
 from .io_panel import IoPanel, WatchArea
@@ -189,10 +189,16 @@ class RacConsoleApp(TableActions, App[int]):
                 self.frame_log.add(event)
                 if isinstance(event, Alert):
                     self.show(Message(event.text, "error"))
-        if batch.frames_dropped:
-            self.frame_log.add(
-                Alert(f"{batch.frames_dropped} frames not shown: the screen fell behind")
-            )
+        if batch.frames_dropped or batch.cycles_dropped:
+            lost = [
+                counted(n, what)
+                for n, what in (
+                    (batch.frames_dropped, "frame"),
+                    (batch.cycles_dropped, "poll cycle"),
+                )
+                if n
+            ]
+            self.frame_log.add(Alert(f"{' and '.join(lost)} not shown: the screen fell behind"))
 
     def flush_log(self) -> None:
         count = self.frame_log.flush()
