@@ -85,7 +85,8 @@ def _global_options(parser: argparse.ArgumentParser, suppress: bool) -> list[arg
             "-H",
             "--host",
             default=default(None),
-            help="controller address (default: the built-in simulator)",
+            help="controller address, or the name of a target profile in the config file "
+            "(default: the built-in simulator)",
         ),
         parser.add_argument(
             "-p",
@@ -118,6 +119,27 @@ def _global_options(parser: argparse.ArgumentParser, suppress: bool) -> list[arg
             metavar="FILE",
             default=default(None),
             help="append every frame sent and received to FILE as JSON lines",
+        ),
+        parser.add_argument(
+            "--log",
+            metavar="FILE",
+            dest="transcript",
+            default=default(None),
+            help="append every frame to FILE as a plain timestamped transcript, "
+            "one line per frame (as tio's log)",
+        ),
+        parser.add_argument(
+            "--no-verify",
+            dest="verify",
+            action="store_false",
+            default=default(True),
+            help="do not read a variable before and after a PUT (read-back is on by default)",
+        ),
+        parser.add_argument(
+            "--yes",
+            action="store_true",
+            default=default(False),
+            help="write to a target whose profile says writes = \"confirm\" without asking",
         ),
     ]
 

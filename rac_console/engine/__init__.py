@@ -18,6 +18,7 @@ Thread rules (the only ones; nothing else is shared):
 from .engine import DEFAULT_INTERVAL, SIMULATOR_NOTICE, Engine
 from .events import (
     Alert,
+    ConfirmWrite,
     Cycle,
     Feedback,
     Message,
@@ -34,6 +35,7 @@ __all__ = [
     "SIMULATOR_NOTICE",
     "Alert",
     "Batch",
+    "ConfirmWrite",
     "Cycle",
     "Engine",
     "Feedback",

@@ -13,7 +13,10 @@ import threading
 import time
 from collections import deque
 
+from collections.abc import Mapping
+
 from ..commands.language import Command, VarRef
+from ..commands.policy import TargetProfile, WritePolicy
 from ..protocol import Variant, describe_hresult, hresult_name
 from ..session import (
     BadReply,
@@ -28,7 +31,7 @@ from ..session import (
 from ..sim.thread import SimulatorThread
 from .backoff import Backoff
 from .csvsink import CsvSink
-from .events import Alert, Cycle, Event, Message, Note, Result, Status
+from .events import Alert, ConfirmWrite, Cycle, Event, Message, Note, Result, Status
 from .outbox import Outbox
 from .recorder import FrameRecorder
 from .watch import WatchList, WatchRow
@@ -41,6 +44,8 @@ STATUS_EVERY = 0.1
 #: Events are handed to the outbox in batches at least this often while polling (and at
 #: once when the engine goes idle or answers a line): one lock per batch, not per frame.
 EVENTS_EVERY = 0.01
+#: How often a write waiting for its confirmation looks for the answer (polling between).
+CONFIRM_CHECK_EVERY = 0.02
 
 
 class Engine:
@@ -58,16 +63,30 @@ class Engine:
         outbox: Outbox | None = None,
         cycles: bool = False,
         log_csv: str | None = None,
+        policy: WritePolicy | None = None,
+        verify: bool = True,
+        profile: TargetProfile | None = None,
+        profiles: Mapping[str, TargetProfile] | None = None,
     ) -> None:
         """Raises InputError when ``record`` cannot be opened (before any thread starts).
 
         With ``cycles``, a :class:`Cycle` event follows each poll cycle (for trends).
         ``log_csv`` starts a CSV log at the first poll cycle (raises InputError when the
-        file cannot be written)."""
+        file cannot be written). ``policy`` is what writes the target allows (a profile's
+        ``writes`` and ``allow``); ``verify`` reads every PUT back; ``profile`` names the
+        target (its host and port are ``host`` and ``port``); ``profiles`` are the ones
+        ``connect NAME`` knows."""
         self.outbox = outbox if outbox is not None else Outbox()
         self._target = (host, port)
         self.timeout = timeout
         self.read_only = read_only
+        self.policy = policy if policy is not None else WritePolicy()
+        self.verify = verify
+        self.profile = profile
+        self.profiles: Mapping[str, TargetProfile] = profiles or {}
+        self.current_seq = 0  # the submitted line running now (a confirm names it)
+        self._answers: dict[int, bool] = {}  # confirm answers, by seq (any thread writes)
+        self._answers_lock = threading.Lock()
         self.interval = interval
         self.watch = WatchList()
         self.seen: set[tuple[str, int]] = set()
@@ -157,6 +176,11 @@ class Engine:
         session = self.session
         if session is not None:
             session.cancel()
+
+    def answer_confirm(self, seq: int, yes: bool) -> None:
+        """A front end's answer to a :class:`ConfirmWrite` (any thread)."""
+        with self._answers_lock:
+            self._answers[seq] = yes
 
     @property
     def stopping(self) -> bool:
@@ -361,6 +385,11 @@ class Engine:
                 csv_log=self.csv.path,
                 csv_failure=self.csv.failure,
                 seen=self._seen_frozen,
+                profile=self.profile.name if self.profile is not None else None,
+                label=self.profile.label if self.profile is not None else None,
+                colour=self.profile.colour if self.profile is not None else None,
+                writes="read-only" if self.read_only else self.policy.writes.value,
+                verify=self.verify,
             )
         )
 
@@ -501,6 +530,23 @@ class Engine:
         self._samples.append((row.var, variant))
         if changed:
             self.show_row(row)
+
+    def ask_confirm(self, question: ConfirmWrite) -> bool:
+        """Publish the question and keep polling until the front end answers; a cancel
+        (Esc, Ctrl-C) or a stop is a No."""
+        with self._answers_lock:
+            self._answers.pop(question.seq, None)
+        self.emit(question)
+        self.publish_status(force=True)
+        self.flush_events()
+        while not self.stopping:
+            with self._answers_lock:
+                answer = self._answers.pop(question.seq, None)
+            if answer is not None:
+                return answer
+            self.poll_until(time.perf_counter() + CONFIRM_CHECK_EVERY, float("inf"))
+            self.flush_events()
+        return False
 
     def poll_until(self, until: float, deadline: float) -> None:
         """Until ``time.perf_counter()`` reaches ``until`` (between a wait's reads): poll

@@ -105,6 +105,11 @@ class Status:
     seen: frozenset[tuple[str, int]]
     csv_log: str | None = None  # the CSV log's path while logging
     csv_failure: str | None = None  # why a CSV log failed, kept after a new one starts
+    profile: str | None = None  # the target profile's name (-H cell3, connect cell3)
+    label: str | None = None  # its label: "Cell 3 — welding"
+    colour: str | None = None  # its colour, a Rich colour name or #rrggbb
+    writes: str = "open"  # open, confirm or read-only (the profile's, or --read-only)
+    verify: bool = True  # every PUT is read back (off: --no-verify)
 
     def exit_status(self, status: int) -> int:
         """A front end's exit status: 4 (a local I/O error) when it would be 0 but the
@@ -126,4 +131,21 @@ class Cycle:
     samples: tuple[tuple[VarRef, Variant | None], ...]
 
 
-Event = Frame | Note | Alert | Result | Cycle
+@dataclass(frozen=True, slots=True)
+class ConfirmWrite:
+    """A write on a ``confirm`` target waits for a yes: the front end asks old → new
+    (default No) and answers with :meth:`Engine.answer_confirm` ``(seq, yes)``.
+
+    Until it is answered the engine keeps polling and runs nothing else; Esc (the
+    engine's cancel) counts as No."""
+
+    seq: int  # the submitted line's number, as its Result will carry
+    var: str  # "I10", or the raw line's variable
+    before: str | None  # the value now, as text ("14"); None when it could not be read
+    after: str  # the value to write, as text
+    request: str  # the PUT's wire text
+    target: str  # "LIVE 192.168.0.1:5006"
+    label: str | None  # the profile's label
+
+
+Event = Frame | Note | Alert | Result | Cycle | ConfirmWrite

@@ -45,6 +45,7 @@ def handle(engine: Engine, seq: int, what: str | Command) -> None:
     command: Command | None = None
     line = what if isinstance(what, str) else None
     engine.begin_command()
+    engine.current_seq = seq
     try:
         command = parse_command(what) if isinstance(what, str) else what
         feedback: list[Feedback]

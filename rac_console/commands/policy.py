@@ -1,0 +1,112 @@
+"""What a target lets be written, decided before anything is sent.
+
+A target profile says ``writes = "open" | "confirm" | "read-only"`` and may list
+``allow`` ranges (``"I 100-199"``, ``"IO 64-71"``): a write outside them is refused
+with the rule that refused it. Pure: no file, no socket.
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass
+from enum import Enum
+
+from ..protocol import KINDS, InputError, VarKind, kind_of
+from ..protocol.variables import MAX_INDEX
+from .language import Exchange, Get, Put, Raw, VarRef
+
+
+class Writes(Enum):
+    OPEN = "open"  # writes go out as typed (the built-in simulator's mode)
+    CONFIRM = "confirm"  # each write asks old → new [y/N] first (the CLI needs --yes)
+    READ_ONLY = "read-only"  # only well-formed GETs go out
+
+
+@dataclass(frozen=True)
+class AllowRange:
+    """``I 100-199``: the variables of one type a target lets be written."""
+
+    kind: VarKind
+    low: int
+    high: int
+
+    def covers(self, var: VarRef) -> bool:
+        return var.kind is self.kind and self.low <= var.index <= self.high
+
+    def __str__(self) -> str:
+        span = str(self.low) if self.low == self.high else f"{self.low}-{self.high}"
+        return f"{self.kind.code} {span}"
+
+
+_RANGE = re.compile(r"\s*([A-Za-z]+)\s*\[?\s*(\d+)\s*(?:-\s*(\d+)\s*)?\]?\s*", re.ASCII)
+
+
+def parse_allow(text: str) -> AllowRange:
+    """``"I 100-199"``, ``"IO 64"``, ``"P[0-9]"``; InputError with how to write it."""
+    example = 'write a range as "TYPE FIRST-LAST" or "TYPE INDEX", e.g. "I 100-199", "IO 64"'
+    match = _RANGE.fullmatch(text)
+    if match is None:
+        raise InputError(f"allow {text!r} is not a range: {example}")
+    code, first, last = match.group(1).upper(), int(match.group(2)), match.group(3)
+    if code not in KINDS:
+        raise InputError(f"allow {text!r}: {code} is not a variable type ({' '.join(KINDS)})")
+    high = int(last) if last is not None else first
+    if high < first or high > MAX_INDEX:
+        raise InputError(f"allow {text!r}: indices run from 0 to {MAX_INDEX}, first to last")
+    return AllowRange(kind_of(code), first, high)
+
+
+_RAW_PUT = re.compile(r"PUT:RC8:(\d{1,5}):([A-Za-z]{1,2}):", re.ASCII | re.IGNORECASE)
+
+
+def written_var(command: Exchange) -> VarRef | None:
+    """The variable a command writes: a typed put's, or a raw well-formed
+    ``PUT:RC8:<index>:<type>:...`` line's; None for a GET or a line we cannot read."""
+    if isinstance(command, Put):
+        return command.var
+    if isinstance(command, Raw) and command.request.write:
+        match = _RAW_PUT.match(command.request.text)
+        if match and match.group(2).upper() in KINDS and int(match.group(1)) <= MAX_INDEX:
+            return VarRef(kind_of(match.group(2).upper()), int(match.group(1)))
+    return None
+
+
+@dataclass(frozen=True)
+class WritePolicy:
+    """A target's rules for writes; the default lets everything out (as before profiles)."""
+
+    writes: Writes = Writes.OPEN
+    allow: tuple[AllowRange, ...] | None = None  # None: any variable
+    source: str = ""  # where the rules come from, for messages: "profile cell3"
+
+    @property
+    def confirms(self) -> bool:
+        return self.writes is Writes.CONFIRM
+
+    def refusal(self, command: Exchange) -> str | None:
+        """Why ``allow`` keeps this off the wire, or None (read-only is checked apart)."""
+        if self.allow is None or isinstance(command, Get) or command.request.read_only_safe:
+            return None
+        var = written_var(command)
+        rules = ", ".join(str(rule) for rule in self.allow) or "nothing"
+        where = f"{self.source} " if self.source else ""
+        if var is None:
+            return (
+                f"refused: {where}allows writes only to {rules}, and this line is not a "
+                "well-formed GET or PUT:RC8:<index>:<type>:<value> it can check (nothing was sent)"
+            )
+        if any(rule.covers(var) for rule in self.allow):
+            return None
+        return f"PUT {var} refused: {where}allows writes only to {rules} (nothing was sent)"
+
+
+@dataclass(frozen=True)
+class TargetProfile:
+    """A named target from the config file: ``-H cell3`` or ``connect cell3``."""
+
+    name: str
+    host: str
+    port: int = 5006
+    label: str | None = None  # "Cell 3 — welding": shown on the status line and the border
+    colour: str | None = None  # a Rich colour name or #rrggbb
+    policy: WritePolicy = WritePolicy()
