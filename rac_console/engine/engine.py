@@ -12,7 +12,6 @@ import queue
 import threading
 import time
 from collections import deque
-
 from collections.abc import Mapping
 
 from ..commands.language import Command, VarRef

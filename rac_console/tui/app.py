@@ -20,6 +20,7 @@ from ..commands.outcome import Outcome
 from ..engine import (
     SIMULATOR_NOTICE,
     Alert,
+    ConfirmWrite,
     Cycle,
     Engine,
     Feedback,
@@ -185,6 +186,8 @@ class RacConsoleApp(TableActions, App[int]):
                 self._show_result(event)
             elif isinstance(event, Cycle):
                 self.take_cycle(event)
+            elif isinstance(event, ConfirmWrite):
+                self.confirm_write(event)
             else:
                 self.frame_log.add(event)
                 if isinstance(event, Alert):
@@ -371,6 +374,10 @@ class RacConsoleApp(TableActions, App[int]):
         self.io_panel.show(shown)
         self.table.set_hide_io(shown)
         self.refresh_table()
+
+    def confirm_write(self, question: ConfirmWrite) -> None:
+        """A write on a ``confirm`` target asks first (the modal comes with profiles)."""
+        self.engine.answer_confirm(question.seq, False)
 
     def action_clear_log(self) -> None:
         self.frame_log.clear()
