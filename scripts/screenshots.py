@@ -12,8 +12,10 @@ import sys
 import tempfile
 from pathlib import Path
 
+from rac_console.commands.policy import TargetProfile, WritePolicy, Writes, parse_allow
 from rac_console.engine import Engine
 from rac_console.present.history import History
+from rac_console.sim.thread import SimulatorThread
 from rac_console.tui.app import RacConsoleApp
 
 OUT = Path(__file__).resolve().parent.parent / "screenshots"
@@ -71,14 +73,44 @@ KEYED_SCENES = {
         ["watch P 0 current pose", "watch I 0 cycle", "watch F 0 motor temp", "watch J 0"],
         ["f6", "down", "t"],
     ),
+    "hex-view-120x40": (
+        (120, 40),
+        ["watch I 0 cycle", "get I 1", "put I 10 15", "send hello", "get S 1"],
+        ["f7"],
+    ),
+    "help-80x24": ((80, 24), ["watch IO 0-3"], ["f1"]),
+    "palette-100x30": ((100, 30), ["watch IO 0-3"], ["ctrl+p"]),
+}
+
+#: Scenes on a LIVE target profile (a simulator served on loopback, named cell3):
+#: its colour frames the console; the second one is a write waiting for its "y".
+PROFILE_SCENES = {
+    "profile-live-120x40": ((120, 40), ["watch IO 128-135", "watch I 10 part count"], ""),
+    "confirm-120x40": ((120, 40), ["watch I 10 part count", "put I 10 14"], "put I 10 15\n"),
 }
 
 
+def profile_engine(port: int) -> Engine:
+    """An engine on profile cell3: a LIVE target that asks before every write."""
+    policy = WritePolicy(
+        Writes.CONFIRM, (parse_allow("I 0-99"), parse_allow("IO 128-143")), "profile cell3"
+    )
+    profile = TargetProfile("cell3", "127.0.0.1", port, "Cell 3 — welding", "red", policy)
+    return Engine(
+        "127.0.0.1", port, interval=0.2, cycles=True, policy=policy, profile=profile
+    )
+
+
 async def take(
-    name: str, size: tuple[int, int], lines: list[str], typed: str, keys: list[str] | None = None
+    name: str,
+    size: tuple[int, int],
+    lines: list[str],
+    typed: str,
+    keys: list[str] | None = None,
+    engine: Engine | None = None,
 ) -> None:
     with tempfile.TemporaryDirectory() as home:
-        engine = Engine(None, interval=0.2, cycles=True)
+        engine = engine or Engine(None, interval=0.2, cycles=True)
         app = RacConsoleApp(engine, History(Path(home) / "history"))
         async with app.run_test(size=size) as pilot:
             for line in lines:
@@ -90,10 +122,11 @@ async def take(
                 await pilot.press(*keys)
                 await pilot.pause(4.0)  # a trend of a few seconds
             if typed:
-                await pilot.press(*typed)
+                line, enter = typed.removesuffix("\n"), typed.endswith("\n")
+                await pilot.press(*line, *(["enter"] if enter else []))
                 if name == "completion":
                     await pilot.press("tab")
-                await pilot.pause(0.3)
+                await pilot.pause(0.6)
             app.command_line.cursor_blink = False
             app.save_screenshot(f"{name}.svg", str(OUT))
     print(f"wrote screenshots/{name}.svg", file=sys.stderr)
@@ -105,6 +138,9 @@ async def main() -> None:
         await take(name, size, lines, typed)
     for name, (size, lines, keys) in KEYED_SCENES.items():
         await take(name, size, lines, "", keys)
+    for name, (size, lines, typed) in PROFILE_SCENES.items():
+        with SimulatorThread() as sim:
+            await take(name, size, lines, typed, engine=profile_engine(sim.port))
 
 
 if __name__ == "__main__":

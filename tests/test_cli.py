@@ -245,7 +245,7 @@ def test_wire_bytes_of_typed_commands(
     env: dict[str, str], recording: Callable[..., RecordingServer], args: list[str], wire: bytes
 ) -> None:
     server = recording()
-    result = cli(env, *server.args, *args)
+    result = cli(env, *server.args, "--no-verify", *args)  # the PUT alone: no read-back
     assert result.returncode == 0, result.stderr
     assert result.stderr == ""
     assert len(server.connections()) == 1
@@ -378,7 +378,8 @@ def test_timed_out_put_says_the_outcome_is_unknown(
     env: dict[str, str], recording: Callable[..., RecordingServer]
 ) -> None:
     server = recording(fixed_reply(None))
-    result = cli(env, *server.args, "--timeout", "0.3", "--json", "put", "I", "10", "1")
+    args = ("--timeout", "0.3", "--json", "--no-verify")  # not stopped by a read before
+    result = cli(env, *server.args, *args, "put", "I", "10", "1")
     assert result.returncode == 3
     (data,) = json_lines(result.stdout)
     assert data["ok"] is False
@@ -477,7 +478,7 @@ def test_run_file_uses_one_session(
     path = tmp_path / "script.rac"
     path.write_text(SCRIPT, encoding="utf-8")
     server = recording()
-    result = cli(env, *server.args, "run", str(path))
+    result = cli(env, *server.args, "--no-verify", "run", str(path))
     assert result.returncode == 0, result.stderr
     assert bytes(server.received) == SCRIPT_WIRE
     assert len(server.connections()) == 1
@@ -488,7 +489,7 @@ def test_run_stdin_json_one_object_per_command_line(
     env: dict[str, str], recording: Callable[..., RecordingServer]
 ) -> None:
     server = recording()
-    result = cli(env, *server.args, "--json", "run", "-", stdin=SCRIPT)
+    result = cli(env, *server.args, "--json", "--no-verify", "run", "-", stdin=SCRIPT)
     assert result.returncode == 0, result.stderr
     objects = json_lines(result.stdout)
     assert [o["line"] for o in objects] == [3, 4, 6, 7, 8]

@@ -148,7 +148,7 @@ def test_frames_offers_on_and_off() -> None:
     assert texts("frames on ") == []
 
 
-@pytest.mark.parametrize("text", ["connect ", "interval ", "latency ", "save ", "pause ", "bogus "])
+@pytest.mark.parametrize("text", ["interval ", "latency ", "save ", "pause ", "bogus "])
 def test_commands_without_choices_offer_nothing(text: str) -> None:
     assert complete(text, SEEN) == []
 

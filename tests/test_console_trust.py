@@ -63,10 +63,12 @@ async def test_a_burst_of_typed_lines_runs_each_line_once_in_order(tmp_path: Pat
             "the first connection",
         )
         burst(pilot, "put I 10 1\n5\nget I 1\nget I 2\nget I 3\n")
-        await until(pilot, lambda: len(tap.sent) >= 4, "the burst to run")
+        await until(pilot, lambda: len(tap.sent) >= 6, "the burst to run")
         await until(pilot, lambda: "I3 = " in results_text(app), "the last line's result")
         assert sent_lines(tap) == [
+            b"GET:RC8:10:I:",  # the value before
             b"PUT:RC8:10:I:3,1",
+            b"GET:RC8:10:I:",  # read back
             b"GET:RC8:1:I:",
             b"GET:RC8:2:I:",
             b"GET:RC8:3:I:",
@@ -84,8 +86,16 @@ async def test_a_pasted_block_runs_each_line_once_in_order(tmp_path: Path) -> No
         pilot.app.query_one(CommandLine).post_message(
             events.Paste("get I 1\nget I 2\r\nput I 10 7\nget I")
         )
-        await until(pilot, lambda: "I10 ← 7" in results_text(app), "the pasted lines")
-        assert sent_lines(tap) == [b"GET:RC8:1:I:", b"GET:RC8:2:I:", b"PUT:RC8:10:I:3,7"]
+        await until(
+            pilot, lambda: "→ 7  S_OK  read back 7 ✓" in results_text(app), "the pasted lines"
+        )
+        assert sent_lines(tap) == [
+            b"GET:RC8:1:I:",
+            b"GET:RC8:2:I:",
+            b"GET:RC8:10:I:",
+            b"PUT:RC8:10:I:3,7",
+            b"GET:RC8:10:I:",
+        ]
         assert app.query_one(CommandLine).value == "get I"  # the unfinished line, to edit
 
 
@@ -272,7 +282,7 @@ async def test_argument_hint_and_history_suggestion_are_both_shown(tmp_path: Pat
         command_line = app.query_one(CommandLine)
         hint_line = app.query_one("#hint", Static)
         await type_line(pilot, "put P 10 1 2 3 4 5 6 -1")
-        await until(pilot, lambda: "P10 ← " in results_text(app), "the put")
+        await until(pilot, lambda: "P10: " in results_text(app), "the put")
         await type_line(pilot, "put P 10 ", enter=False, keys=True)
         await until(
             pilot,

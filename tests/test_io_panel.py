@@ -114,6 +114,9 @@ async def test_space_toggles_the_bit_under_the_cursor_once_per_flight(tmp_path: 
         # Paused, no poll can show the write: it stays in flight through the burst.
         await type_line(pilot, "pause")
         await until(pilot, lambda: app.status is not None and app.status.paused, "the pause")
+        # A slow controller: the write and its read-back stay in flight through the burst.
+        await type_line(pilot, "send SIM:SET:delay_ms=400")
+        await until(pilot, lambda: "SIM:SET:delay_ms=400" in results_text(app), "the delay")
         app.io_panel.focus()
         await pilot.pause()
         assert app.io_panel.cursor == 128
@@ -133,6 +136,7 @@ async def test_space_toggles_the_bit_under_the_cursor_once_per_flight(tmp_path: 
         assert "underline" in str(app.io_panel.grid.text.spans)  # drawn as in flight
 
         await pilot.press("escape")  # back to the command line
+        await type_line(pilot, "send SIM:SET:delay_ms=0")
         await type_line(pilot, "resume")
         await until(pilot, lambda: word_is(app, 128, 0b1111), "IO 129 ON")
         await until(

@@ -88,7 +88,7 @@ async def test_get_put_and_raw_exchanges_against_the_simulator(tmp_path: Path) -
 
     async def steps(d: Driver) -> None:
         d.type("put I 7 42\r")
-        await d.until(lambda out: "I7 ← 42" in out, "the put")
+        await d.until(lambda out: "I7: 0 → 42  S_OK  read back 42 ✓" in out, "the put")
         d.type("get I[7]\r")
         await d.until(lambda out: "I7 = 42" in out, "the get")
         d.type("GET:RC8:7:I:\r")
@@ -100,7 +100,9 @@ async def test_get_put_and_raw_exchanges_against_the_simulator(tmp_path: Path) -
     assert "S_OK  VT_I4  42" in out
     assert "invalid command string" in out
     assert driver.tap.sent == [
+        b"GET:RC8:7:I:\r",  # the value before
         b"PUT:RC8:7:I:3,42\r",
+        b"GET:RC8:7:I:\r",  # read back
         b"GET:RC8:7:I:\r",
         b"GET:RC8:7:I:\r",
         b"PUT:RC8:10:11,0\r",

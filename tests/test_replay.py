@@ -131,7 +131,7 @@ def replay(env: dict[str, str]) -> Iterator[Callable[..., Replay]]:
 def recorded(env: dict[str, str], tmp_path: Path) -> Path:
     """A record file written by the real CLI: two runs, appended to one file."""
     path = tmp_path / "cell.jsonl"
-    result = cli(env, "--record", str(path), "run", "-", stdin=SESSION)
+    result = cli(env, "--record", str(path), "--no-verify", "run", "-", stdin=SESSION)
     assert result.returncode == 1, result.stderr  # get I 500: the controller's error
     result = cli(env, "--record", str(path), "get", "P", "1")
     assert result.returncode == 0, result.stderr
@@ -182,7 +182,8 @@ def test_unrecorded_gets_and_puts_get_errors(
     assert (unknown["ok"], unknown["result_name"], unknown["value"]) == (False, "E_NOTIMPL", None)
     server.wait_for_stderr(lambda line: "GET:RC8:11:I: not in the recording" in line)
 
-    result = cli(env, "-H", "127.0.0.1", "-p", str(server.port), "--json", "put", "I", "10", "7")
+    target = ("-H", "127.0.0.1", "-p", str(server.port))
+    result = cli(env, *target, "--json", "--no-verify", "put", "I", "10", "7")  # no GETs
     assert result.returncode == 1
     (put,) = [json.loads(line) for line in result.stdout.splitlines()]
     assert put["result_name"] == "E_ACCESSDENIED"

@@ -30,7 +30,9 @@ async def test_a_burst_of_lines_runs_each_once_in_order(tmp_path: Path) -> None:
 
     out = await driver.run(steps)
     assert sent(driver) == [
+        b"GET:RC8:10:I:\r",  # the value before
         b"PUT:RC8:10:I:3,1\r",
+        b"GET:RC8:10:I:\r",  # read back
         b"GET:RC8:1:I:\r",
         b"GET:RC8:2:I:\r",
         b"GET:RC8:3:I:\r",
@@ -52,10 +54,16 @@ async def test_a_pasted_block_runs_line_by_line(tmp_path: Path) -> None:
 
     async def steps(d: Driver) -> None:
         d.type("\x1b[200~get I 1\nget I 2\nput I 10 7\x1b[201~\r")  # a bracketed paste
-        await d.until(lambda out: "I10 ← 7" in out, "the pasted lines")
+        await d.until(lambda out: "→ 7  S_OK  read back 7 ✓" in out, "the pasted lines")
 
     await driver.run(steps)
-    assert sent(driver) == [b"GET:RC8:1:I:\r", b"GET:RC8:2:I:\r", b"PUT:RC8:10:I:3,7\r"]
+    assert sent(driver) == [
+        b"GET:RC8:1:I:\r",
+        b"GET:RC8:2:I:\r",
+        b"GET:RC8:10:I:\r",
+        b"PUT:RC8:10:I:3,7\r",
+        b"GET:RC8:10:I:\r",
+    ]
 
 
 @pytest.fixture

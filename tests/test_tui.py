@@ -43,7 +43,14 @@ async def test_typed_get_put_raw_and_send_show_frames_and_decoding(tmp_path: Pat
         assert "→ PUT:RC8:7:I:3,42↵" in log
         assert "→ GET:RC8:7:I:↵" in log
         assert "→ hello↵" in log
-        assert tap.sent == [b"PUT:RC8:7:I:3,42\r", b"GET:RC8:7:I:\r", b"GET:RC8:7:I:\r", b"hello\r"]
+        assert tap.sent == [
+            *(
+                b"GET:RC8:7:I:\r",
+                b"PUT:RC8:7:I:3,42\r",
+                b"GET:RC8:7:I:\r",
+            ),  # read, write, read back
+            *(b"GET:RC8:7:I:\r", b"GET:RC8:7:I:\r", b"hello\r"),
+        ]
         await until(pilot, lambda: "I7 = 42" in results_text(app), "the decoded result")
         assert "E_INVALIDCOMMAND" in results_text(app)
 

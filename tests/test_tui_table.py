@@ -128,7 +128,7 @@ async def test_space_toggles_an_io_bit_through_the_typed_put_path(tmp_path: Path
             pilot, lambda: app.table.get_cell("IO128", "value").plain.strip() == "OFF", "OFF"
         )
         assert "› put IO 128 off" in results_text(app)
-        assert "IO128 ← OFF" in results_text(app)
+        assert "IO128: ON → OFF  S_OK  read back OFF ✓" in results_text(app)
 
 
 async def test_space_in_a_read_only_console_is_refused_and_nothing_is_sent(
@@ -158,22 +158,22 @@ async def test_space_on_a_row_that_is_not_io_sends_nothing(tmp_path: Path) -> No
 async def test_a_second_space_before_the_first_came_back_is_ignored(tmp_path: Path) -> None:
     """Each Space toggles from the value shown; a second one before the row shows the
     first one's effect would write OFF again (or a value nobody meant), so it is refused
-    until a poll shows the row. Polling paused keeps the row at ON as long as needed."""
+    until the write is read back. Polling paused: only the read-back can show it."""
     app = make_app(tmp_path)
     async with app.run_test(size=SIZE) as pilot:
         tap = FrameTap(tmp_path)
         await watch(pilot, "watch IO 128", 1)
         await type_line(pilot, "pause")
         await until(pilot, lambda: app.status is not None and app.status.paused, "the pause")
-        await pilot.press("f6", "space")
-        await until(pilot, lambda: "IO128 ← OFF" in results_text(app), "the first one's reply")
-        assert app.table.get_cell("IO128", "value").plain.strip() == "ON"  # not polled yet
-        await pilot.press("space")
-        refusal = "IO128: the last toggle has not come back yet (polling is paused"
+        await type_line(pilot, "send SIM:SET:delay_ms=300")  # slow: the write stays in flight
+        await until(pilot, lambda: "SIM:SET:delay_ms=300" in results_text(app), "the delay")
+        await pilot.press("f6", "space", "space")  # the second before the first came back
+        done = "IO128: ON → OFF  S_OK  read back OFF ✓"
+        await until(pilot, lambda: done in results_text(app), "the first one's reply")
+        refusal = "IO128: the last toggle has not come back yet"
         await until(pilot, lambda: refusal in results_text(app), "the refusal")
         assert puts(tap) == [b"PUT:RC8:128:IO:11,0\r"]
-        await pilot.press("f2")  # resume: a poll shows OFF and frees the row
-        await until(
+        await until(  # the read-back shows the row its value, polling paused
             pilot, lambda: app.table.get_cell("IO128", "value").plain.strip() == "OFF", "OFF"
         )
         var = next(iter(app.rows))

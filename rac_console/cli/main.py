@@ -20,7 +20,9 @@ if TYPE_CHECKING:
 
 DESCRIPTION = "A console for DENSO RC8 controllers speaking RAC (TCP port 5006)."
 EPILOG = """\
-Without -H every command talks to a built-in RC8 simulator.
+Without -H every command talks to a built-in RC8 simulator. -H NAME uses the
+[target.NAME] profile of config.toml in your config directory (RAC_CONSOLE_CONFIG
+names another file): its address, label, colour and write rules.
 Options may also come after the command, even after a value. A value that starts
 with - and is not a number goes after --, where every word is the value:
   rac-console put S 10 -- -text
@@ -92,8 +94,8 @@ def _global_options(parser: argparse.ArgumentParser, suppress: bool) -> list[arg
             "-p",
             "--port",
             type=_port,
-            default=default(5006),
-            help="controller port (default 5006)",
+            default=default(None),  # None: 5006, or the profile's (an explicit -p wins)
+            help="controller port (default 5006, or the profile's)",
         ),
         parser.add_argument(
             "--timeout",
@@ -139,7 +141,7 @@ def _global_options(parser: argparse.ArgumentParser, suppress: bool) -> list[arg
             "--yes",
             action="store_true",
             default=default(False),
-            help="write to a target whose profile says writes = \"confirm\" without asking",
+            help='write to a target whose profile says writes = "confirm" without asking',
         ),
     ]
 
@@ -531,7 +533,7 @@ def use_uvloop() -> bool:
 
 
 def _dispatch(args: argparse.Namespace) -> int:
-    if getattr(args, "port", 5006) != 5006 and not getattr(args, "host", None):
+    if getattr(args, "port", None) not in (None, 5006) and not getattr(args, "host", None):
         print(
             f"rac-console: -p {args.port} needs -H HOST: without -H every command talks "
             "to a built-in simulator of its own",
@@ -545,6 +547,11 @@ def _dispatch(args: argparse.Namespace) -> int:
             file=sys.stderr,
         )
         return 2
+    if args.command != "sim":
+        from .target import settle_target
+
+        if not settle_target(args):  # a broken config file: one line, exit 2
+            return 2
     if args.command == "get" and (args.repeat, args.repeat_interval) != (None, None):
         from .live import repeat_get
 
@@ -586,17 +593,19 @@ def _interactive(args: argparse.Namespace) -> int:
     from ..present.history import History, default_history_path
     from ..protocol import InputError
     from ..protocol.text import terminal_safe
+    from .target import engine_target
 
     try:
         engine = Engine(
             args.host,
             args.port,
             timeout=args.timeout,
-            read_only=args.read_only,
             record=args.record,
+            transcript=args.transcript,
             interval=args.interval,
             log_csv=getattr(args, "log_csv", None),
             cycles=args.command is None,  # the console draws trends; the REPL has none
+            **engine_target(args),
         )
     except InputError as exc:
         print(f"rac-console: {terminal_safe(str(exc))}", file=sys.stderr)
@@ -623,7 +632,7 @@ def _interactive(args: argparse.Namespace) -> int:
         return run_repl(engine, history)
     from ..tui.app import run_console
 
-    return run_console(engine, history, args.watch)
+    return run_console(engine, history, args.watch, sorted(args.target.profiles))
 
 
 def parse_args(words: Sequence[str]) -> argparse.Namespace:

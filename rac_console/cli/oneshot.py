@@ -7,17 +7,20 @@ import itertools
 import json
 import sys
 from collections.abc import Iterator
+from dataclasses import replace
 
 from ..commands.argv import exchange_from_words, input_line
-from ..commands.language import Get, Latency, Put, Raw, Wait
+from ..commands.language import Exchange, Get, Latency, Put, Raw, Wait
 from ..commands.outcome import ExitStatus, Outcome, refused, worst
+from ..commands.policy import Writes
 from ..commands.registry import parse_command
 from ..engine.conditions import wait_for
 from ..engine.execute import execute, measure_latency
+from ..engine.writes import write
 from ..present.render import error_text, make_console, notice_text, print_error, print_outcome
 from ..protocol import InputError
 from ..session import ConnectFailed, Disconnected, Session
-from .target import open_session
+from .target import open_session, write_policy
 
 
 class Output:
@@ -71,7 +74,7 @@ def one_command(args: argparse.Namespace) -> ExitStatus:
             raise InputError(args.words_problem)
         command = exchange_from_words(args.command, args.words)
         with open_session(args, output.local_failure) as session:
-            outcome = execute(session, command, read_only=args.read_only, line=line)
+            outcome = _exchange(session, command, args, line)
     except InputError as exc:
         outcome = refused(line, str(exc))
     output.show(outcome)
@@ -102,7 +105,7 @@ def run_script(args: argparse.Namespace) -> ExitStatus:
         with open_session(args, output.local_failure) as session:
             for number, raw_line in enumerate(itertools.chain([first] if first else [], lines), 1):
                 line = raw_line.rstrip("\r\n")
-                outcome = _run_line(session, line, args.read_only)
+                outcome = _run_line(session, line, args)
                 if outcome is not None:
                     output.show(outcome, {"line": number}, prefix=f"line {number}: ")
                     statuses.append(outcome.status)
@@ -112,7 +115,25 @@ def run_script(args: argparse.Namespace) -> ExitStatus:
     return output.status(worst(statuses))
 
 
-def _run_line(session: Session, line: str, read_only: bool) -> Outcome | None:
+def _exchange(session: Session, command: Exchange, args: argparse.Namespace, line: str) -> Outcome:
+    """One GET, PUT or raw line; a write by the target's rules, read back unless
+    ``--no-verify``, and on a ``confirm`` target only with ``--yes``."""
+    if isinstance(command, Put) or (isinstance(command, Raw) and command.request.write):
+        policy = write_policy(args)
+        if args.yes and policy.confirms:  # said yes ahead: nothing to ask, nothing to read
+            policy = replace(policy, writes=Writes.OPEN)
+        return write(
+            session,
+            command,
+            policy=policy,
+            read_only=args.read_only,
+            verify=args.verify,
+            line=line,
+        )
+    return execute(session, command, read_only=args.read_only, line=line)
+
+
+def _run_line(session: Session, line: str, args: argparse.Namespace) -> Outcome | None:
     try:
         command = parse_command(line)
     except InputError as exc:
@@ -120,14 +141,14 @@ def _run_line(session: Session, line: str, read_only: bool) -> Outcome | None:
     if command is None:
         return None
     if isinstance(command, Wait):
-        return wait_for(session, command, line=line, read_only=read_only)
+        return wait_for(session, command, line=line, read_only=args.read_only)
     if not isinstance(command, Get | Put | Raw):
         return refused(
             line,
             f"{line.split()[0]!r} works in the console and the REPL; "
             "run takes get, put, send, wait and GET:/PUT: lines",
         )
-    return execute(session, command, read_only=read_only, line=line)
+    return _exchange(session, command, args, line)
 
 
 def latency(args: argparse.Namespace) -> ExitStatus:

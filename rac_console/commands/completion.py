@@ -43,10 +43,15 @@ def _split_var(words: list[str]) -> list[str]:
     return words
 
 
-def complete(text: str, seen: Iterable[tuple[str, int]] = ()) -> list[Candidate]:
+def complete(
+    text: str,
+    seen: Iterable[tuple[str, int]] = (),
+    targets: Iterable[tuple[str, str]] = (),
+) -> list[Candidate]:
     """Candidates for the word at the end of ``text``.
 
-    ``seen`` holds (TYPE, index) pairs already used or watched, offered as indices.
+    ``seen`` holds (TYPE, index) pairs already used or watched, offered as indices;
+    ``targets`` the config file's profiles (name, label or host), offered after connect.
     """
     if is_raw_line(text):
         return []
@@ -65,6 +70,8 @@ def complete(text: str, seen: Iterable[tuple[str, int]] = ()) -> list[Candidate]
     completes = spec.completes if spec is not None else Completes.NOTHING
     if completes is Completes.COMMAND and len(done) == 1:
         return matching((name, spec.summary) for name, spec in COMMANDS.items())
+    if completes is Completes.TARGET and len(done) == 1:
+        return matching([("sim", "the built-in simulator"), *targets])
     if completes is Completes.ON_OFF and len(done) == 1:
         return matching([("on", "echo every frame"), ("off", "stop echoing frames")])
     if completes is not Completes.VARIABLE:

@@ -102,8 +102,12 @@ class SetInterval:
 
 @dataclass(frozen=True)
 class Connect:
-    host: str
+    """``connect HOST[:PORT]``, ``connect PROFILE`` or ``connect sim`` (host None: the
+    built-in simulator). Whether HOST names a profile is the engine's to know."""
+
+    host: str | None
     port: int
+    port_given: bool = False  # HOST:PORT: the port wins over a profile's
 
 
 @dataclass(frozen=True)
@@ -414,7 +418,12 @@ def _parse_seconds(text: str, word: str = "interval") -> float:
 
 def parse_connect(text: str) -> Connect:
     if not text or " " in text:
-        raise InputError("connect needs one address: connect HOST or connect HOST:PORT")
+        raise InputError(
+            "connect needs one address: connect HOST or connect HOST:PORT "
+            "(or a profile's name, or sim for the built-in simulator)"
+        )
+    if text == "sim":
+        return Connect(None, 5006)
     if text.startswith("["):  # [IPv6]:PORT
         host, closed, port_part = text[1:].partition("]")
         if not closed or (port_part and not port_part.startswith(":")):
@@ -430,4 +439,4 @@ def parse_connect(text: str) -> Connect:
         return Connect(host, 5006)
     if not (port_text.isascii() and port_text.isdigit()) or not 0 < int(port_text) < 65536:
         raise InputError(f"port must be a number from 1 to 65535, got {port_text!r}")
-    return Connect(host, int(port_text))
+    return Connect(host, int(port_text), port_given=True)

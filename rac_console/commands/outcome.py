@@ -64,6 +64,13 @@ class Outcome:
     written: Variant | None = None
     failure: Exception | None = None  # why no trustworthy reply came (not in the JSON)
     waited: Waited | None = None  # a wait: its condition, whether it was met, how long
+    # A PUT read back (see engine/writes.py): the value before (None: not known), the
+    # value the GET after it answered, whether that is the value written (None: not
+    # checked: --no-verify, or the read-back failed), and why the read-back failed.
+    before: Variant | None = None
+    read_back: Variant | None = None
+    verified: bool | None = None
+    read_back_error: str | None = None
 
     @property
     def ok(self) -> bool:
@@ -104,6 +111,12 @@ class Outcome:
             data["error"] = self.error
         if self.waited is not None:
             data["wait"] = self.waited.to_json()
+        if self.written is not None or self.read_back is not None or self.read_back_error:
+            data["before"] = self.before.to_json() if self.before is not None else None
+            data["read_back"] = self.read_back.to_json() if self.read_back is not None else None
+            data["verified"] = self.verified
+            if self.read_back_error:
+                data["read_back_error"] = self.read_back_error
         return data
 
 

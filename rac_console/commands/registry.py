@@ -44,6 +44,7 @@ class Completes(Enum):
     VARIABLE = "variable"  # TYPE, then an index seen before (then on|off for put IO)
     COMMAND = "command"  # help TOPIC
     ON_OFF = "on|off"
+    TARGET = "target"  # connect: sim, then the config file's profiles
 
 
 @dataclass(frozen=True)
@@ -130,9 +131,16 @@ COMMANDS: dict[str, CommandSpec] = {
         CommandSpec(
             "connect",
             "HOST[:PORT]",
-            "talk to a controller (port 5006 by default)",
+            "talk to a controller (port 5006 by default), a profile, or sim",
             parse_connect,
             "connect 192.168.0.1",
+            Completes.TARGET,
+            notes=(
+                "connect PROFILE: a [target.PROFILE] of the config file, with its label, "
+                "colour and write rules (writes, allow), e.g. connect cell3",
+                "connect sim: back to the built-in simulator (writes open)",
+                "connect HOST[:PORT]: no profile; --read-only stays whatever the target",
+            ),
         ),
         CommandSpec(
             "disconnect", "", "close the session and stop polling", _no_argument(Step.DISCONNECT)

@@ -17,6 +17,7 @@ Thread rules (the only ones; nothing else is shared):
 
 from .engine import DEFAULT_INTERVAL, SIMULATOR_NOTICE, Engine
 from .events import (
+    CONFIRM_GUARD_SECONDS,
     Alert,
     ConfirmWrite,
     Cycle,
@@ -31,6 +32,7 @@ from .events import (
 from .outbox import Batch, Outbox
 
 __all__ = [
+    "CONFIRM_GUARD_SECONDS",
     "DEFAULT_INTERVAL",
     "SIMULATOR_NOTICE",
     "Alert",

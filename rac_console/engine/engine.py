@@ -15,7 +15,7 @@ from collections import deque
 from collections.abc import Mapping
 
 from ..commands.language import Command, VarRef
-from ..commands.policy import TargetProfile, WritePolicy
+from ..commands.policy import TargetProfile, WritePolicy, Writes
 from ..protocol import Variant, describe_hresult, hresult_name
 from ..session import (
     BadReply,
@@ -33,6 +33,7 @@ from .csvsink import CsvSink
 from .events import Alert, ConfirmWrite, Cycle, Event, Message, Note, Result, Status
 from .outbox import Outbox
 from .recorder import FrameRecorder
+from .transcript import FrameTranscript
 from .watch import WatchList, WatchRow
 
 DEFAULT_INTERVAL = 0.5
@@ -58,6 +59,7 @@ class Engine:
         timeout: float = 2.0,
         read_only: bool = False,
         record: str | None = None,
+        transcript: str | None = None,
         interval: float = DEFAULT_INTERVAL,
         outbox: Outbox | None = None,
         cycles: bool = False,
@@ -67,7 +69,8 @@ class Engine:
         profile: TargetProfile | None = None,
         profiles: Mapping[str, TargetProfile] | None = None,
     ) -> None:
-        """Raises InputError when ``record`` cannot be opened (before any thread starts).
+        """Raises InputError when ``record`` or ``transcript`` (``--log``) cannot be opened
+        (before any thread starts).
 
         With ``cycles``, a :class:`Cycle` event follows each poll cycle (for trends).
         ``log_csv`` starts a CSV log at the first poll cycle (raises InputError when the
@@ -78,12 +81,17 @@ class Engine:
         self.outbox = outbox if outbox is not None else Outbox()
         self._target = (host, port)
         self.timeout = timeout
-        self.read_only = read_only
         self.policy = policy if policy is not None else WritePolicy()
+        # --read-only, kept through connect; a read-only profile's policy adds its own.
+        self.base_read_only = read_only
+        self.read_only = read_only or self.policy.writes is Writes.READ_ONLY
+        # What ``connect HOST`` (no profile) and the command line allow.
+        self.base_policy = self.policy if profile is None else WritePolicy()
         self.verify = verify
         self.profile = profile
         self.profiles: Mapping[str, TargetProfile] = profiles or {}
         self.current_seq = 0  # the submitted line running now (a confirm names it)
+        self.target_id = 0  # counts the targets opened: a front end forgets the last one's
         self._answers: dict[int, bool] = {}  # confirm answers, by seq (any thread writes)
         self._answers_lock = threading.Lock()
         self.interval = interval
@@ -101,6 +109,8 @@ class Engine:
         self.polls_per_second: float | None = None
         self.backoff = Backoff()
         self.recorder = FrameRecorder(record, self.alert) if record else None
+        # --log FILE: the plain-text transcript, with the notes (InputError as record).
+        self.transcript = FrameTranscript(transcript, self.alert) if transcript else None
         self.csv = CsvSink(self.alert, self._csv_changed)
         if log_csv:
             self.csv.wait_for_rows(log_csv)
@@ -226,6 +236,8 @@ class Engine:
             self.close_target()
             if self.recorder is not None:
                 self.recorder.close()
+            if self.transcript is not None:
+                self.transcript.close()
             self.csv.stop()
             self.flush_events()
             self.publish_status(force=True)
@@ -256,6 +268,13 @@ class Engine:
             self.simulator = SimulatorThread().start()
             host, port = self.simulator.host, self.simulator.port
         self.host, self.port = host, port
+        self.target_id += 1
+        if self.target_id > 1:  # another target: nothing of the last one is shown as its
+            for row in self.watch.start_afresh():
+                self.show_row(row)
+            ended = self.csv.stop() if self.csv.path is not None else None
+            if ended is not None:  # one file, one controller
+                self.alert(f"CSV log stopped at the change of target: {ended.path}")
         self.backoff, self._early_drop, self._lost = Backoff(), False, False
         session = Session(host, port, timeout=self.timeout)
         session.add_frame_observer(self._on_frame)
@@ -298,6 +317,8 @@ class Engine:
     def _on_frame(self, frame: Frame) -> None:
         if self.recorder is not None:
             self.recorder(frame)
+        if self.transcript is not None:
+            self.transcript(frame)
         self._events.append(frame)
         # The request in flight, for the status line's "waiting for a reply": set as a
         # request leaves, cleared by its reply or by the connection's end.
@@ -306,9 +327,14 @@ class Engine:
             self.flush_events()  # while polling, and during a long command (latency)
 
     def note(self, text: str) -> None:
-        self.emit(Note(text, time.time()))
+        now = time.time()
+        if self.transcript is not None:
+            self.transcript.note(text, now)
+        self.emit(Note(text, now))
 
     def alert(self, text: str) -> None:
+        if self.transcript is not None:
+            self.transcript.note(text)
         self.emit(Alert(text))
         self.flush_events()
 
@@ -381,6 +407,9 @@ class Engine:
                 polls_per_second=self.polls_per_second,
                 interval_met=self._interval_met(period),
                 record_failure=self.recorder.failure if self.recorder is not None else None,
+                transcript_failure=(
+                    self.transcript.failure if self.transcript is not None else None
+                ),
                 csv_log=self.csv.path,
                 csv_failure=self.csv.failure,
                 seen=self._seen_frozen,
@@ -389,6 +418,7 @@ class Engine:
                 colour=self.profile.colour if self.profile is not None else None,
                 writes="read-only" if self.read_only else self.policy.writes.value,
                 verify=self.verify,
+                target_id=self.target_id,
             )
         )
 
@@ -570,7 +600,7 @@ class Engine:
         if self.csv.path is not None:
             self.csv.cycle_ended(wall, self.watch.rows)
         if self.publish_cycles:
-            self.emit(Cycle(wall, time.monotonic(), samples))
+            self.emit(Cycle(wall, time.monotonic(), samples, self.target_id))
 
     def _csv_changed(self) -> None:
         self.publish_status(force=True)

@@ -105,16 +105,21 @@ class Status:
     seen: frozenset[tuple[str, int]]
     csv_log: str | None = None  # the CSV log's path while logging
     csv_failure: str | None = None  # why a CSV log failed, kept after a new one starts
+    transcript_failure: str | None = None  # why the --log transcript stopped
     profile: str | None = None  # the target profile's name (-H cell3, connect cell3)
     label: str | None = None  # its label: "Cell 3 — welding"
     colour: str | None = None  # its colour, a Rich colour name or #rrggbb
     writes: str = "open"  # open, confirm or read-only (the profile's, or --read-only)
     verify: bool = True  # every PUT is read back (off: --no-verify)
+    target_id: int = 0  # changes when another target is opened (connect): trends restart
 
     def exit_status(self, status: int) -> int:
         """A front end's exit status: 4 (a local I/O error) when it would be 0 but the
-        recording or the CSV log stopped on the way."""
-        failed = self.record_failure is not None or self.csv_failure is not None
+        recording, the --log transcript or the CSV log stopped on the way."""
+        failed = any(
+            failure is not None
+            for failure in (self.record_failure, self.transcript_failure, self.csv_failure)
+        )
         return 4 if status == 0 and failed else status
 
 
@@ -129,6 +134,12 @@ class Cycle:
     time: float  # time.time() when the cycle ended (wall clock, for timestamps)
     monotonic: float  # time.monotonic() then (for windows of seconds)
     samples: tuple[tuple[VarRef, Variant | None], ...]
+    target_id: int = 0  # the target polled (Status.target_id): an old one's is dropped
+
+
+#: A yes within this many seconds of a confirm question is not taken as its answer (the
+#: console's dialog and the REPL alike): it was typed ahead, or pasted over a slow link.
+CONFIRM_GUARD_SECONDS = 0.4
 
 
 @dataclass(frozen=True, slots=True)

@@ -6,6 +6,8 @@ parser; its behaviour is here. Every problem becomes feedback, never an exceptio
 
 from __future__ import annotations
 
+import time
+
 from ..commands.language import (
     Command,
     Connect,
@@ -26,15 +28,17 @@ from ..commands.language import (
     WatchFile,
 )
 from ..commands.outcome import Outcome
+from ..commands.policy import WritePolicy, Writes
 from ..commands.registry import help_lines, parse_command
-from ..protocol import InputError
-from ..protocol.text import counted
-from ..session import ConnectFailed, Disconnected, TransportError
+from ..protocol import InputError, Variant
+from ..protocol.text import counted, terminal_safe
+from ..session import ConnectFailed, Disconnected, Session, TransportError
 from . import watchlist
 from .conditions import wait_for
 from .engine import Engine
-from .events import Feedback, Message, Result, UiStep
+from .events import OK, ConfirmWrite, Feedback, Message, Result, UiStep
 from .execute import execute, measure_latency
+from .writes import plain_value, write
 
 NOT_CONNECTED = "not connected: connect HOST[:PORT] first"
 
@@ -70,6 +74,9 @@ def run(engine: Engine, command: Command, line: str | None) -> list[Feedback]:
                 return [Message(NOT_CONNECTED, "error")]
             if isinstance(command, Get | Put):
                 engine.see((command.var,))
+            if isinstance(command, Put) or command.request.write:
+                assert not isinstance(command, Get)
+                return [_noted(engine, _write(engine, session, command, line))]
             outcome = execute(session, command, read_only=engine.read_only, line=line)
             return [_noted(engine, outcome)]
         case Wait():
@@ -109,8 +116,8 @@ def run(engine: Engine, command: Command, line: str | None) -> list[Feedback]:
             engine.interval = seconds
             engine.wake()
             return [Message(f"poll interval {seconds:g} s")]
-        case Connect(host=host, port=port):
-            return [_connect(engine, host, port)]
+        case Connect():
+            return [_connect(engine, command)]
         case WatchFile():
             return [_watch_file(engine, command)]
         case Help(topic=topic):
@@ -118,6 +125,43 @@ def run(engine: Engine, command: Command, line: str | None) -> list[Feedback]:
         case Simple(step=step):
             return [_step(engine, step)]
     raise AssertionError(f"no handler for {command!r}")  # the registry and this match agree
+
+
+def _write(engine: Engine, session: Session, command: Put | Raw, line: str | None) -> Outcome:
+    """A PUT by the target's rules: allow, confirm (asked through the front end), the
+    value before and the read-back; a watched row shows the value read back at once."""
+
+    def known_before(var: VarRef) -> Variant | None:
+        row = engine.watch.rows.get(var)
+        return row.variant if row is not None and row.status == OK and not row.stale else None
+
+    def confirm(var: VarRef, before: Variant | None, after: Variant, write: Put | Raw) -> bool:
+        question = ConfirmWrite(
+            engine.current_seq,
+            str(var),
+            plain_value(var, before) if before is not None else None,
+            plain_value(var, after),
+            write.request.text,
+            engine.target,
+            engine.profile.label if engine.profile is not None else None,
+        )
+        return engine.ask_confirm(question)
+
+    outcome = write(
+        session,
+        command,
+        policy=engine.policy,
+        read_only=engine.read_only,
+        verify=engine.verify,
+        known_before=known_before,
+        confirm=confirm,
+        line=line,
+    )
+    row = engine.watch.rows.get(outcome.var) if outcome.var is not None else None
+    held = outcome.read_back
+    if row is not None and held is not None and row.update(held, time.monotonic()):
+        engine.show_row(row)
+    return outcome
 
 
 def _noted(engine: Engine, outcome: Outcome) -> Outcome:
@@ -216,16 +260,52 @@ def _csv_log(engine: Engine, command: CsvLog) -> Message:
     )
 
 
-def _connect(engine: Engine, host: str, port: int) -> Message:
+def _connect(engine: Engine, command: Connect) -> Message:
+    """``connect PROFILE``, ``connect sim`` or ``connect HOST[:PORT]``: the target changes,
+    and with it the profile (label, colour) and the write rules: a profile's, the
+    simulator's (open), or for a plain host the ones the engine started with. The
+    command line's ``--read-only`` stays whatever the target."""
+    profile = engine.profiles.get(command.host) if command.host is not None else None
+    host, port = command.host, command.port
+    if profile is not None:
+        host, port = profile.host, command.port if command.port_given else profile.port
+        policy = profile.policy
+    else:
+        policy = WritePolicy() if host is None else engine.base_policy
     engine.close_target()
+    engine.profile, engine.policy = profile, policy
+    engine.read_only = engine.base_read_only or policy.writes is Writes.READ_ONLY
     engine.open_target(host, port)
     assert engine.session is not None
+    writes = "read-only" if engine.read_only else f"writes {policy.writes.value}"
     try:
         engine.session.connect()
     except (ConnectFailed, Disconnected) as exc:
-        return Message(f"{exc}; will keep retrying while variables are watched", "error")
+        text = f"{exc}; will keep retrying while variables are watched"
+        if profile is None and command.host and _bare_name(command.host):
+            names = ", ".join(sorted(engine.profiles))
+            known = f"profiles: {names}" if names else "the config file names none"
+            text += f"; no profile named {command.host} ({known})"
+        return Message(text, "error")
+    if host is None:
+        engine.note("connected to the built-in simulator")
+        return Message(f"connected to the built-in simulator ({writes})")
     engine.note(f"connected to {host}:{port}")
-    return Message(f"connected to LIVE controller {host}:{port}")
+    if profile is None:
+        rules = f" ({writes})" if writes != "writes open" else ""
+        return Message(f"connected to LIVE controller {host}:{port}{rules}")
+    label = terminal_safe(profile.label or profile.name)
+    allow = profile.policy.allow
+    rules = f", allow {', '.join(map(str, allow)) or 'nothing'}" if allow is not None else ""
+    return Message(
+        f"connected to {label} (profile {profile.name}): LIVE controller {host}:{port}, "
+        f"{writes}{rules}"
+    )
+
+
+def _bare_name(host: str) -> bool:
+    """A word that could be a misspelt profile: no dot, no colon, not localhost."""
+    return "." not in host and ":" not in host and host.lower() != "localhost"
 
 
 def _watch_file(engine: Engine, command: WatchFile) -> Message:

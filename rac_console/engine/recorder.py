@@ -35,20 +35,25 @@ def open_private(path: str, mode: str = "a") -> TextIO:
     return os.fdopen(fd, mode, encoding="utf-8")  # type: ignore[return-value]
 
 
-class FrameRecorder:
-    """A frame observer appending JSON lines: ``t``, ``dir``, ``text``, ``rtt_ms``
-    (``partial``, ``unsolicited``, and ``refused`` with why for a reply not taken).
+class LineFile:
+    """A file appended one whole line at a time, created owner-only.
 
-    A write that fails (a full disk, a quota, a file-size limit) stops the recording
-    for good: the failure is kept in :attr:`failure` and told once to ``on_failure``;
-    every later frame is skipped, so the work on screen goes on untouched. Each line is
-    one unbuffered write, so the file holds only whole lines up to the failure.
+    A write that fails (a full disk, a quota, a file-size limit) stops the file for
+    good: the failure is kept in :attr:`failure` and told once to ``on_failure``; every
+    later line is skipped, so the work on screen goes on untouched. Each line is one
+    unbuffered write, so the file holds only whole lines up to the failure.
     """
+
+    #: What the file is, in messages: ``cannot write the {what} FILE``.
+    what = "file"
+    #: ``{stopped}: No space left on device after 360 {unit}s (FILE)``.
+    stopped = "writing stopped"
+    unit = "line"
 
     def __init__(self, path: str, on_failure: Callable[[str], None] | None = None) -> None:
         """Raises InputError when the file cannot be opened for appending."""
         self.path = path
-        self.frames = 0
+        self.written = 0
         self.failure: str | None = None
         self._on_failure = on_failure
         try:
@@ -56,7 +61,46 @@ class FrameRecorder:
                 path, os.O_WRONLY | os.O_CREAT | os.O_APPEND | getattr(os, "O_BINARY", 0), 0o600
             )
         except OSError as exc:
-            raise InputError(f"cannot write the record file {path}: {exc.strerror}") from None
+            raise InputError(f"cannot write the {self.what} {path}: {exc.strerror}") from None
+
+    def append(self, line: bytes) -> None:
+        """One whole line (its newline included), unless the file stopped."""
+        if self._fd is None:
+            return
+        try:
+            append_whole(self._fd, line)
+        except OSError as exc:
+            self._fail(exc)
+            return
+        self.written += 1
+
+    def _fail(self, exc: OSError) -> None:
+        reason = exc.strerror or str(exc)
+        count = f"{self.written} {self.unit}{'s' * (self.written != 1)}"
+        self.failure = f"{self.stopped}: {reason} after {count} ({self.path})"
+        self.close()
+        if self._on_failure is not None:
+            self._on_failure(self.failure)
+
+    def close(self) -> None:
+        if self._fd is not None:
+            fd, self._fd = self._fd, None
+            with contextlib.suppress(OSError):
+                os.close(fd)
+
+
+class FrameRecorder(LineFile):
+    """A frame observer appending JSON lines: ``t``, ``dir``, ``text``, ``rtt_ms``
+    (``partial``, ``unsolicited``, and ``refused`` with why for a reply not taken).
+    A failing disk stops it, said once (see :class:`LineFile`)."""
+
+    what = "record file"
+    stopped = "recording stopped"
+    unit = "frame"
+
+    @property
+    def frames(self) -> int:
+        return self.written
 
     def __call__(self, frame: Frame) -> None:
         if self._fd is None:
@@ -75,23 +119,4 @@ class FrameRecorder:
             record["unsolicited"] = True
         if frame.problem is not None:
             record["refused"] = frame.problem  # a reply the session would not take
-        line = (json.dumps(record) + "\n").encode("ascii")
-        try:
-            append_whole(self._fd, line)
-        except OSError as exc:
-            self._fail(exc)
-            return
-        self.frames += 1
-
-    def _fail(self, exc: OSError) -> None:
-        reason = exc.strerror or str(exc)
-        self.failure = f"recording stopped: {reason} after {self.frames} frames ({self.path})"
-        self.close()
-        if self._on_failure is not None:
-            self._on_failure(self.failure)
-
-    def close(self) -> None:
-        if self._fd is not None:
-            fd, self._fd = self._fd, None
-            with contextlib.suppress(OSError):
-                os.close(fd)
+        self.append((json.dumps(record) + "\n").encode("ascii"))

@@ -26,6 +26,7 @@ class WatchRow:
     polled_at: float | None = None
     every: float | None = None  # this row's own poll period; None: the console's interval
     watched: bool = True  # False once unwatched (a poll cycle may still hold the row)
+    quiet: bool = False  # the next value is the first from a new target: no change
 
     @cached_property
     def request(self) -> Request:
@@ -42,8 +43,9 @@ class WatchRow:
         """A good value came; True when what a table shows changed."""
         same = variant is self.variant or variant == self.variant  # a repeated reply: the same
         shown_changed = self.status != OK or not same
-        if not same:
+        if not same and not self.quiet:
             self.changed_at = now
+        self.quiet = False
         self.variant = variant
         self.status, self.stale, self.polled_at = OK, False, now
         return shown_changed
@@ -101,6 +103,14 @@ class WatchList:
         for var in targets:
             self.rows.pop(var).watched = False
         return targets
+
+    def start_afresh(self) -> list[WatchRow]:
+        """A new target: every row forgets the old one's value and change, so nothing of
+        it is shown as the new one's (its first value is no change either)."""
+        for row in self.rows.values():
+            row.variant, row.status, row.stale = None, WAITING, False
+            row.changed_at, row.polled_at, row.quiet = None, None, True
+        return list(self.rows.values())
 
     def mark_all(self, status: str) -> list[WatchRow]:
         """Every row failed the same way (a lost connection); the rows whose view changed."""

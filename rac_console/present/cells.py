@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 from rich.text import Text
 
 from ..engine.events import OK, RowView
@@ -9,8 +11,45 @@ from ..protocol import Variant, vt_name
 from ..protocol.text import scalar_text
 
 HIGHLIGHT_SECONDS = 1.0
-#: How a value that changed within :data:`HIGHLIGHT_SECONDS` is marked (table and I/O grid).
-CHANGED_STYLE = "bold on #4a4a10"
+
+
+@dataclass(frozen=True, slots=True)
+class ChangeStyle:
+    """How a value that changed within :data:`HIGHLIGHT_SECONDS` stands out (table and
+    I/O grid): a background, and text that reads on it in the theme it is made for."""
+
+    value: str  # over a changed value: a table cell, an I/O grid's word
+    io_on: str  # then over the table's ON
+    io_off: str  # and its OFF
+    bit_on: str  # a changed ON bit in the I/O grid (its whole style)
+    bit_off: str  # a changed OFF bit
+
+
+#: On a dark theme (and the REPL's terminal, whatever its colours): white on olive (a
+#: theme's own text can be too pale on it: solarized-dark's is under 3:1), ON light
+#: green, OFF light red (the terminal's red is too dark on it), each above 4:1.
+CHANGED_DARK = ChangeStyle(
+    value="bold #ffffff on #4a4a10",
+    io_on="#87d787",
+    io_off="#ff8a80",
+    bit_on="bright_green bold on #4a4a10",
+    bit_off="#b0b0b0 on #4a4a10",
+)
+#: On a light theme, whose dark text is lost on olive (1.8:1 in textual-light): pale
+#: amber under near-black text, ON dark green, OFF dark red (grey in the grid, as OFF
+#: is there), each above 5:1. No ``dim``: it blends the text into the background.
+CHANGED_LIGHT = ChangeStyle(
+    value="bold #1a1a1a on #ffe082",
+    io_on="#006b1f",
+    io_off="#a40000",
+    bit_on="bold #006b1f on #ffe082",
+    bit_off="#555555 on #ffe082",
+)
+
+
+def change_style(dark: bool) -> ChangeStyle:
+    """The change highlight for a dark or a light theme (the console asks its theme)."""
+    return CHANGED_DARK if dark else CHANGED_LIGHT
 
 
 #: Numbers are right-aligned in at least this many columns; a longer one widens its cell.
@@ -25,7 +64,7 @@ def number_text(value: object, width: int = NUMBER_WIDTH) -> str:
     return f"{scalar_text(value):>{width}}"
 
 
-def value_cell(row: RowView, now: float) -> Text:
+def value_cell(row: RowView, now: float, change: ChangeStyle = CHANGED_DARK) -> Text:
     variant = row.variant
     if variant is None:
         return Text("—", style="dim")
@@ -45,7 +84,9 @@ def value_cell(row: RowView, now: float) -> Text:
     if row.stale:
         text.stylize("dim italic")
     elif row.changed_at is not None and now - row.changed_at < HIGHLIGHT_SECONDS:
-        text.stylize(CHANGED_STYLE)
+        text.stylize(change.value)
+        if kind.code == "IO":
+            text.stylize(change.io_on if variant.value else change.io_off)
     return text
 
 

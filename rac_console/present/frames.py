@@ -46,9 +46,48 @@ def _decode(body: bytes) -> str:
         return f"undecodable: {exc!r}"
 
 
+#: Columns of :func:`gap_text` (a gap of 1000 s or more takes more).
+GAP_WIDTH = 7
+
+
+def gap_text(seconds: float | None) -> str:
+    """The time since the previous frame, its unit chosen so the figure stays short:
+    `` +0.21ms``, ``+12.3ms``, `` +500ms``, ``+1.500s``, ``+12.50s``; blank for the first.
+
+    Each form is used while its rounding stays in range (9.996 ms is ``+10.0ms``, not
+    ``+10.00ms``): the bounds are where the next digit would round up. On every line the
+    log draws, so plain comparisons, no ``round``."""
+    if seconds is None:
+        return " " * GAP_WIDTH
+    ms = seconds * 1000 if seconds > 0 else 0.0
+    if ms < 9.995:
+        return f"+{ms:.2f}ms"
+    if ms < 99.95:
+        return f"+{ms:.1f}ms"
+    if ms < 999.5:
+        return f" +{ms:.0f}ms"
+    if ms < 9_999.5:
+        return f"+{seconds:.3f}s"
+    if ms < 99_995:
+        return f"+{seconds:.2f}s"
+    if ms < 999_950:
+        return f"+{seconds:.1f}s"
+    return f"{f'+{seconds:.0f}s':>{GAP_WIDTH}}"
+
+
+def hex_text(data: bytes) -> str:
+    """Every byte of a frame in hex, CR included: ``47 45 54 3a … 0d``."""
+    return data.hex(" ")
+
+
 def frame_line(frame: Frame) -> str:
     """``14:03:07.123 ← 0,3,123↵   0.21 ms  S_OK  VT_I4  123``."""
-    line = f"{clock_text(frame.time)} {ARROWS[frame.direction]} {wire_text(frame.data)}"
+    return f"{clock_text(frame.time)} {frame_body(frame)}"
+
+
+def frame_body(frame: Frame) -> str:
+    """A frame line after its time: ``← 0,3,123↵   0.21 ms  S_OK  VT_I4  123``."""
+    line = f"{ARROWS[frame.direction]} {wire_text(frame.data)}"
     if frame.direction == "tx":
         return line
     notes = []

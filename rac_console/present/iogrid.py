@@ -23,7 +23,8 @@ OFF                   dim                                                  ``○
 no value yet          struck through                                       ``?130``
 stale ON / OFF        italic on dark green / dim italic (value kept)       as ON / OFF
 changed (1 s)         the table's highlight: olive background, ON's
-                      digits green on it                                   as ON / OFF
+                      digits green on it (light themes: pale amber, ON     as ON / OFF
+                      dark green, OFF grey; see ``cells.ChangeStyle``)
 not watched           dim                                                  ``·``
 cursor                blue background, ON's digits bold green, OFF's plain as ON / OFF
 write in flight       underlined, over any of the above                    as ON / OFF
@@ -44,7 +45,7 @@ from rich.text import Text
 from ..commands.language import VarRef
 from ..engine.events import RowView
 from ..protocol.text import terminal_safe
-from .cells import CHANGED_STYLE, HIGHLIGHT_SECONDS
+from .cells import CHANGED_DARK, HIGHLIGHT_SECONDS, ChangeStyle
 
 GLYPH_ON = "●"
 GLYPH_OFF = "○"
@@ -62,7 +63,7 @@ STYLE_OFF = "dim"
 STYLE_UNKNOWN = "strike"
 STYLE_STALE = "dim italic"  # the word's, and a stale OFF bit's
 STYLE_STALE_ON = "italic on dark_green"
-STYLE_CHANGED_ON = f"bright_green {CHANGED_STYLE}"
+STYLE_CHANGED_ON = CHANGED_DARK.bit_on  # a dark theme's; a light one has its own
 STYLE_UNWATCHED = "dim"
 STYLE_HEX = "bold cyan"
 STYLE_CURSOR = "on blue"
@@ -231,8 +232,11 @@ def choose_layout(width: int, indices: Iterable[int], labels: Iterable[str] = ()
     return layout
 
 
-def bit_style(bit: Bit, cursor: bool = False, pending: bool = False) -> str:
-    """The style that alone tells a cell's state (see the module's table)."""
+def bit_style(
+    bit: Bit, cursor: bool = False, pending: bool = False, change: ChangeStyle = CHANGED_DARK
+) -> str:
+    """The style that alone tells a cell's state (see the module's table); ``change``
+    is the change highlight of the theme it is drawn in."""
     on = bit.state is BitState.ON
     if bit.state is BitState.UNWATCHED:
         parts = [STYLE_UNWATCHED]
@@ -243,7 +247,7 @@ def bit_style(bit: Bit, cursor: bool = False, pending: bool = False) -> str:
     elif bit.stale:
         parts = [STYLE_STALE_ON if on else STYLE_STALE]
     elif bit.changed:
-        parts = [STYLE_CHANGED_ON if on else f"{STYLE_OFF} {CHANGED_STYLE}"]
+        parts = [change.bit_on if on else change.bit_off]
     else:
         parts = [STYLE_ON if on else STYLE_OFF]
     if cursor:
@@ -281,7 +285,7 @@ def fit_label(label: str, width: int) -> str:
     return set_cell_size(safe, width)
 
 
-def word_text(word: Word, gap: int = 2) -> Text:
+def word_text(word: Word, gap: int = 2, change: ChangeStyle = CHANGED_DARK) -> Text:
     text = Text(" " * gap)
     text.append(word.hex_text(), style=STYLE_HEX)
     digits = len(str((1 << word.width) - 1))
@@ -289,7 +293,7 @@ def word_text(word: Word, gap: int = 2) -> Text:
     if word.stale:
         text.stylize(STYLE_STALE, gap)
     elif word.changed:
-        text.stylize(CHANGED_STYLE, gap)
+        text.stylize(change.value, gap)
     return text
 
 
@@ -298,10 +302,11 @@ def render_grid(
     layout: Layout,
     cursor: int | None = None,
     pending: frozenset[int] = frozenset(),
+    change: ChangeStyle = CHANGED_DARK,
 ) -> Text:
     """The grid as one Text, a line per :class:`GridLine`, the blanks between cells
     unstyled; ``cursor`` (an index) and the bits with a write in flight (``pending``)
-    drawn as :func:`bit_style` says."""
+    drawn as :func:`bit_style` says, a change with ``change`` (the theme's)."""
     text = Text(no_wrap=True, overflow="crop", end="")
     for n, line in enumerate(lines):
         if n:
@@ -311,9 +316,9 @@ def render_grid(
                 text.append(" " * layout.sep)
                 if k == 8 and layout.byte_gap:
                     text.append(" " * layout.byte_gap)
-            style = bit_style(bit, bit.index == cursor, bit.index in pending)
+            style = bit_style(bit, bit.index == cursor, bit.index in pending, change)
             text.append(cell_text(bit, layout), style=style)
-        text.append_text(word_text(line.word, layout.word_gap))
+        text.append_text(word_text(line.word, layout.word_gap, change))
     return text
 
 
@@ -338,9 +343,11 @@ def build_grid(
     width: int,
     cursor: int | None = None,
     pending: frozenset[int] = frozenset(),
+    change: ChangeStyle = CHANGED_DARK,
 ) -> Grid:
-    """The grid of the watched IO rows for a panel ``width`` columns wide."""
+    """The grid of the watched IO rows for a panel ``width`` columns wide, a change
+    highlighted with ``change`` (the theme's)."""
     bits = bits_from_rows(rows, now)
     layout = choose_layout(width, bits, (bit.label for bit in bits.values()))
     lines = grid_lines(bits, layout.per_line)
-    return Grid(tuple(lines), layout, render_grid(lines, layout, cursor, pending))
+    return Grid(tuple(lines), layout, render_grid(lines, layout, cursor, pending, change))

@@ -60,6 +60,8 @@ def outcome_text(outcome: Outcome) -> Text:
     if var is not None and variant is not None:
         line.append(f"{var} = ", style="bold")
         line.append_text(value_text(var, variant))
+    elif var is not None and outcome.written is not None and read_back_checked(outcome):
+        line.append_text(write_text(var, outcome))
     elif var is not None and outcome.written is not None:
         line.append(f"{var} ← ", style="bold")
         line.append_text(value_text(var, outcome.written))
@@ -76,8 +78,46 @@ def outcome_text(outcome: Outcome) -> Text:
     return line
 
 
+def read_back_checked(outcome: Outcome) -> bool:
+    """True for a PUT read back (or whose read-back failed): not one sent --no-verify."""
+    return outcome.read_back is not None or outcome.read_back_error is not None
+
+
+def write_text(var: VarRef, outcome: Outcome) -> Text:
+    """``I10: 14 → 15  S_OK  read back 15 ✓`` (``?`` for a value before not known)."""
+    line = Text()
+    line.append(f"{var}: ", style="bold")
+    if outcome.before is not None:
+        line.append_text(value_text(var, outcome.before))
+    else:
+        line.append("?", style="dim")
+    line.append(" → ")
+    if outcome.written is not None:
+        line.append_text(value_text(var, outcome.written))
+    response = outcome.response
+    if response is not None:
+        line.append(f"  {describe_response(response)}", style="green" if response.ok else "red")
+    if outcome.read_back is not None:
+        line.append("  read back ")
+        line.append_text(value_text(var, outcome.read_back))
+        if outcome.verified is True:
+            line.append(" ✓", style="bold green")
+        elif outcome.verified is False:
+            line.append(" ✗", style="bold red")
+    elif outcome.read_back_error is not None:
+        line.append(f"  {terminal_safe(outcome.read_back_error)}", style="red")
+    return line
+
+
 def error_text(outcome: Outcome, prefix: str = "") -> str:
     """One clear line: what failed and why, with the request and raw reply."""
+    var = outcome.var
+    if var is not None and outcome.response is not None and read_back_checked(outcome):
+        # The PUT was answered: the write line says it all, and why it is a failure.
+        why = f" ({outcome.error})" if outcome.error and outcome.response.ok else ""
+        if not outcome.response.ok:
+            why = f" ({outcome.summary()})"
+        return terminal_safe(prefix + write_text(var, outcome).plain + why)
     parts = [prefix + outcome.summary()]
     if outcome.request and outcome.response_text is None:
         parts.append(f"(request {outcome.request})")
@@ -86,6 +126,11 @@ def error_text(outcome: Outcome, prefix: str = "") -> str:
         if len(reply) > MAX_QUOTED_REPLY:  # the whole reply is in --json, the log and --record
             reply = f"{reply[:MAX_QUOTED_REPLY]}… ({len(reply)} characters)"
         parts.append(f"(request {outcome.request}, reply {reply})")
+    if var is not None and outcome.read_back is not None:  # a PUT whose outcome was unknown
+        parts.append("; read back")
+        parts.append(value_text(var, outcome.read_back).plain)
+        if outcome.verified is not None:
+            parts.append("(the value written)" if outcome.verified else "(not the value written)")
     return terminal_safe(" ".join(parts))
 
 

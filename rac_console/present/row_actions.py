@@ -109,9 +109,10 @@ class PendingToggles:
 
     A toggle writes the opposite of the value shown, so a second toggle before the row
     shows the first one's effect would write the same value again (or one nobody
-    meant). A row is busy from the key press until the write failed, or until a poll
-    after it shows the value written; failing that, the second cycle that polled the
-    row after the reply (the first may have polled it before the write went out).
+    meant). A row is busy from the key press until the write failed or was read back
+    (the read-back shows the row its new value at once); with ``--no-verify``, until a
+    poll after it shows the value written, failing that the second cycle that polled
+    the row after the reply (the first may have polled it before the write went out).
     """
 
     def __init__(self) -> None:
@@ -130,8 +131,9 @@ class PendingToggles:
         """The reply to a toggle: True when that row is free again (the write failed)."""
         for var, pending in self._rows.items():
             if pending.seq == result.seq:
-                if any(isinstance(f, Outcome) and f.ok for f in result.feedback):
-                    pending.answered = True
+                outcomes = [f for f in result.feedback if isinstance(f, Outcome)]
+                if any(f.ok and f.verified is None for f in outcomes):
+                    pending.answered = True  # not read back: a poll must show it
                     return False
                 del self._rows[var]
                 return True

@@ -6,7 +6,7 @@ from collections.abc import Callable, Iterable, Iterator
 
 from prompt_toolkit.completion import CompleteEvent, Completer, Completion
 from prompt_toolkit.document import Document
-from prompt_toolkit.formatted_text import StyleAndTextTuples
+from prompt_toolkit.formatted_text import FormattedText, StyleAndTextTuples
 from prompt_toolkit.history import History as PromptHistory
 from prompt_toolkit.layout.processors import (
     Processor,
@@ -18,7 +18,10 @@ from prompt_toolkit.styles import Style
 
 from ..commands.completion import complete, hint
 from ..commands.tokens import tokenize
+from ..engine import ConfirmWrite, Status
 from ..present.history import History
+from ..present.status import ink_on, profile_colour, target_label
+from ..protocol.text import terminal_safe
 
 STYLE = Style.from_dict(
     {
@@ -32,6 +35,10 @@ STYLE = Style.from_dict(
         "auto-suggestion": "#808080",
         "bottom-toolbar": "noreverse bg:#303030 #d0d0d0",
         "toolbar.readonly": "bold bg:ansiblue ansiwhite",
+        "toolbar.confirm": "bold bg:ansimagenta ansiwhite",
+        "toolbar.open": "",
+        "confirm": "bold",
+        "confirm.value": "bold ansiyellow",
         "toolbar.hint": "italic bg:#303030 #ffffaf",
         "prompt.sim": "bold ansiyellow",
         "prompt.live": "bold ansired",
@@ -40,16 +47,81 @@ STYLE = Style.from_dict(
 )
 
 
+def label_fragment_style(colour: str | None) -> str:
+    """A profile's label block: its colour behind, ink that reads on it; reversed for a
+    profile without a colour or with one nobody knows."""
+    parsed = profile_colour(colour)
+    if parsed is None:
+        return "bold reverse"
+    red, green, blue = parsed.get_truecolor()
+    ink = "#000000" if ink_on(parsed) == "black" else "#ffffff"
+    return f"bold bg:#{red:02x}{green:02x}{blue:02x} {ink}"
+
+
+def prompt_fragments(status: Status | None, lost: bool) -> FormattedText:
+    """``sim> ``, ``HOST:PORT> ``, `` Cell 3 — welding > `` (a profile's label in its
+    colour) or ``not connected> ``."""
+    if status is None or not status.has_session or (lost and status.connection != "connected"):
+        return FormattedText([("class:prompt.off", "not connected"), ("", "> ")])
+    label = target_label(status)
+    if label is not None:
+        return FormattedText([(label_fragment_style(status.colour), f" {label} "), ("", "> ")])
+    if status.is_simulator:
+        return FormattedText([("class:prompt.sim", "sim"), ("", "> ")])
+    return FormattedText([("class:prompt.live", f"{status.host}:{status.port}"), ("", "> ")])
+
+
+def toolbar_fragments(status: Status) -> FormattedText:
+    """The toolbar's target: the profile's label in its colour, the target, and what
+    it lets be written (``READ-ONLY``, ``CONFIRM WRITES``, ``writes open``)."""
+    parts: StyleAndTextTuples = []
+    label = target_label(status)
+    if label is not None:
+        parts.append((label_fragment_style(status.colour), f" {label} "))
+    parts.append(("", f" {terminal_safe(status.target)} "))
+    if status.read_only:
+        parts.append(("class:toolbar.readonly", " READ-ONLY "))
+    elif status.writes == "confirm":
+        parts.append(("class:toolbar.confirm", " CONFIRM WRITES "))
+    elif status.writes == "open":
+        parts.append(("class:toolbar.open", " writes open "))
+    return FormattedText(parts)
+
+
+def confirm_message(question: ConfirmWrite) -> FormattedText:
+    """``Write I10: 14 → 15 on Cell 3 — welding? [y/N] `` (default No)."""
+    before = question.before
+    where = question.label or question.target
+    return FormattedText(
+        [
+            ("class:confirm", f"Write {terminal_safe(question.var)}: "),
+            (
+                "class:confirm.value" if before is not None else "italic",
+                terminal_safe(before) if before is not None else "value now unknown",
+            ),
+            ("class:confirm", " → "),
+            ("class:confirm.value", terminal_safe(question.after)),
+            ("class:confirm", f" on {terminal_safe(where)}? "),
+            ("bold", "[y/N] "),
+        ]
+    )
+
+
 class RacCompleter(Completer):
     """Candidates from :func:`complete`, each with its one line of help."""
 
-    def __init__(self, seen: Callable[[], Iterable[tuple[str, int]]]) -> None:
+    def __init__(
+        self,
+        seen: Callable[[], Iterable[tuple[str, int]]],
+        targets: Iterable[tuple[str, str]] = (),
+    ) -> None:
         self._seen = seen
+        self._targets = tuple(targets)  # the profiles connect completes to
 
     def get_completions(
         self, document: Document, complete_event: CompleteEvent
     ) -> Iterator[Completion]:
-        for candidate in complete(document.text_before_cursor, self._seen()):
+        for candidate in complete(document.text_before_cursor, self._seen(), self._targets):
             yield Completion(
                 candidate.text, start_position=-candidate.start, display_meta=candidate.help
             )

@@ -11,6 +11,7 @@ from prompt_toolkit import PromptSession
 from prompt_toolkit.auto_suggest import AutoSuggestFromHistory
 from prompt_toolkit.formatted_text import FormattedText
 from prompt_toolkit.input import Input
+from prompt_toolkit.input.typeahead import clear_typeahead
 from prompt_toolkit.key_binding import KeyBindings, KeyPressEvent
 from prompt_toolkit.keys import Keys
 from prompt_toolkit.output import Output
@@ -22,10 +23,13 @@ from rich.text import Text
 from ..commands.completion import hint
 from ..commands.language import Unwatch, VarRef, Watch
 from ..commands.outcome import ExitStatus, Outcome
+from ..commands.profiles import completion_targets
 from ..engine import (
+    CONFIRM_GUARD_SECONDS,
     SIMULATOR_NOTICE,
     Alert,
     Batch,
+    ConfirmWrite,
     Engine,
     Message,
     Note,
@@ -41,7 +45,16 @@ from ..present.history import History
 from ..present.render import error_text, make_console, notice_text, outcome_text
 from ..protocol.text import terminal_safe
 from ..session import Frame
-from .prompt_parts import STYLE, HintProcessor, RacCompleter, RacLexer, SharedHistory
+from .prompt_parts import (
+    STYLE,
+    HintProcessor,
+    RacCompleter,
+    RacLexer,
+    SharedHistory,
+    confirm_message,
+    prompt_fragments,
+    toolbar_fragments,
+)
 
 
 def _no_mouse() -> KeyBindings:
@@ -85,11 +98,14 @@ class Repl:
         self._waiting: dict[int, asyncio.Future[Result]] = {}
         self._wake = asyncio.Event()
         self._closing = False
+        self.asking: ConfirmWrite | None = None  # the confirm question on screen
+        self._confirm_prompt: PromptSession[str] | None = None
+        self._questions: set[asyncio.Task[None]] = set()
         self.prompt: PromptSession[str] = PromptSession(
             message=self.prompt_message,
             history=SharedHistory(history),
             auto_suggest=AutoSuggestFromHistory(),
-            completer=RacCompleter(self._seen),
+            completer=RacCompleter(self._seen, completion_targets(engine.profiles)),
             complete_while_typing=False,
             lexer=RacLexer(),
             input_processors=[HintProcessor()],
@@ -107,31 +123,20 @@ class Repl:
         return self.status.seen if self.status is not None else frozenset()
 
     def prompt_message(self) -> FormattedText:
-        status = self.status
-        if (
-            status is None
-            or not status.has_session
-            or (self.lost and status.connection != "connected")
-        ):
-            return FormattedText([("class:prompt.off", "not connected"), ("", "> ")])
-        if status.is_simulator:
-            return FormattedText([("class:prompt.sim", "sim"), ("", "> ")])
-        return FormattedText([("class:prompt.live", f"{status.host}:{status.port}"), ("", "> ")])
+        return prompt_fragments(self.status, self.lost)
 
     def toolbar(self) -> FormattedText:
         status = self.status
-        target = status.target if status is not None else "starting"
         rtt = status.rtt if status is not None else None
         rtt_text = f"rtt {rtt * 1000:.2f} ms" if rtt is not None else "rtt –"
-        parts = [("", f" {terminal_safe(target)}  {rtt_text} ")]
+        parts = list(toolbar_fragments(status) if status is not None else [("", " starting ")])
+        parts.append(("", f" {rtt_text} "))
         if self.frames:
             parts.append(("", " frames on "))
         buffer = self.prompt.default_buffer
         needs = hint(buffer.text) if buffer.suggestion is not None else ""
         if needs:  # the history suggestion holds the grey text: the hint shows here
             parts.append(("class:toolbar.hint", f" needs: {needs} "))
-        if status is not None and status.read_only:
-            parts.append(("class:toolbar.readonly", " READ-ONLY "))
         return FormattedText(parts)
 
     # ------------------------------------------------------------- outbox
@@ -149,8 +154,43 @@ class Repl:
                     waiter.set_result(event)
                 else:
                     self._show_result(event)
+            elif isinstance(event, ConfirmWrite):
+                task = asyncio.get_running_loop().create_task(self.confirm(event))
+                self._questions.add(task)
+                task.add_done_callback(self._questions.discard)
             else:
                 self._echo(event)
+
+    async def confirm(self, question: ConfirmWrite) -> None:
+        """A write on a ``confirm`` target: ``Write I10: 14 → 15 on Cell 3? [y/N]``; only
+        y or yes writes. Keys typed ahead before the question are dropped, not taken as
+        its answer; Ctrl-C or Ctrl-D is a No. (Without a terminal, ``run`` refuses.)"""
+        if self._confirm_prompt is None:
+            self._confirm_prompt = PromptSession(
+                style=STYLE, input=self.prompt.input, output=self.prompt.output
+            )
+        self.asking = question
+        yes = False
+        try:
+            while True:
+                clear_typeahead(self.prompt.input)
+                asked_at = time.monotonic()
+                answer = await self._confirm_prompt.prompt_async(confirm_message(question))
+                yes = answer.strip().lower() in ("y", "yes")
+                if not yes or time.monotonic() - asked_at >= CONFIRM_GUARD_SECONDS:
+                    break
+                self.console.print(
+                    notice_text(
+                        f"answered within {CONFIRM_GUARD_SECONDS:g} s of the question, as keys "
+                        "typed ahead would be: answer again",
+                        error=True,
+                    )
+                )
+        except (KeyboardInterrupt, EOFError):
+            yes = False
+        finally:
+            self.asking = None
+            self.engine.answer_confirm(question.seq, yes)
 
     async def _drain_forever(self) -> None:
         # asyncio.timeout, not wait_for: 3.11's wait_for can swallow the cancellation that

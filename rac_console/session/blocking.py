@@ -148,7 +148,10 @@ class Session:
         if not quiet and self._peer_spoke(sock) and self._discard_waiting(sock):
             sock = self._connected()
         data = machine.begin(request)
+        # Both clocks read before sendall: after it the thread may run again only once
+        # the reply is in (the GIL, the scheduler), and the frame must say when it left.
         sent_at = time.perf_counter()
+        sent_time = time.time()
         try:
             sock.sendall(data)
         except (TimeoutError, BlockingIOError):  # the peer has not read for a timeout
@@ -159,10 +162,15 @@ class Session:
             self._drop()
             raise Disconnected(f"the connection failed while sending: {_reason(exc)}") from None
         if self._frame_observers:
-            self._publish(Frame(time.time(), "tx", data, poll=poll))
-        return self._await_reply(sock, sent_at, poll)
+            self._publish(Frame(sent_time, "tx", data, poll=poll))
+        return self._await_reply(sock, sent_at, sent_time, poll)
 
-    def _await_reply(self, sock: socket.socket, sent_at: float, poll: bool) -> Reply:
+    def _await_reply(
+        self, sock: socket.socket, sent_at: float, sent_time: float, poll: bool
+    ) -> Reply:
+        """The reply to the request sent at ``sent_at`` (``time.perf_counter()``), which
+        is ``sent_time`` (``time.time()``): a reply's frame is stamped ``sent_time + rtt``,
+        so the log's times and gaps agree with the round trip."""
         machine = self._machine
         deadline = sent_at + self.timeout
         first = True
@@ -190,9 +198,11 @@ class Session:
             verdict = machine.feed(chunk)
             if verdict.answer is None and not verdict.drop:
                 continue
-            return self._conclude(verdict, now - sent_at, poll, now)
+            return self._conclude(verdict, now - sent_at, poll, now, sent_time + now - sent_at)
 
-    def _conclude(self, verdict: Verdict, rtt: float, poll: bool, now: float) -> Reply:
+    def _conclude(
+        self, verdict: Verdict, rtt: float, poll: bool, now: float, arrived: float
+    ) -> Reply:
         observers = bool(self._frame_observers)
         answer = verdict.answer
         response = verdict.response
@@ -200,7 +210,7 @@ class Session:
             # The usual reply: one good line, nothing else (a drop is set for anything else).
             if observers:
                 self._publish(
-                    Frame(time.time(), "rx", answer + b"\r", rtt, poll=poll, response=response)
+                    Frame(arrived, "rx", answer + b"\r", rtt, poll=poll, response=response)
                 )
             self._replied_at = now
             self.last_rtt = rtt
@@ -208,7 +218,7 @@ class Session:
         if answer is not None and observers:
             self._publish(
                 Frame(
-                    time.time(),
+                    arrived,
                     "rx",
                     answer + b"\r",
                     rtt,
@@ -220,10 +230,10 @@ class Session:
         if verdict.strays:
             self._saw_stray()
         for stray in verdict.strays:
-            self._publish(Frame(time.time(), "rx", stray, unsolicited=True))
+            self._publish(Frame(arrived, "rx", stray, unsolicited=True))
         if verdict.too_long is not None:
             tail = verdict.too_long
-            self._publish(Frame(time.time(), "rx", tail, unsolicited=answer is not None))
+            self._publish(Frame(arrived, "rx", tail, unsolicited=answer is not None))
         if verdict.drop:
             self._drop()
         if verdict.problem is not None:

@@ -5,18 +5,20 @@ from __future__ import annotations
 import asyncio
 import time
 from collections import deque
+from collections.abc import Sequence
 from typing import ClassVar
 
 from rich.text import Text
 from textual import on
 from textual.app import App, ComposeResult
 from textual.binding import Binding, BindingType
-from textual.widgets import Footer, RichLog, Static
+from textual.widgets import RichLog, Static
 from textual.worker import Worker, WorkerState
 
 from .. import __version__
 from ..commands.language import Simple, Step, VarRef, WatchFile
 from ..commands.outcome import Outcome
+from ..commands.profiles import completion_targets
 from ..engine import (
     SIMULATOR_NOTICE,
     Alert,
@@ -30,15 +32,21 @@ from ..engine import (
     Status,
     UiStep,
 )
+from ..engine.config import config_path
+from ..engine.settings import SettingsFile
 from ..present.history import History
 from ..present.render import error_text, notice_text, outcome_text
 from ..present.row_actions import PendingToggles
-from ..present.status import status_text
+from ..present.status import target_label
 from ..present.trends import TrendStore
 from ..protocol.text import counted, terminal_safe
 from .command_line import CommandLine
-from .frame_log import FrameLog
+from .confirm_screen import ConfirmWriteScreen, border_colour
+from .footer import FittingFooter
+from .frame_log import FrameLog, LogActions, log_filter_line
 from .io_panel import IoPanel, WatchArea
+from .palette import ConsoleCommands, PaletteActions, Providers
+from .settings import SettingsKeeper
 from .status_bar import StatusBar
 from .table_actions import TableActions, TableFilter
 from .trend_view import TrendView
@@ -52,28 +60,51 @@ MAX_CANDIDATE_LINES = 7
 TABLE_REFRESH_HZ = 5
 
 
-class RacConsoleApp(TableActions, App[int]):
+class RacConsoleApp(PaletteActions, TableActions, LogActions, App[int]):
     CSS_PATH = "app.tcss"
+    COMMANDS: ClassVar[Providers] = {ConsoleCommands}  # ours, then Textual's (palette.py)
     TITLE = "rac-console"
     BINDINGS: ClassVar[list[BindingType]] = [
+        # In the footer in this order, after the focused pane's keys, as many as fit.
+        Binding("escape", "cancel_command", "Cancel command", id="cancel-command"),
         Binding("ctrl+q", "quit", "Quit", id="quit", priority=True),
+        Binding("f1", "help", "Help", id="help"),
+        # F2 and F4 say what they will do: check_action shows one of each pair.
         Binding("f2", "toggle_polling", "Pause polls", id="toggle-polling"),
-        Binding("f3", "toggle_poll_frames", "Poll frames", id="toggle-poll-frames"),
+        Binding("f2", "toggle_polling('resume')", "Resume polls", id="resume-polling"),
         Binding("f4", "toggle_scroll", "Freeze log", id="toggle-scroll"),
-        Binding("f5", "toggle_io_grid", "I/O grid", id="toggle-io-grid"),
-        Binding("ctrl+l", "clear_log", "Clear log", id="clear-log"),
+        Binding("f4", "toggle_scroll('follow')", "Follow log", id="follow-log"),
         # Priority: taken as the key arrives, so the keys typed right after it go to the
         # new pane (without it they were already on their way to the old one).
         Binding("f6", "focus_pane(1)", "Next pane", id="next-pane", priority=True),
-        Binding("shift+f6", "focus_pane(-1)", "Previous pane", id="previous-pane", priority=True),
-        Binding("escape", "cancel_command", "Cancel command", id="cancel-command"),
+        Binding("f5", "toggle_io_grid", "I/O grid", id="toggle-io-grid"),
+        Binding("f3", "toggle_poll_frames", "Poll frames", id="toggle-poll-frames"),
+        Binding("f7", "toggle_hex", "Hex view", id="toggle-hex"),
+        Binding("ctrl+l", "clear_log", "Clear log", id="clear-log"),
+        Binding(
+            "shift+f6",
+            "focus_pane(-1)",
+            "Previous pane",
+            show=False,
+            id="previous-pane",
+            priority=True,
+        ),
     ]
 
-    def __init__(self, engine: Engine, history: History, watch_file: str | None = None) -> None:
+    def __init__(
+        self,
+        engine: Engine,
+        history: History,
+        watch_file: str | None = None,
+        profile_names: Sequence[str] = (),
+        settings: SettingsFile | None = None,
+    ) -> None:
         super().__init__()
         self.engine = engine
         self.history = history
         self.watch_file = watch_file
+        self.profile_names = tuple(profile_names)  # the palette offers connect NAME
+        self.kept = SettingsKeeper(self, settings)  # theme, I/O grid, log toggles
         self.status: Status | None = None
         self.rows: dict[VarRef, RowView] = {}
         self._removed: set[VarRef] = set()
@@ -89,6 +120,7 @@ class RacConsoleApp(TableActions, App[int]):
         self.table_filter = TableFilter(self.table, id="table-filter")
         self.trend_view = TrendView(self.trends, id="trend")
         self.frame_log = FrameLog(id="log")
+        self.log_filter = log_filter_line(self.frame_log)
         self.io_panel = IoPanel(self.toggles.busy, id="io")
         self.completions = Static(id="completions")
         self.hint = Static(id="hint")
@@ -101,6 +133,7 @@ class RacConsoleApp(TableActions, App[int]):
             id="command",
             placeholder="get P 1 · put IO 20 on · watch IO 0-7 · help",
         )
+        self.command_line.targets = tuple(completion_targets(engine.profiles))
 
     def compose(self) -> ComposeResult:
         yield self.status_bar
@@ -109,18 +142,20 @@ class RacConsoleApp(TableActions, App[int]):
             yield self.io_panel
         yield self.table_filter
         yield self.frame_log
+        yield self.log_filter
         yield self.trend_view
         yield self.completions
         yield self.results
         yield self.hint
         yield self.command_line
-        yield Footer(compact=True)
+        yield FittingFooter()
 
     async def on_mount(self) -> None:
-        self.frame_log.border_title = "Frames (→ sent, ← received)"
+        self.kept.apply()
         await asyncio.to_thread(self.engine.start)
         self.drain_outbox()
         self._welcome()
+        self.kept.say_problems()
         if self.watch_file:
             self.engine.submit_command(WatchFile("load", self.watch_file))
         self.set_interval(1 / DRAIN_HZ, self.drain_outbox)
@@ -130,6 +165,7 @@ class RacConsoleApp(TableActions, App[int]):
         self.command_line.focus()
 
     async def on_unmount(self) -> None:
+        self.kept.save(at_exit=True)
         await asyncio.to_thread(self.engine.stop)
         self.status = self.engine.outbox.drain().status or self.status
 
@@ -151,7 +187,9 @@ class RacConsoleApp(TableActions, App[int]):
             results.write(
                 Text.assemble(
                     ("LIVE", "bold white on red"),
-                    f" controller {terminal_safe(f'{status.host}:{status.port}')}.",
+                    f" controller {terminal_safe(f'{status.host}:{status.port}')}",
+                    _profile_words(status),
+                    ".",
                 )
             )
         results.write(
@@ -173,7 +211,13 @@ class RacConsoleApp(TableActions, App[int]):
         if batch.status is not None:
             if self.status is None or batch.status.target != self.status.target:
                 self.sub_title = terminal_safe(batch.status.target)
+            if self.status is not None and batch.status.target_id != self.status.target_id:
+                self.trends.clear()  # the last target's samples are not the new one's
+            if self.status is None or _shown_target(batch.status) != _shown_target(self.status):
+                self.show_target(batch.status)
+            self.follow_status(self.status, batch.status)
             self.status = batch.status
+            self.frame_log.slow_after = batch.status.timeout / 2  # a slow reply stands out
         batch.apply_rows(self.rows)
         self._removed |= batch.removed
         self.forget_rows(batch.removed - batch.rows.keys())
@@ -221,15 +265,12 @@ class RacConsoleApp(TableActions, App[int]):
         self.io_panel.refresh_rows(self.rows, time.monotonic())
         if self.status is None:
             return
-        line = status_text(
+        self._status_line = self.status_bar.show(  # for its width; repainted if changed
             self.status,
             self.engine.outbox.waiting_since,
             self.frames_per_second(),
             running=self._running_line(),
         )
-        if line != self._status_line:  # an unchanged line costs no repaint
-            self._status_line = line
-            self.status_bar.update(line)
 
     # ------------------------------------------------------------- commands
 
@@ -260,9 +301,15 @@ class RacConsoleApp(TableActions, App[int]):
         return line, time.monotonic() - since, len(self.lines_pending) - 1
 
     def check_action(self, action: str, parameters: tuple[object, ...]) -> bool | None:
-        """Esc cancels only while a typed line is running (elsewhere it leaves a pane)."""
+        """Esc cancels only while a typed line is running (elsewhere it leaves a pane);
+        F2 and F4 show the one of their pair that says what they will do."""
         if action == "cancel_command":
             return bool(self.lines_pending)
+        if action == "toggle_polling":
+            paused = self.status is not None and self.status.paused
+            return paused == (parameters == ("resume",))
+        if action == "toggle_scroll":
+            return self.frame_log.auto_scroll != (parameters == ("follow",))
         return True
 
     def action_cancel_command(self) -> None:
@@ -341,7 +388,7 @@ class RacConsoleApp(TableActions, App[int]):
 
     # -------------------------------------------------------------- actions
 
-    def action_toggle_polling(self) -> None:
+    def action_toggle_polling(self, _shown: str = "") -> None:
         paused = not (self.status is not None and self.status.paused)
         self.engine.submit_command(Simple(Step.PAUSE if paused else Step.RESUME))
 
@@ -356,10 +403,11 @@ class RacConsoleApp(TableActions, App[int]):
             )
         )
 
-    def action_toggle_scroll(self) -> None:
+    def action_toggle_scroll(self, _shown: str = "") -> None:
         log = self.frame_log
         log.auto_scroll = not log.auto_scroll
-        log.border_title = "Frames" + ("" if log.auto_scroll else " (FROZEN: F4 follows)")
+        self.refresh_bindings()  # F4 says what it will do now
+        log.update_title()
         if log.auto_scroll:
             log.scroll_end(animate=False)
 
@@ -376,13 +424,53 @@ class RacConsoleApp(TableActions, App[int]):
         self.refresh_table()
 
     def confirm_write(self, question: ConfirmWrite) -> None:
-        """A write on a ``confirm`` target asks first (the modal comes with profiles)."""
-        self.engine.answer_confirm(question.seq, False)
+        """A write on a ``confirm`` target asks first: old → new, ``[y/N]``, default No;
+        the engine polls on until the answer, then the focus is back where it was (a
+        table row or a grid bit: the next Space toggles the next one)."""
+        colour = self.status.colour if self.status is not None else None
+
+        def answered(yes: bool | None) -> None:
+            self.engine.answer_confirm(question.seq, bool(yes))
+
+        self.push_screen(ConfirmWriteScreen(question, colour), answered)
+
+    def show_target(self, status: Status) -> None:
+        """A profile's colour around the whole console and its label in the border's
+        title, so two consoles on two robots can't be mixed up; none without a profile
+        (the simulator, a plain host). A colour nobody knows keeps the default one."""
+        screen = self.screen_stack[0]
+        label = target_label(status)
+        screen.set_class(label is not None, "-profile")
+        colour = border_colour(status.colour) if label is not None else None
+        if colour is not None:
+            screen.styles.border = ("heavy", colour)
+        else:
+            screen.styles.border = None  # the stylesheet's, for -profile or not
+        screen.border_title = Text(f" {label} ") if label is not None else None
 
     def action_clear_log(self) -> None:
         self.frame_log.clear()
 
 
-def run_console(engine: Engine, history: History, watch_file: str | None) -> int:
-    app = RacConsoleApp(engine, history, watch_file)
+def _profile_words(status: Status) -> str:
+    """``, profile cell3 (Cell 3 — welding): writes confirm`` for a profile, else ''."""
+    if status.profile is None:
+        return ""
+    label = f" ({terminal_safe(status.label)})" if status.label else ""
+    return f", profile {terminal_safe(status.profile)}{label}: writes {status.writes}"
+
+
+def _shown_target(status: Status) -> tuple[str | None, str | None, str | None]:
+    """What the border shows of a target: its profile, label and colour."""
+    return status.profile, status.label, status.colour
+
+
+def run_console(
+    engine: Engine, history: History, watch_file: str | None, profile_names: Sequence[str] = ()
+) -> int:
+    """The console; ``profile_names`` are the config file's targets (the palette's
+    ``connect NAME`` entries)."""
+    app = RacConsoleApp(
+        engine, history, watch_file, profile_names, settings=SettingsFile(config_path())
+    )
     return app.exit_status(app.run() or 0)

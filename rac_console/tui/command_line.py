@@ -39,6 +39,8 @@ class HintSuggester(Suggester):
 
 
 class CommandLine(Input):
+    #: What ``connect`` completes to besides sim: (profile name, its label), set by the app.
+    targets: tuple[tuple[str, str], ...] = ()
     BINDINGS: ClassVar[list[BindingType]] = [
         Binding("tab", "complete", "Complete", id="complete"),
         Binding("up", "history(-1)", "History back", show=False, id="history-back"),
@@ -59,6 +61,9 @@ class CommandLine(Input):
             super().__init__()
             self.value = value  # the line it was made for: a late one is ignored
             self.text = text
+
+    class HelpRequested(Message):
+        """``?`` typed on an empty line: the app opens the help."""
 
     class Completions(Message):
         """Several candidates fit: the app lists them with their help."""
@@ -87,6 +92,11 @@ class CommandLine(Input):
         Backspace or Tab reach the line before those keys act: Enter then submitted a
         line merged with the next one. Handled here, every key acts in the order typed.
         """
+        if event.character == "?" and not self.value:
+            event.stop()
+            event.prevent_default()
+            self.post_message(self.HelpRequested())
+            return  # on an empty line ? asks for help; anywhere else it is a character
         if event.is_printable:
             return  # Input inserts it, in order
         for binding in self._bindings.key_to_bindings.get(event.key, ()):
@@ -145,7 +155,7 @@ class CommandLine(Input):
 
     def action_complete(self) -> None:
         text = self.value[: self.cursor_position]
-        candidates = complete(text, self._seen())
+        candidates = complete(text, self._seen(), self.targets)
         if not candidates:
             return
         start = len(text) - candidates[0].start

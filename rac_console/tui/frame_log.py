@@ -1,44 +1,189 @@
-"""The raw frame log: one line per frame, written in batches, bounded in memory."""
+"""The raw frame log: one line per frame, written in batches, bounded in memory.
+
+Besides the lines drawn, the log keeps the last :data:`KEPT` frames it was given (the
+frames themselves: a frame's gap and the request a reply answers follow from the order),
+so the hex view (F7), the frame times, the filter (``/``) and the poll frames (F3) redraw
+what is on screen, not only what comes.
+Lines are plain strings (cheap to write at thousands a second); the few on screen are
+styled as they are drawn, by :class:`FrameHighlighter`.
+"""
 
 from __future__ import annotations
 
+import math
+import re
 import time
 from collections import deque
 from typing import ClassVar
 
 from rich.cells import cell_len
+from rich.highlighter import Highlighter
+from rich.text import Text
 from textual.binding import Binding, BindingType
 from textual.widgets import Log
 
-from ..engine import Alert, Note
-from ..present.frames import clock_text, frame_line
-from ..protocol.text import terminal_safe
+from ..engine import Alert, Feedback, Message, Note
+from ..present.filtering import FrameFilter, add_filter_title
+from ..present.frames import clock_text, frame_body, gap_text, hex_text
+from ..protocol.text import counted, terminal_safe
 from ..session import Frame
+from .filter_line import FilterLine
 
 MAX_LINES = 5000
 MAX_PENDING = 50_000
 #: Lines drawn per flush (10 a second) at most: past it only the newest are drawn, and one
 #: line says how many were not (drawing them cost the poller its CPU, unread).
 MAX_LINES_PER_FLUSH = 500
+#: Frames (and notes) kept to be drawn again: by the hex view, the frame times, the
+#: filter and F3. The filter looks through these.
+KEPT = 20_000
+#: Between a frame's text and its bytes in hex, when both fit the width.
+HEX_SEPARATOR = "  │ "
+TITLE = "Frames (→ sent, ← received)"
+FROZEN_TITLE = "Frames (FROZEN: F4 follows)"
+FILTER_HINT = "filter frames: text, or a variable (IO128, I 10, P[3]): its requests and replies"
+#: A gap before a reply at least this long (the app sets half the timeout) stands out.
+SLOW_STYLE = "bold black on yellow"
+
+
+#: What the log holds: a frame, or a note (its time and text).
+Event = Frame | tuple[float, str]
+#: An event as drawn: with its gap (seconds since the frame before it on the wire) and its
+#: request (a request's own bytes, a reply's request's, None for anything else).
+Drawn = tuple[Event, float | None, bytes | None]
 
 
 class FrameLog(Log):
-    """Frames are queued as they cross the wire and written by :meth:`flush` at ~20 Hz:
-    one ``write_lines`` per screen refresh instead of one per frame."""
+    """Frames are queued as they cross the wire and written by :meth:`flush` at ~10 Hz:
+    one ``write_lines`` per flush instead of one per frame."""
 
     BINDINGS: ClassVar[list[BindingType]] = [
         Binding("escape", "app.focus_command_line", "Command line", id="log-leave"),
+        # Priority: the filter line opens as the key arrives, so the keys typed right
+        # after it go there (the log takes no other printable key).
+        Binding("slash", "app.filter_frames", "Filter", id="log-filter", priority=True),
+        Binding("t", "app.toggle_frame_times", "Frame times", id="log-frame-times"),
         Binding("tab", "app.focus_pane(1)", "Next pane", show=False, id="log-next-pane"),
         Binding("shift+tab", "app.focus_pane(-1)", "Previous pane", show=False, id="log-prev"),
     ]
 
     def __init__(self, **kwargs: object) -> None:
-        super().__init__(max_lines=MAX_LINES, auto_scroll=True, **kwargs)  # type: ignore[arg-type]
-        self._pending: deque[Frame | tuple[float, str]] = deque(maxlen=MAX_PENDING)
-        self.show_polls = True
+        super().__init__(highlight=True, max_lines=MAX_LINES, auto_scroll=True, **kwargs)  # type: ignore[arg-type]
+        self.highlighter: FrameHighlighter = FrameHighlighter()
+        self._pending: deque[Event] = deque(maxlen=MAX_PENDING)
+        self._kept: deque[Event] = deque()
+        # The wire before the oldest kept event (its frame's time, the request waiting),
+        # and after the newest: a gap and a reply's request follow from them.
+        self._base: tuple[float | None, bytes | None] = (None, None)
+        self._last_time: float | None = None
+        self._request: bytes | None = None
+        self._bodies: dict[int, str] = {}  # kept frames' lines after their time, by id
+        self._frames_kept = 0
+        self._frames_shown = 0  # counted while narrowed (a filter, or polls hidden)
+        self._show_polls = True
+        self._hex_view = False
+        self._show_gaps = True
+        self._filter = FrameFilter()
+        self._narrowed = False  # a filter, or poll frames hidden: not every frame shows
+        self._hex_width = 0  # the width the hex was laid out for
+        self._title: Text | None = None
+
+    # ------------------------------------------------------------- options
+
+    @property
+    def show_polls(self) -> bool:
+        """Poll frames shown (F3); hiding them hides the ones on screen too."""
+        return self._show_polls
+
+    @show_polls.setter
+    def show_polls(self, shown: bool) -> None:
+        if shown != self._show_polls:
+            self._show_polls = shown
+            self._rematch()
+
+    @property
+    def hex_view(self) -> bool:
+        """Each frame's bytes in hex, beside its text (under it when both do not fit)."""
+        return self._hex_view
+
+    @hex_view.setter
+    def hex_view(self, shown: bool) -> None:
+        if shown != self._hex_view:
+            self._hex_view = shown
+            self._redraw()
+
+    @property
+    def show_gaps(self) -> bool:
+        """The time since the previous frame, on each frame's line."""
+        return self._show_gaps
+
+    @show_gaps.setter
+    def show_gaps(self, shown: bool) -> None:
+        if shown != self._show_gaps:
+            self._show_gaps = shown
+            self._redraw()
+
+    @property
+    def slow_after(self) -> float:
+        """A reply this many seconds after its request has its gap highlighted."""
+        return self.highlighter.slow_after
+
+    @slow_after.setter
+    def slow_after(self, seconds: float) -> None:
+        if seconds != self.highlighter.slow_after:
+            self.highlighter.slow_after = seconds
+            self._render_line_cache.clear()
+            self.refresh()
+
+    @property
+    def filter_text(self) -> str:
+        return self._filter.typed
+
+    def set_filter(self, text: str) -> None:
+        """Show only the frames that name a variable (and their replies), or hold a text."""
+        new = FrameFilter.of(text)
+        if (new.needle, new.var) == (self._filter.needle, self._filter.var):
+            self._filter = new  # as typed, for the title
+            self.update_title()
+            return
+        self._filter = new
+        self._rematch()
+
+    @property
+    def frames_kept(self) -> int:
+        return self._frames_kept
+
+    @property
+    def title_text(self) -> str:
+        """The border title as plain text."""
+        return self._title.plain if self._title is not None else ""
+
+    def update_title(self) -> None:
+        """Frozen or following, the hex view, the filter and how many frames pass it."""
+        title = Text(TITLE if self.auto_scroll else FROZEN_TITLE)
+        if self._hex_view:
+            title.append("  hex")
+        if self._filter:
+            add_filter_title(title, self._filter.typed)
+        if self._filter or not self._show_polls:
+            title.append(f"  {self._frames_shown} of {counted(self._frames_kept, 'frame')}")
+        if not self._show_polls:
+            title.append("  polls hidden (F3)")
+        if title != self._title:
+            self._title = title
+            self.border_title = title
+
+    # ---------------------------------------------------------- the frames
+
+    def on_mount(self) -> None:
+        self.update_title()
+        self._redraw()
 
     def on_resize(self) -> None:
-        """A resize moves the end away from the view: bring it back while following."""
+        """A resize moves the end away from the view: bring it back while following.
+        The hex view lays its bytes out for the width: again at a new one."""
+        if self._hex_view and self._width_now() != self._hex_width:
+            self._redraw()
         if self.auto_scroll:
             self.call_after_refresh(self.scroll_end, animate=False, x_axis=False)
 
@@ -55,22 +200,36 @@ class FrameLog(Log):
         else:
             self._pending.append((time.time(), event.text))
 
+    def clear(self) -> FrameLog:
+        """Ctrl+L: the lines and the frames kept go (a filter finds nothing older)."""
+        self._kept.clear()
+        self._bodies.clear()
+        self._base = (self._last_time, self._request)
+        self._frames_kept = self._frames_shown = 0
+        super().clear()
+        self.update_title()
+        return self
+
     def flush(self) -> int:
         """Write what arrived since the last flush; returns the number of events."""
         if not self._pending:
             return 0
         events = list(self._pending)
         self._pending.clear()
-        shown = [e for e in events if not isinstance(e, Frame) or self.show_polls or not e.poll]
-        lines = [_line(e) for e in shown[-MAX_LINES_PER_FLUSH:]]
-        if len(shown) > MAX_LINES_PER_FLUSH:
-            skipped = len(shown) - MAX_LINES_PER_FLUSH
-            stamp = shown[-MAX_LINES_PER_FLUSH - 1]
+        count, shown = self._keep(events)
+        if self._narrowed:
+            self.update_title()
+        if not self.is_mounted:
+            return len(events)  # drawn from what is kept once mounted
+        lines = self._draw(shown[-MAX_LINES_PER_FLUSH:])
+        if count > MAX_LINES_PER_FLUSH:
+            skipped = count - MAX_LINES_PER_FLUSH
+            stamp = shown[-MAX_LINES_PER_FLUSH - 1][0]
             when = stamp.time if isinstance(stamp, Frame) else stamp[0]
             lines.insert(
                 0,
-                f"{clock_text(when)} ── {skipped} earlier lines not drawn (faster than anyone "
-                "reads): --record FILE keeps every frame ──",
+                f"{self._head(when, None)} ── {skipped} earlier lines not drawn (faster than "
+                "anyone reads): --record FILE keeps every frame ──",
             )
         if lines:
             # Log follows only when the view already sat at the end, and any layout
@@ -80,6 +239,158 @@ class FrameLog(Log):
             if self.auto_scroll:
                 self.scroll_end(animate=False, immediate=True, x_axis=False)
         return len(events)
+
+    def _keep(self, events: list[Event]) -> tuple[int, list[Drawn]]:
+        """Keep new events (the oldest go past KEPT); how many of them are shown, and
+        the newest of those with their gap and request (all the flush may draw).
+
+        On the path of every frame: while every frame shows, only the newest ones a
+        flush draws make a tuple."""
+        kept = self._kept
+        narrowed, passes = self._narrowed, self._passes
+        last_time, waiting = self._last_time, self._request
+        tail = 0 if narrowed else len(events) - MAX_LINES_PER_FLUSH - 1
+        shown: list[Drawn] = []
+        count = frames = 0
+        for n, event in enumerate(events):
+            kept.append(event)
+            if isinstance(event, Frame):
+                frames += 1
+                gap = None if last_time is None else event.time - last_time
+                last_time = event.time
+                if event.direction == "tx":
+                    request = waiting = event.data
+                elif event.unsolicited:
+                    request = None
+                else:  # one request in flight: a reply answers the last one sent
+                    request, waiting = waiting, None
+                if narrowed:
+                    if not passes(event, request):
+                        continue
+                    self._frames_shown += 1
+            else:
+                gap = request = None
+            count += 1
+            if n >= tail:
+                shown.append((event, gap, request))
+        self._last_time, self._request = last_time, waiting
+        self._frames_kept += frames
+        if len(kept) > KEPT:
+            self._forget(len(kept) - KEPT)
+        return count, shown
+
+    def _forget(self, count: int) -> None:
+        """The oldest events go; the wire state before the oldest kept one follows them."""
+        kept, bodies = self._kept, self._bodies
+        narrowed = self._narrowed
+        base_time, waiting = self._base
+        for _ in range(count):
+            event = kept.popleft()
+            if not isinstance(event, Frame):
+                continue
+            self._frames_kept -= 1
+            base_time = event.time
+            if event.direction == "tx":
+                request = waiting = event.data
+            elif event.unsolicited:
+                request = None
+            else:
+                request, waiting = waiting, None
+            if narrowed and self._passes(event, request):
+                self._frames_shown -= 1
+            if bodies:
+                bodies.pop(id(event), None)
+        self._base = (base_time, waiting)
+
+    def _walk(self) -> list[Drawn]:
+        """Every kept event with its gap and request."""
+        last_time, waiting = self._base
+        out: list[Drawn] = []
+        for event in self._kept:
+            if not isinstance(event, Frame):
+                out.append((event, None, None))
+                continue
+            gap = None if last_time is None else event.time - last_time
+            last_time = event.time
+            if event.direction == "tx":
+                request = waiting = event.data
+            elif event.unsolicited:
+                request = None
+            else:
+                request, waiting = waiting, None
+            out.append((event, gap, request))
+        return out
+
+    def _passes(self, frame: Frame, request: bytes | None) -> bool:
+        if frame.poll and not self._show_polls:
+            return False
+        if not self._filter:
+            return True
+        if self._filter.var is not None:
+            return self._filter.matches(request, "")
+        return self._filter.matches(request, self._body(frame))
+
+    def _rematch(self) -> None:
+        """The filter or F3 changed: which kept frames pass, counted, and drawn again."""
+        self._narrowed = bool(self._filter) or not self._show_polls
+        self._redraw()
+
+    def _redraw(self) -> None:
+        """Draw again the kept events that pass (the newest MAX_LINES); count them."""
+        passes = self._passes
+        shown = [
+            drawn
+            for drawn in self._walk()
+            if not isinstance(drawn[0], Frame) or passes(drawn[0], drawn[2])
+        ]
+        self._frames_shown = sum(isinstance(drawn[0], Frame) for drawn in shown)
+        self.update_title()
+        if not self.is_mounted:
+            return
+        lines = self._draw(shown[-MAX_LINES:])
+        super().clear()
+        if lines:
+            self.write_lines(lines, scroll_end=False)
+        if self.auto_scroll:
+            self.scroll_end(animate=False, immediate=True, x_axis=False)
+
+    # ------------------------------------------------------------ the lines
+
+    def _body(self, frame: Frame) -> str:
+        """The line after its time, kept for a kept frame once a text filter read it."""
+        body = self._bodies.get(id(frame))
+        if body is None:
+            body = self._bodies[id(frame)] = frame_body(frame)
+        return body
+
+    def _head(self, when: float, gap: float | None) -> str:
+        return f"{clock_text(when)} {gap_text(gap)}" if self._show_gaps else clock_text(when)
+
+    def _width_now(self) -> int:
+        return self.scrollable_content_region.width if self.is_mounted else 0
+
+    def _draw(self, shown: list[Drawn]) -> list[str]:
+        lines: list[str] = []
+        hex_view = self._hex_view
+        width = self._hex_width = self._width_now() if hex_view else 0
+        bodies = self._bodies  # made by a text filter: else made here, not kept
+        for event, gap, _ in shown:
+            if not isinstance(event, Frame):
+                stamp, text = event
+                lines.append(f"{self._head(stamp, None)} ── {terminal_safe(text)} ──")
+                continue
+            head = self._head(event.time, gap)
+            line = f"{head} {bodies.get(id(event)) or frame_body(event)}"
+            if not hex_view:
+                lines.append(line)
+                continue
+            hexed = hex_text(event.data)
+            if not width or len(line) + len(HEX_SEPARATOR) + len(hexed) <= width:
+                lines.append(line + HEX_SEPARATOR + hexed)
+            else:
+                lines.append(line)
+                lines.extend(_hex_under(hexed, len(head) + 1, width))
+        return lines
 
     def _update_size(self, updates: int, lines: list[str]) -> None:  # type: ignore[override]
         """Log's width update, done here and now: Log starts a thread per write for it
@@ -95,11 +406,83 @@ class FrameLog(Log):
 
 
 #: Characters of a frame line that are one cell wide though not ASCII.
-_NARROW = frozenset("→←↵─ ·") | frozenset(chr(c) for c in range(32, 127))
+_NARROW = frozenset("→←↵─│ ·") | frozenset(chr(c) for c in range(32, 127))
 
 
-def _line(event: Frame | tuple[float, str]) -> str:
-    if isinstance(event, Frame):
-        return frame_line(event)
-    stamp, text = event
-    return f"{clock_text(stamp)} ── {terminal_safe(text)} ──"
+def _hex_under(hexed: str, indent: int, width: int) -> list[str]:
+    """A frame's hex on lines of their own under it, from its arrow's column."""
+    per_line = max(4, (width - indent + 1) // 3)
+    pairs = hexed.split(" ")
+    pad = " " * indent
+    return [pad + " ".join(pairs[at : at + per_line]) for at in range(0, len(pairs), per_line)]
+
+
+#: A frame line's start: the time, the gap (when shown), the arrow.
+_HEAD = re.compile(r"\d\d:\d\d:\d\d\.\d{3} +(?:(\+\d+(?:\.\d+)?)(ms|s) )?([→←]) ")
+#: A line of hex under its frame.
+_HEX_LINE = re.compile(r" +[0-9a-f]{2}(?: [0-9a-f]{2})*$")
+
+
+class FrameHighlighter(Highlighter):
+    """Styles a frame line as it is drawn (the lines on screen only): the gap dim, or
+    highlighted before a reply that took :attr:`slow_after` seconds or more; the hex dim."""
+
+    def __init__(self) -> None:
+        self.slow_after = math.inf
+
+    def highlight(self, text: Text) -> None:
+        plain = text.plain
+        head = _HEAD.match(plain)
+        if head is None:
+            if _HEX_LINE.match(plain):
+                text.stylize("dim")
+            return
+        number, unit, arrow = head.groups()
+        if number is not None:
+            seconds = float(number[1:]) / (1000 if unit == "ms" else 1)
+            slow = arrow == "←" and seconds >= self.slow_after
+            text.stylize(SLOW_STYLE if slow else "dim", head.start(1), head.end(2))
+        at = plain.rfind(HEX_SEPARATOR)
+        if at >= 0:
+            text.stylize("dim", at)
+
+
+class LogActions:
+    """The frame log's keys, on the app: hex view (F7), frame times (``t``), filter (``/``)."""
+
+    frame_log: FrameLog
+    log_filter: FilterLine
+
+    def show(self, feedback: Feedback) -> None:
+        raise NotImplementedError  # the app's
+
+    def action_toggle_hex(self) -> None:
+        log = self.frame_log
+        log.hex_view = not log.hex_view
+        self.show(
+            Message(
+                "hex view: each frame's bytes beside its text (F7 hides them)"
+                if log.hex_view
+                else "hex view off"
+            )
+        )
+
+    def action_toggle_frame_times(self) -> None:
+        log = self.frame_log
+        log.show_gaps = not log.show_gaps
+        self.show(
+            Message(
+                "frame times: the time since the previous frame on each line"
+                if log.show_gaps
+                else "frame times hidden (t in the frame log shows them)"
+            )
+        )
+
+    def action_filter_frames(self) -> None:
+        """``/`` in the frame log: its filter line, with the filter as it is."""
+        self.log_filter.open()
+
+
+def log_filter_line(log: FrameLog) -> FilterLine:
+    """The frame log's filter line (``/``)."""
+    return FilterLine(log, FILTER_HINT, id="log-filter")

@@ -23,6 +23,7 @@ from textual.widgets import Static
 
 from ..commands.language import VarRef
 from ..engine import RowView
+from ..present.cells import change_style
 from ..present.iogrid import Grid, build_grid
 from ..protocol import kind_of
 from ..protocol.text import terminal_safe
@@ -107,6 +108,7 @@ class IoPanel(VerticalScroll, can_focus=True):
             self.scrollable_content_region.width,
             self.cursor if self.has_focus else None,
             frozenset(var.index for var in rows if var.kind is IO and self._busy(var)),
+            change_style(self.app.current_theme.dark),  # legible on a light theme too
         )
         self.grid = grid
         text = grid.text if grid.lines else EMPTY_TEXT

@@ -1,9 +1,44 @@
-"""The status line widget; its text is made in :mod:`rac_console.present.status`."""
+"""The status line widget; its text is made in :mod:`rac_console.present.status`, for
+the widget's width: whole fields, built again when the width changes."""
 
 from __future__ import annotations
 
+from rich.text import Text
+from textual import events
 from textual.widgets import Static
+
+from ..engine.events import Status
+from ..present.status import status_text
 
 
 class StatusBar(Static):
-    pass
+    """One line; :meth:`show` builds it from the figures for the width it has."""
+
+    def __init__(self, *, id: str | None = None) -> None:
+        super().__init__(id=id)
+        self._figures: tuple[Status, float | None, float, tuple[str, float, int] | None] | None
+        self._figures = None
+        self.line = Text()
+
+    def show(
+        self,
+        status: Status,
+        waiting_since: float | None,
+        frames_per_second: float,
+        running: tuple[str, float, int] | None = None,
+    ) -> Text:
+        """Build the line for ``status`` (see :func:`.status_text`) to fit this widget;
+        repaint only when it changed. Returns the line."""
+        self._figures = (status, waiting_since, frames_per_second, running)
+        width = self.content_size.width
+        line = status_text(
+            status, waiting_since, frames_per_second, running, width=width if width > 0 else None
+        )
+        if line != self.line:  # an unchanged line costs no repaint
+            self.line = line
+            self.update(line)
+        return line
+
+    def on_resize(self, event: events.Resize) -> None:
+        if self._figures is not None:
+            self.show(*self._figures)

@@ -8,11 +8,7 @@ put on the command line is never sent without the user's own Enter.
 
 from __future__ import annotations
 
-from typing import ClassVar
-
-from textual.binding import Binding, BindingType
 from textual.widget import Widget
-from textual.widgets import Input
 
 from ..commands.language import VarRef
 from ..engine import Cycle, Engine, Feedback, Message, Result, RowView, Status
@@ -20,42 +16,24 @@ from ..present.row_actions import PendingToggles, put_line, toggle_line
 from ..present.trends import TrendStore, has_trend
 from ..protocol.text import terminal_safe
 from .command_line import CommandLine
+from .filter_line import FilterLine, focus_now
 from .frame_log import FrameLog
 from .io_panel import IoPanel
 from .trend_view import TrendView
-from .watch_table import WatchTable
+from .watch_table import WatchTable, writes_refused
 
 
-class TableFilter(Input):
-    """The watch table's filter line, shown by ``/``; filters as you type."""
-
-    BINDINGS: ClassVar[list[BindingType]] = [
-        Binding("escape", "clear", "Clear filter", id="filter-clear"),
-        Binding("enter", "done", "Keep filter", id="filter-done"),
-    ]
+class TableFilter(FilterLine):
+    """The watch table's filter line, shown by ``/``: rows by name or label."""
 
     def __init__(self, table: WatchTable, **kwargs: object) -> None:
-        super().__init__(placeholder="filter rows: name or label", **kwargs)  # type: ignore[arg-type]
-        self.table = table
+        super().__init__(table, "filter rows: name or label", **kwargs)
+        table.filter_line = self  # ``/`` on the table opens this line at once
 
-    def on_input_changed(self, event: Input.Changed) -> None:
-        event.stop()  # the command line's own handlers are not for this line
-        self.table.set_filter(event.value)
 
-    def open(self) -> None:
-        self.add_class("-visible")
-        self.focus()
-
-    def action_clear(self) -> None:
-        self.value = ""
-        self.table.set_filter("")
-        self.remove_class("-visible")
-        focus_now(self.table)
-
-    def action_done(self) -> None:
-        """Back to the table; the filter stays (its border title shows it; ``/`` edits it)."""
-        self.remove_class("-visible")
-        focus_now(self.table)
+#: The command line's placeholder: examples that work on the target.
+PLACEHOLDER = "get P 1 · put IO 20 on · watch IO 0-7 · help"
+READ_ONLY_PLACEHOLDER = "get P 1 · watch IO 0-7 · help"
 
 
 class TableActions:
@@ -75,6 +53,18 @@ class TableActions:
     def show(self, feedback: Feedback) -> None:
         raise NotImplementedError  # the app's
 
+    def follow_status(self, old: Status | None, new: Status) -> None:
+        """A new status: the footer's keys (F2's word, Space on a read-only target)
+        and the command line's examples follow it."""
+        if old is None or (old.paused, writes_refused(old)) != (
+            new.paused,
+            writes_refused(new),
+        ):
+            self.refresh_bindings()  # type: ignore[attr-defined]  # the App's
+        self.command_line.placeholder = (
+            READ_ONLY_PLACEHOLDER if writes_refused(new) else PLACEHOLDER
+        )
+
     # --------------------------------------------------------------- focus
 
     def _panes(self) -> list[Widget]:
@@ -91,8 +81,8 @@ class TableActions:
         """F6 / Shift+F6: command line → table (→ I/O grid) → frame log or trend → back."""
         panes = self._panes()
         focused = self.focused  # type: ignore[attr-defined]
-        if focused is self.table_filter:
-            focused = self.table
+        if isinstance(focused, FilterLine) and isinstance(focused.target, Widget):
+            focused = focused.target  # a pane's filter line counts as its pane
         index = panes.index(focused) if focused in panes else 0
         focus_now(panes[(index + step) % len(panes)])
 
@@ -101,7 +91,12 @@ class TableActions:
 
     def type_on_command_line(self, character: str) -> None:
         """A character the table has no use for: the start of a command typed with the
-        table focused. It goes to the command line, and so do the keys after it."""
+        table focused. It goes to the command line, and so do the keys after it; keys
+        queued behind a ``/`` go to the filter line it opened."""
+        focused = self.focused  # type: ignore[attr-defined]
+        if isinstance(focused, FilterLine):
+            focused.insert_text_at_cursor(character)
+            return
         command_line = self.command_line
         focus_now(command_line)
         command_line.insert_text_at_cursor(character)
@@ -158,7 +153,10 @@ class TableActions:
     # --------------------------------------------------------------- trends
 
     def take_cycle(self, cycle: Cycle) -> None:
-        """A poll cycle from the outbox: its values go to the trends."""
+        """A poll cycle from the outbox: its values go to the trends (not an earlier
+        target's, drained after the change)."""
+        if self.status is not None and cycle.target_id != self.status.target_id:
+            return
         self.trends.add_cycle(cycle)
         if self.toggles.cycle(cycle):
             self.refresh_table()
@@ -214,9 +212,3 @@ class TableActions:
         if view.has_class("-open") and view.var is not None:
             view.field = self.table.field_of(view.var)
             view.redraw()
-
-
-def focus_now(widget: Widget) -> None:
-    """Focus at once. ``Widget.focus`` waits behind the keys already queued, so keys
-    typed right after F6 (or after a key that leaves a pane) went to the old pane."""
-    widget.screen.set_focus(widget)

@@ -19,11 +19,13 @@ from textual.message import Message
 from textual.widgets import DataTable
 
 from ..commands.language import VarRef
-from ..engine import RowView
-from ..present.cells import age_text, status_cell, type_text, value_cell
+from ..engine import RowView, Status
+from ..present.cells import age_text, change_style, status_cell, type_text, value_cell
+from ..present.filtering import add_filter_title, needle_of
 from ..present.table_rows import SortMode, visible_keys
 from ..present.trends import TrendStore, field_labels, has_trend, sparkline_text
 from ..protocol.text import terminal_safe
+from .filter_line import FilterLine
 
 #: Status, age and trend before the value, so they stay in view when a long P or J
 #: value is cut off on a narrow terminal.
@@ -73,8 +75,22 @@ class WatchTable(DataTable[object]):
         (`t` opens a trend, the space writes a bit): the first character no binding
         takes moves it, and everything after it, to the command line."""
         character = event.character
-        # Keys already on their way when the first one left for the command line follow it.
+        # Keys already on their way when the first one left for the command line (or
+        # for the filter line) follow it.
         elsewhere = self.screen.focused is not self  # (has_focus waits for the Blur event)
+        if character == "/" and not elsewhere and self.filter_line is not None:
+            # Opened here and now, not by the binding's message: the keys queued behind
+            # the slash must find the filter line focused.
+            event.stop()
+            event.prevent_default()
+            self.filter_line.open()
+            return
+        if character == " " and not elsewhere and self._writes_refused():
+            # Not offered, but still answered: the engine says why nothing is written.
+            event.stop()
+            event.prevent_default()
+            self.action_row("toggle")
+            return
         if (
             event.is_printable
             and character
@@ -86,6 +102,16 @@ class WatchTable(DataTable[object]):
             # focus already moved.
             self._on_typed(character)
 
+    def check_action(self, action: str, parameters: tuple[object, ...]) -> bool | None:
+        """No Space in the footer on a read-only target (it still says why, see on_key)."""
+        if action == "row" and parameters == ("toggle",) and self._writes_refused():
+            return False
+        return True
+
+    def _writes_refused(self) -> bool:
+        status = getattr(self.app, "status", None)
+        return writes_refused(status if isinstance(status, Status) else None)
+
     def __init__(
         self, trends: TrendStore, on_typed: Callable[[str], None], **kwargs: object
     ) -> None:
@@ -93,6 +119,8 @@ class WatchTable(DataTable[object]):
         super().__init__(cursor_type="row", zebra_stripes=True, **kwargs)  # type: ignore[arg-type]
         self.trends = trends
         self._on_typed = on_typed
+        #: The filter line ``/`` opens (it sets itself here).
+        self.filter_line: FilterLine | None = None
         #: The field each V P J T row's trend follows (index into its labels); `f` cycles it.
         self.fields: dict[VarRef, int] = {}
         self._shown: dict[str, tuple[object, ...]] = {}
@@ -127,7 +155,7 @@ class WatchTable(DataTable[object]):
     def set_filter(self, text: str) -> None:
         """Show only rows whose name or label contains ``text`` (any case)."""
         self._filter = text
-        self._needle = text.strip().lower()
+        self._needle = needle_of(text)
         self._apply()
 
     @property
@@ -224,7 +252,7 @@ class WatchTable(DataTable[object]):
             status_cell(row),
             age_text(row, now),
             self._trend_cell(row),
-            value_cell(row, now),
+            value_cell(row, now, change_style(self.app.current_theme.dark)),
             type_text(row),
         )
         shown = self._shown.get(key)
@@ -263,8 +291,7 @@ class WatchTable(DataTable[object]):
         total = len(self._views)
         title = Text("Watch")
         if self._needle:
-            title.append("  filter ")
-            title.append(f'"{terminal_safe(self._filter.strip())}"', style="bold")
+            add_filter_title(title, self._filter)
         if self._needle or self._hide_io:
             title.append(f"  {len(self._order)} of {total} rows")
         else:
@@ -275,6 +302,11 @@ class WatchTable(DataTable[object]):
         if title != self._title:
             self._title = title
             self.border_title = title
+
+
+def writes_refused(status: Status | None) -> bool:
+    """True on a read-only target (``--read-only``, or a profile's ``writes``)."""
+    return status is not None and (status.read_only or status.writes == "read-only")
 
 
 def _differs(old: object, new: object) -> bool:

@@ -1,0 +1,77 @@
+"""The config file: target profiles (and the console's settings), read with tomllib.
+
+``$RAC_CONSOLE_CONFIG``, or ``config.toml`` in the user's config directory
+(platformdirs). A missing file means no profiles; anything wrong with one that exists
+is an InputError of one line naming the file (a TOML syntax error with its line), never
+a traceback, so that a broken file cannot silently drop a profile's read-only guard.
+"""
+
+from __future__ import annotations
+
+import os
+import tomllib
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from ..commands.policy import TargetProfile
+from ..commands.profiles import parse_config
+from ..protocol import InputError
+
+CONFIG_ENV = "RAC_CONSOLE_CONFIG"
+#: A config file larger than this is not one: refused before it is parsed.
+MAX_FILE_BYTES = 1024 * 1024
+
+
+def config_path() -> Path:
+    """Where the config file is: ``$RAC_CONSOLE_CONFIG``, or the user's config directory."""
+    named = os.environ.get(CONFIG_ENV)
+    if named:
+        return Path(named).expanduser()
+    from platformdirs import user_config_path
+
+    return user_config_path("rac-console") / "config.toml"
+
+
+@dataclass(frozen=True)
+class Config:
+    """The config file as loaded: its profiles by name, and its ``[settings]`` table as
+    read (the console's theme, layout and frame-log toggles: see :mod:`.settings`)."""
+
+    path: Path
+    found: bool = False  # False: no file there (no profiles)
+    profiles: Mapping[str, TargetProfile] = field(default_factory=dict)
+    settings: Mapping[str, object] = field(default_factory=dict)
+
+
+def load_config(path: Path | None = None) -> Config:
+    """The config file at ``path`` (default: :func:`config_path`); InputError, one line,
+    for anything wrong with it."""
+    named = path is None and bool(os.environ.get(CONFIG_ENV))
+    path = config_path() if path is None else path
+    try:
+        if not path.exists() and named:  # a typo must not quietly drop a read-only profile
+            raise InputError(f"{path} (named by {CONFIG_ENV}) does not exist")
+        if not path.exists():
+            return Config(path)
+        if not path.is_file():  # a directory, a device or a pipe
+            raise InputError(f"{path} is not a regular file: not a config file")
+        with path.open("rb") as handle:
+            data = handle.read(MAX_FILE_BYTES + 1)
+        if len(data) > MAX_FILE_BYTES:
+            raise InputError(
+                f"{path} is larger than {MAX_FILE_BYTES // 1024} KiB: not a config file"
+            )
+        text = data.decode("utf-8")
+    except (OSError, RuntimeError) as exc:
+        raise InputError(f"cannot read {path}: {getattr(exc, 'strerror', None) or exc}") from None
+    except UnicodeDecodeError:
+        raise InputError(f"{path} is not a UTF-8 text file") from None
+    try:
+        table = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:  # "... (at line 3, column 8)"
+        raise InputError(f"{path}: not valid TOML: {exc}") from None
+    except RecursionError:
+        raise InputError(f"{path}: not valid TOML: nested too deeply") from None
+    parsed = parse_config(table, str(path))
+    return Config(path, True, parsed.profiles, parsed.settings)

@@ -1,0 +1,159 @@
+"""A write, as a careful integrator makes it: refused by the target's rules before the
+wire, the value before read (or taken from the watch table), confirmed where the target
+asks for it, sent, and read back.
+
+Shared by the CLI, ``run`` and the engine behind the console and the REPL. A controller
+that answers S_OK and keeps its old value, or answers an error and writes anyway, is
+caught by the read-back: the outcome says what the controller holds now.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import replace
+
+from ..commands.language import Get, Put, Raw, VarRef
+from ..commands.outcome import ExitStatus, Outcome, refused
+from ..commands.policy import WritePolicy, Writes, written_var
+from ..commands.readback import same_value
+from ..protocol import ProtocolError, Variant
+from ..protocol.variant import parse_variant
+from ..session import ConnectFailed, Session
+from .execute import execute, read_only_refusal
+
+#: Asks whether to write: (the variable, its value now or None, the value to write,
+#: the write) -> yes.
+Confirm = Callable[[VarRef, Variant | None, Variant, Put | Raw], bool]
+
+NO_ONE_TO_ASK = (
+    'PUT {var} refused: {source}asks before every write (writes = "confirm"); '
+    "add --yes to write from a script or the command line (nothing was sent)"
+)
+
+
+def write(
+    session: Session,
+    command: Put | Raw,
+    *,
+    policy: WritePolicy,
+    read_only: bool = False,
+    verify: bool = True,
+    known_before: Callable[[VarRef], Variant | None] = lambda var: None,
+    confirm: Confirm | None = None,
+    line: str | None = None,
+) -> Outcome:
+    """Send one write the way the target allows; never raises for I/O.
+
+    ``known_before`` gives a watched variable's current value (no extra GET then);
+    ``confirm`` is None where nobody can be asked (the CLI without ``--yes``)."""
+    wire = command.request.text
+    if read_only and (refusal := read_only_refusal(command)) is not None:
+        if policy.writes is Writes.READ_ONLY and policy.source:
+            refusal = f"PUT refused: {policy.source} is read-only (nothing was sent)"
+        return refused(line, refusal, wire)
+    if (refusal := policy.refusal(command)) is not None:
+        return refused(line, refusal, wire)
+    var = written_var(command)
+    if var is None:  # a raw line we cannot read: sent as typed, nothing to read back
+        if policy.confirms:
+            return refused(line, _no_one_to_ask("this line", policy), wire)
+        return execute(session, command, line=line)
+    if policy.confirms and confirm is None:
+        return refused(line, _no_one_to_ask(str(var), policy), wire)
+    written = _value_of(command)
+    if written is None and (policy.confirms or policy.allow is not None):
+        return refused(
+            line,
+            f"refused: the value of this raw PUT cannot be read, so {policy.source or 'the target'}"
+            f"'s rules cannot be checked; write it as put {var.kind.code} {var.index} VALUE "
+            "(nothing was sent)",
+            wire,
+        )
+    before = known_before(var)
+    if before is None and (verify or policy.confirms):
+        first = execute(session, Get(var))
+        if first.status == ExitStatus.TRANSPORT:  # the controller does not answer: no PUT
+            return replace(
+                first,
+                request=wire,
+                error=f"PUT {var} not sent: reading its value first failed: {first.error}"
+                " (--no-verify writes without reading)",
+                input_line=line,
+                var=var,
+            )
+        before = first.variant if first.ok else None
+    if policy.confirms and confirm is not None and written is not None:
+        if not confirm(var, before, written, command):
+            return refused(line, f"PUT {var} not confirmed: nothing was sent", wire)
+        # The question may have been open a while: the value answered about must still be
+        # the value there, or the user said yes to a write that is not this one.
+        now = execute(session, Get(var))
+        if now.status == ExitStatus.TRANSPORT:
+            return replace(
+                now,
+                request=wire,
+                input_line=line,
+                var=var,
+                error=(
+                    f"PUT {var} not sent: reading it again after the question failed: {now.error}"
+                ),
+            )
+        held = now.variant if now.ok else None
+        if before is not None and held is not None and not same_value(var.kind, before, held):
+            return refused(
+                line,
+                f"PUT {var} not sent: {var} changed from {plain_value(var, before)} to "
+                f"{plain_value(var, held)} while the question was open; type the put again",
+                wire,
+            )
+        before = held if held is not None else before
+    outcome = execute(session, command, line=line)
+    outcome = replace(outcome, var=var, written=written, before=before)
+    if not verify or isinstance(outcome.failure, ConnectFailed):  # nothing went out
+        return outcome
+    return _read_back(session, outcome, var, written)
+
+
+def _read_back(session: Session, outcome: Outcome, var: VarRef, written: Variant | None) -> Outcome:
+    """The GET after the PUT: what the controller holds now, and whether it is the value
+    written. A mismatch after S_OK is a failure (exit 1); after a timeout or an error
+    answer the outcome keeps its own status and the read-back says what happened."""
+    after = execute(session, Get(var))
+    if not after.ok:
+        problem = f"read back failed: {after.error}"
+        if outcome.ok:
+            return replace(outcome, status=after.status, read_back_error=problem, error=problem)
+        return replace(outcome, read_back_error=problem)
+    held = after.variant
+    matches = written is not None and held is not None and same_value(var.kind, written, held)
+    verified = matches if written is not None else None
+    outcome = replace(outcome, read_back=held, verified=verified)
+    if outcome.ok and verified is False:
+        return replace(
+            outcome,
+            status=ExitStatus.CONTROLLER_ERROR,
+            error="S_OK, but the controller holds another value",
+        )
+    return outcome
+
+
+def _value_of(command: Put | Raw) -> Variant | None:
+    """The value a write sends: a typed put's, or the one a raw PUT line carries."""
+    if isinstance(command, Put):
+        return command.value
+    text = command.request.text.split(":", 4)
+    try:
+        return parse_variant(text[4]) if len(text) == 5 else None
+    except ProtocolError:
+        return None
+
+
+def plain_value(var: VarRef, variant: Variant) -> str:
+    """``14``, ``ON``, ``X 1  Y 2  Z 3``: a value in a sentence (and the confirm question)."""
+    fields = var.kind.fields(variant)
+    return "  ".join(f"{label} {text}" if label else text for label, text in fields)
+
+
+def _no_one_to_ask(what: str, policy: WritePolicy) -> str:
+    source = f"{policy.source} " if policy.source else "this target "
+    return NO_ONE_TO_ASK.format(var=what, source=source)

@@ -1,0 +1,146 @@
+"""The question a write on a ``confirm`` target asks: old → new, ``[y/N]``, default No.
+
+Muscle memory must not answer it (k9s users "blow right through" confirm dialogs): a key
+that arrived before the question was painted, or within :data:`GUARD_SECONDS` after, is
+ignored, and so is every key that follows the one before by less than that (a burst typed
+ahead stays ignored until it pauses): a typed-ahead Enter or y answers nothing. Then
+Enter, n and Esc answer No, only y (or a click on Yes) answers Yes; Esc answers No at
+any time. Nothing here can be focused, so no Enter presses a button.
+"""
+
+from __future__ import annotations
+
+from rich.text import Text
+from textual import events, on
+from textual._time import get_time  # the clock of an event's ``time``
+from textual.app import ComposeResult
+from textual.color import Color
+from textual.containers import Horizontal, Vertical
+from textual.screen import ModalScreen
+from textual.widgets import Button, Static
+
+from ..engine import ConfirmWrite
+from ..present.status import profile_colour
+from ..protocol.text import terminal_safe
+
+#: Keys in the first this many seconds of the question (and any typed before it) are
+#: ignored; Esc still answers No.
+GUARD_SECONDS = 0.4
+
+
+def border_colour(colour: str | None) -> Color | None:
+    """A profile's colour for Textual (an ANSI colour stays one); None when nobody knows
+    the name: the caller keeps its default."""
+    parsed = profile_colour(colour)
+    return Color.from_rich_color(parsed) if parsed is not None else None
+
+
+def question_text(question: ConfirmWrite) -> Text:
+    """``Write I10: 14 → 15`` (``value now unknown`` when it could not be read)."""
+    before = terminal_safe(question.before) if question.before is not None else None
+    text = Text("Write ")
+    text.append(f"{terminal_safe(question.var)}: ", style="bold")
+    if before is None:
+        text.append("value now unknown", style="italic")
+    else:
+        text.append(before, style="bold")
+    text.append(" → ")
+    text.append(terminal_safe(question.after), style="bold")
+    return text
+
+
+class ConfirmWriteScreen(ModalScreen[bool]):
+    """Dismissed with True only for y (or Yes clicked) once the guard time is over."""
+
+    AUTO_FOCUS = None  # nothing here takes the focus: keys come to the screen
+
+    def __init__(self, question: ConfirmWrite, colour: str | None = None) -> None:
+        super().__init__()
+        self.question = question
+        self.colour = colour
+        self.ignored = 0  # keys ignored: typed ahead, or within the guard time
+        self._ready_at = float("inf")  # get_time() from when keys answer
+        self._answered = False
+
+    @property
+    def shown(self) -> bool:
+        """True once the question is on screen (its guard time runs)."""
+        return self._ready_at != float("inf")
+
+    @property
+    def accepting(self) -> bool:
+        """True once keys answer the question."""
+        return get_time() >= self._ready_at
+
+    def compose(self) -> ComposeResult:
+        question = self.question
+        where = terminal_safe(question.label or question.target)
+        with Vertical(id="confirm-box") as box:
+            box.border_title = Text(f" {where} ")
+            if question.label:
+                yield Static(Text(terminal_safe(question.target), style="dim"))
+            yield Static(question_text(question), id="confirm-question")
+            yield Static(Text(terminal_safe(question.request), style="dim"), id="confirm-request")
+            yield Static(
+                Text.assemble(
+                    ("[y/N] ", "bold"),
+                    "y writes · Enter, n or Esc: no",
+                ),
+                id="confirm-keys",
+            )
+            yield Static(
+                Text(
+                    f"keys typed ahead are ignored: y counts once this has been up "
+                    f"{GUARD_SECONDS:g} s with no key pressed",
+                    style="dim italic",
+                ),
+                id="confirm-guard",
+            )
+            with Horizontal(id="confirm-buttons"):
+                for button in (
+                    Button("No", id="confirm-no", variant="primary"),
+                    Button("Yes, write", id="confirm-yes", variant="error"),
+                ):
+                    button.can_focus = False  # by mouse only: Enter must never press one
+                    yield button
+
+    def on_mount(self) -> None:
+        colour = border_colour(self.colour)
+        if colour is not None:
+            box = self.query_one("#confirm-box")
+            box.styles.border = ("heavy", colour)
+        self.call_after_refresh(self._on_screen)
+
+    def _on_screen(self) -> None:
+        """Painted: the guard time starts now (not when it was made: building a screen
+        takes a moment, while keys typed ahead still arrive)."""
+        self._ready_at = get_time() + GUARD_SECONDS
+
+    def on_key(self, event: events.Key) -> None:
+        event.stop()
+        event.prevent_default()
+        if event.key == "escape":
+            self.answer(False)
+        elif event.time < self._ready_at:
+            # Typed ahead, or too soon to have read the question: ignored, and a burst
+            # of keys goes on being one until it pauses (five keys outlast 0.4 s).
+            self.ignored += 1
+            self._ready_at = max(self._ready_at, event.time + GUARD_SECONDS)
+        elif event.key in ("y", "Y"):
+            self.answer(True)
+        elif event.key in ("enter", "n", "N"):
+            self.answer(False)
+
+    def answer(self, yes: bool) -> None:
+        """Dismiss once (a key and a click in the same moment answer once)."""
+        if not self._answered:
+            self._answered = True
+            self.dismiss(yes)
+
+    @on(Button.Pressed)
+    def clicked(self, event: Button.Pressed) -> None:
+        event.stop()
+        if event.button.id == "confirm-no":
+            self.answer(False)
+        elif self.accepting:
+            self.answer(True)

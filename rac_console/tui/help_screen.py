@@ -1,0 +1,206 @@
+"""The help screen (F1, or ``?`` on an empty command line): keys, commands, status line.
+
+The keys are read from the widgets' ``BINDINGS`` when the screen opens, the commands
+from the registry and the figures from :mod:`rac_console.present.help_text`, so the
+help says what the console does now. An input at the top filters it as you type.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Sequence
+from typing import ClassVar
+
+from rich.console import Group, RenderableType
+from rich.table import Table
+from rich.text import Text
+from textual import on
+from textual.app import App, ComposeResult
+from textual.binding import Binding, BindingType
+from textual.containers import VerticalScroll
+from textual.screen import Screen
+from textual.widgets import Input, Static
+
+from ..present.help_text import (
+    HelpSection,
+    KeyGroup,
+    filter_sections,
+    key_label,
+    plain_lines,
+)
+from .command_line import CommandLine
+from .filter_line import FilterLine
+from .frame_log import FrameLog
+from .io_panel import IoPanel
+from .trend_view import TrendView
+from .watch_table import WatchTable
+
+#: The widest a key or a command's usage runs before it wraps (80 columns leave the
+#: description 45).
+TERM_WIDTH = 24
+
+
+def bindings_of(cls: type) -> list[Binding]:
+    """The bindings a class declares itself (not those it inherits)."""
+    declared: Iterable[BindingType] = cls.__dict__.get("BINDINGS", ())
+    return list(Binding.make_bindings(declared))
+
+
+def key_of(cls: type, action: str) -> str | None:
+    """The key bound to ``action`` on ``cls`` or a class it inherits from, as printed
+    on the keyboard (``F2``, ``Ctrl+L``); None when no key runs it."""
+    for klass in cls.__mro__:
+        for binding in bindings_of(klass):
+            if binding.action == action:
+                return key_label(binding.key_display or binding.key)
+    return None
+
+
+def _pairs(cls: type) -> list[tuple[str, str]]:
+    """The keys of ``cls`` and of the console's classes it inherits from (not those of
+    Textual's), labelled, with their descriptions; a key given twice counts once."""
+    pairs: dict[str, str] = {}
+    for klass in cls.__mro__:
+        if klass.__module__.startswith("rac_console."):
+            for binding in bindings_of(klass):
+                key = key_label(binding.key_display or binding.key)
+                pairs.setdefault(key, binding.tooltip or binding.description)
+    return list(pairs.items())
+
+
+def console_key_groups(app_class: type[App[int]]) -> list[KeyGroup]:
+    """The console's keys, read from the bindings of the app and its panes, labelled
+    as on the keyboard."""
+    pane = key_of(app_class, "focus_pane(1)") or "F6"
+    grid = key_of(app_class, "toggle_io_grid") or "F5"
+    trend = key_of(WatchTable, "row('trend')") or "t"
+    row_filter = key_of(WatchTable, "row('filter')") or "/"
+    return [
+        (
+            "anywhere",
+            [
+                *_pairs(app_class),
+                (key_label(app_class.COMMAND_PALETTE_BINDING), "Command palette"),
+            ],
+        ),
+        (
+            "command line",
+            [
+                ("Enter", "Run the line"),
+                *_pairs(CommandLine),
+                ("Right", "Accept the grey suggestion from history (at the end of the line)"),
+                ("?", "Help (on an empty line)"),
+            ],
+        ),
+        (f"watch table ({pane})", _pairs(WatchTable)),
+        (f"filter line ({row_filter})", _pairs(FilterLine)),
+        (f"I/O grid ({grid}, then {pane})", _pairs(IoPanel)),
+        (f"frame log ({pane})", _pairs(FrameLog)),
+        (f"trend view ({trend} on a row)", _pairs(TrendView)),
+    ]
+
+
+def render_sections(sections: Sequence[HelpSection], query: str) -> RenderableType:
+    """The sections as a title and a two-column grid each; the query's matches marked."""
+    parts: list[RenderableType] = []
+    for section in sections:
+        if parts:
+            parts.append(Text())
+        parts.append(Text(section.title, style="bold underline"))
+        grid = Table.grid(padding=(0, 2))
+        grid.add_column(style="bold", max_width=TERM_WIDTH)
+        grid.add_column(ratio=1)
+        for entry in section.entries:
+            text = Text(entry.text)
+            for more in entry.more:
+                text.append("\n")
+                text.append(more, style="dim")
+            term = Text(entry.term)
+            if query:
+                for cell in (term, text):
+                    cell.highlight_words([query], style="reverse", case_sensitive=False)
+            grid.add_row(term, text)
+        parts.append(grid)
+    return Group(*parts)
+
+
+class HelpScreen(Screen[None]):
+    """The help, filtered by the line at its top; Esc (or F1 again) closes it."""
+
+    CSS_PATH = "help_screen.tcss"
+    BINDINGS: ClassVar[list[BindingType]] = [
+        Binding("escape", "close", "Close help", id="help-close"),
+        Binding("up", "scroll(-1)", "Scroll up", show=False, id="help-up"),
+        Binding("down", "scroll(1)", "Scroll down", show=False, id="help-down"),
+        Binding("pageup", "page(-1)", "Page up", show=False, id="help-page-up"),
+        Binding("pagedown", "page(1)", "Page down", show=False, id="help-page-down"),
+    ]
+
+    def __init__(self, sections: Sequence[HelpSection]) -> None:
+        super().__init__()
+        self.sections = list(sections)
+        self.matched = 0
+        self.total = 0
+        self.shown_text = ""  # what the body shows, as plain text
+
+    def compose(self) -> ComposeResult:
+        yield Input(placeholder="search the help: a key, a command, a word", id="help-search")
+        with VerticalScroll(id="help-body"):
+            yield Static(id="help-text")
+        yield Static(
+            Text.assemble(
+                ("Esc", "bold"),
+                " closes  ",
+                ("Up Down PgUp PgDn", "bold"),
+                " scroll  ",
+                ("Ctrl+P", "bold"),
+                " palette",
+            ),
+            id="help-keys",
+        )
+
+    def on_mount(self) -> None:
+        body = self.query_one("#help-body", VerticalScroll)
+        body.border_title = "Help: keys, commands, status line"
+        body.can_focus = False
+        self._show("")
+        self.query_one("#help-search", Input).focus()
+
+    @on(Input.Changed, "#help-search")
+    def _search(self, event: Input.Changed) -> None:
+        event.stop()  # the command line's handlers in the app are not for this input
+        self._show(event.value)
+
+    @on(Input.Submitted, "#help-search")
+    def _keep(self, event: Input.Submitted) -> None:
+        event.stop()
+
+    def _show(self, query: str) -> None:
+        shown, self.matched, self.total = filter_sections(self.sections, query)
+        body = self.query_one("#help-body", VerticalScroll)
+        text = self.query_one("#help-text", Static)
+        query = query.strip()
+        if not query:
+            body.border_subtitle = f"{self.total} entries · type to search"
+        else:
+            body.border_subtitle = f"{self.matched} of {self.total} match"
+        if shown:
+            text.update(render_sections(shown, query))
+            self.shown_text = "\n".join(plain_lines(shown))
+        else:
+            message = Text.assemble("nothing matches ", (repr(query), "bold"))
+            text.update(message)
+            self.shown_text = message.plain
+        body.scroll_home(animate=False)
+
+    def action_close(self) -> None:
+        self.dismiss(None)
+
+    def action_scroll(self, lines: int) -> None:
+        self.query_one("#help-body", VerticalScroll).scroll_relative(y=lines, animate=False)
+
+    def action_page(self, step: int) -> None:
+        body = self.query_one("#help-body", VerticalScroll)
+        if step < 0:
+            body.scroll_page_up(animate=False)
+        else:
+            body.scroll_page_down(animate=False)

@@ -1,0 +1,248 @@
+"""The command palette (Ctrl+P) in the console's language, the help and the screenshot.
+
+:class:`ConsoleCommands` lists the console's own commands, each with its key (read
+from the bindings), then Textual's own (Theme, Keys, Screenshot, Quit). A command
+that is a line of the language runs as a typed line (``submit_line``: echoed, queued,
+cancelled by Esc); one that needs a file name puts the line on the command line for
+the user to finish. Titles and help made from names in a file or a reply are plain
+text, never markup.
+
+:class:`PaletteActions` is a mixin of :class:`~rac_console.tui.app.RacConsoleApp`:
+the help screen, and a screenshot that is saved even with no ``~/Downloads``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterator
+from dataclasses import dataclass
+from datetime import datetime
+from functools import partial
+from pathlib import Path
+from typing import TYPE_CHECKING, cast
+
+from platformdirs import user_downloads_path
+from textual.command import DiscoveryHit, Hit, Hits, Provider
+from textual.content import Content
+
+from ..engine import Message
+from ..present.help_text import help_sections
+from ..protocol.text import terminal_safe
+from .command_line import CommandLine
+from .filter_line import focus_now
+from .help_screen import HelpScreen, console_key_groups, key_of
+
+if TYPE_CHECKING:
+    from .app import RacConsoleApp
+
+
+@dataclass(frozen=True)
+class PaletteCommand:
+    title: str  # plain text: what the palette's search matches
+    run: Callable[[], object]
+    help: str = ""  # fixed text of this module (Textual reads it as markup)
+    key: str | None = None
+
+    def display(self, offsets: tuple[int, ...] = ()) -> Content:
+        """The title with the matched characters marked, then the key, dimmed."""
+        content = Content(self.title)
+        for offset in offsets:
+            if offset < len(self.title) and not self.title[offset].isspace():
+                content = content.stylize("reverse", offset, offset + 1)
+        if self.key:
+            content = Content.assemble(content, "  ", (self.key, "dim bold"))
+        return content
+
+
+def console_commands(app: RacConsoleApp) -> Iterator[PaletteCommand]:
+    """The console's commands, titled for the state they would change."""
+    cls = type(app)
+    paused = app.status is not None and app.status.paused
+    yield PaletteCommand(
+        "Resume polling" if paused else "Pause polling",
+        app.action_toggle_polling,
+        "poll the watched variables again" if paused else "stop polling the watched variables",
+        key_of(cls, "toggle_polling"),
+    )
+    polls = app.frame_log.show_polls
+    yield PaletteCommand(
+        "Hide poll frames" if polls else "Show poll frames",
+        app.action_toggle_poll_frames,
+        "the frame log shows typed exchanges only" if polls else "the frame log shows polls too",
+        key_of(cls, "toggle_poll_frames"),
+    )
+    following = app.frame_log.auto_scroll
+    yield PaletteCommand(
+        "Freeze log" if following else "Follow log",
+        app.action_toggle_scroll,
+        "stop the frame log scrolling" if following else "scroll the frame log with new frames",
+        key_of(cls, "toggle_scroll"),
+    )
+    yield PaletteCommand(
+        "Clear log", app.action_clear_log, "empty the frame log", key_of(cls, "clear_log")
+    )
+    grid = app.io_panel.display
+    yield PaletteCommand(
+        "Hide I/O grid" if grid else "Show I/O grid",
+        app.action_toggle_io_grid,
+        "watched IO bits as rows of the table" if grid else "watched IO bits as a grid of words",
+        key_of(cls, "toggle_io_grid"),
+    )
+    toggle_hex = getattr(app, "action_toggle_hex", None)
+    if callable(toggle_hex):
+        yield PaletteCommand(
+            "Hex view of frames",
+            toggle_hex,
+            "show or hide each frame's bytes in hex",
+            key_of(cls, "toggle_hex"),
+        )
+    yield PaletteCommand(
+        "Help", app.action_help, "keys, commands, what the status line says", key_of(cls, "help")
+    )
+    yield PaletteCommand(
+        "connect sim",
+        lambda: app.submit_line("connect sim"),
+        "back to the built-in simulator",
+    )
+    for name in app.profile_names:
+        line = f"connect {name}"
+        yield PaletteCommand(
+            terminal_safe(line),
+            partial(app.submit_line, line),
+            "a target profile from the config file",
+        )
+    yield PaletteCommand(
+        "load FILE…",
+        lambda: app.put_on_command_line("load "),
+        "add a saved watch list: type its file name",
+    )
+    yield PaletteCommand(
+        "save FILE…",
+        lambda: app.put_on_command_line("save "),
+        "save the watch list as TOML: type a file name",
+    )
+    if app.status is not None and app.status.csv_log is not None:
+        yield PaletteCommand(
+            "log stop", lambda: app.submit_line("log stop"), "stop logging to the CSV file"
+        )
+    else:
+        yield PaletteCommand(
+            "log FILE.csv…",
+            lambda: app.put_on_command_line("log "),
+            "log the watched values to a CSV file: type its name",
+        )
+
+
+def textual_commands(app: RacConsoleApp) -> Iterator[PaletteCommand]:
+    """Textual's own (Theme, Keys, Screenshot, Quit…), with a key where one runs them."""
+    for command in app.get_system_commands(app.screen):
+        callback = command.callback
+        action = getattr(callback, "__name__", "").removeprefix("action_")
+        bound_to_app = getattr(callback, "__self__", None) is app
+        key = key_of(type(app), action) if bound_to_app and action else None
+        yield PaletteCommand(command.title, callback, command.help, key)
+
+
+#: What ``App.COMMANDS`` holds: providers, or callables that return one.
+Providers = set[type[Provider] | Callable[[], type[Provider]]]
+
+
+class ConsoleCommands(Provider):
+    """The palette's commands: the console's own, then Textual's."""
+
+    def _commands(self) -> list[PaletteCommand]:
+        app: RacConsoleApp = self.app  # type: ignore[assignment]
+        return [*console_commands(app), *textual_commands(app)]
+
+    async def discover(self) -> Hits:
+        for command in self._commands():
+            yield DiscoveryHit(
+                command.display(), command.run, text=command.title, help=command.help
+            )
+
+    async def search(self, query: str) -> Hits:
+        matcher = self.matcher(query)
+        for command in self._commands():
+            score, offsets = matcher.fuzzy_search.match(matcher.query, command.title)
+            if score > 0:
+                yield Hit(
+                    score,
+                    command.display(tuple(offsets)),
+                    command.run,
+                    text=command.title,
+                    help=command.help,
+                )
+
+
+def screenshot_directory() -> tuple[Path, bool]:
+    """Where a screenshot goes: the Downloads folder, or the current directory when
+    there is none (True when it is the fallback)."""
+    try:
+        downloads = user_downloads_path()
+    except Exception:  # platformdirs reads the user's dirs file: never a traceback
+        downloads = None
+    if downloads is not None and downloads.is_dir():
+        return downloads, False
+    return Path.cwd(), True
+
+
+class PaletteActions:
+    """The help screen, the palette's line-making commands and the screenshot, for
+    :class:`~rac_console.tui.app.RacConsoleApp` (and only it: see ``_app``)."""
+
+    @property
+    def _app(self) -> RacConsoleApp:
+        return cast("RacConsoleApp", self)
+
+    def action_help(self) -> None:
+        """F1, ``?`` on an empty line, the palette: open the help (F1 again closes it)."""
+        app = self._app
+        if isinstance(app.screen, HelpScreen):
+            app.screen.dismiss(None)
+            return
+        sections = help_sections(console_key_groups(type(app)))
+        app.push_screen(HelpScreen(sections), self._help_closed)
+
+    def _help_closed(self, _: None) -> None:
+        """Back on the command line, wherever the help was opened from."""
+        focus_now(self._app.command_line)
+
+    def on_command_line_help_requested(self, _: CommandLine.HelpRequested) -> None:
+        self.action_help()
+
+    def put_on_command_line(self, text: str) -> None:
+        """A line for the user to finish (a file name) and run with their own Enter."""
+        command_line = self._app.command_line
+        command_line.value = text
+        command_line.cursor_position = len(text)
+        focus_now(command_line)
+
+    def deliver_screenshot(
+        self,
+        filename: str | None = None,
+        path: str | None = None,
+        time_format: str | None = None,
+    ) -> str | None:
+        """Save an SVG of the screen in Downloads, or in the current directory when
+        there is no Downloads folder (Textual's own then fails), and say where."""
+        app = self._app
+        fallback = False
+        if path is not None:
+            directory = Path(path).expanduser()
+        else:
+            directory, fallback = screenshot_directory()
+        stamp = datetime.now().strftime(time_format or "%Y-%m-%dT%H_%M_%S")
+        target = directory / (filename or f"{app.title}_{stamp}.svg")
+        shown = terminal_safe(str(target))
+        try:
+            target.write_text(app.export_screenshot(), encoding="utf-8")
+        except OSError as error:
+            why = error.strerror or type(error).__name__
+            app.notify(
+                f"Not saved: {shown}: {why}", title="Screenshot", severity="error", markup=False
+            )
+            app.show(Message(f"screenshot not saved: {shown}: {why}", "error"))
+            return None
+        where = " (no Downloads folder: saved in the current directory)" if fallback else ""
+        app.notify(f"Saved to {shown}{where}", title="Screenshot", markup=False)
+        app.show(Message(f"screenshot saved to {shown}{where}"))
+        return str(target)

@@ -1,0 +1,59 @@
+"""Snapshot of a LIVE target profile's colours: the label in the profile's colour on the
+status line and as the title of the frame around the whole console, ``CONFIRM WRITES``.
+
+The controller is a simulator on 127.0.0.1 port 0; the figures that move (its port, the
+round trip, frames per second) are staged.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+from pathlib import Path
+
+import pytest
+from test_profiles_tui import console
+from tui_helpers import type_line, until
+
+from rac_console.commands.policy import TargetProfile, WritePolicy, Writes, parse_allow
+from rac_console.sim.thread import SimulatorThread
+
+#: A terminal app and a simulator: `pytest -m "not slow"` skips it.
+pytestmark = pytest.mark.slow
+
+
+def test_live_profile_colours(snap_compare, tmp_path: Path) -> None:
+    with SimulatorThread() as cell:
+        profile = TargetProfile(
+            "cell3",
+            cell.host,
+            cell.port,
+            "Cell 3 — welding",
+            "dark_orange3",
+            WritePolicy(Writes.CONFIRM, (parse_allow("I 100-199"),), "profile cell3"),
+        )
+        app = console(tmp_path, profile)
+
+        async def run_before(pilot) -> None:
+            await until(
+                pilot,
+                lambda: app.status is not None and app.status.connection == "connected",
+                "the connection",
+            )
+            await type_line(pilot, "pause")
+            await until(pilot, lambda: app.status is not None and app.status.paused, "the pause")
+            await until(pilot, lambda: app.frames_per_second() == 0, "no frames flowing")
+            assert app.status is not None
+            app.status = replace(
+                app.status,
+                target="LIVE 192.168.0.1:5006",
+                host="192.168.0.1",
+                port=5006,
+                rtt=0.00025,
+            )
+            app.results.clear()
+            app.frame_log.clear()
+            app.command_line.cursor_blink = False
+            app.refresh_table()
+            await pilot.pause(0.1)
+
+        assert snap_compare(app, terminal_size=(100, 24), run_before=run_before)
