@@ -50,9 +50,7 @@ def measure(port: int, args: argparse.Namespace, cpu: int | None, csv_dir: str) 
                 keys += out["key_ms"]
     session, console, logged = runs["session"], runs["console"], runs["console+csv"]
     ratios = sorted(c.rate / s.rate for c, s in zip(console, session, strict=True))
-    csv_costs = sorted(
-        c.cpu_us / p.cpu_us - 1 for c, p in zip(logged, console, strict=True)
-    )
+    csv_costs = sorted(c.cpu_us / p.cpu_us - 1 for c, p in zip(logged, console, strict=True))
     return {
         "session_rps": statistics.median(r.rate for r in session),
         "session_cpu_us": statistics.median(r.cpu_us for r in session),

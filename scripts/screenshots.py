@@ -1,6 +1,6 @@
 """Regenerate screenshots/ from the real console running against the built-in simulator.
 
-    python scripts/screenshots.py
+    python scripts/screenshots.py [SCENE...]
 
 Each screenshot is taken after typing real commands and letting polling run.
 """
@@ -86,7 +86,7 @@ KEYED_SCENES = {
 #: its colour frames the console; the second one is a write waiting for its "y".
 PROFILE_SCENES = {
     "profile-live-120x40": ((120, 40), ["watch IO 128-135", "watch I 10 part count"], ""),
-    "confirm-120x40": ((120, 40), ["watch I 10 part count", "put I 10 14"], "put I 10 15\n"),
+    "confirm-120x40": ((120, 40), ["watch I 10 part count", "watch IO 128-135"], "put I 10 15\n"),
 }
 
 
@@ -96,9 +96,7 @@ def profile_engine(port: int) -> Engine:
         Writes.CONFIRM, (parse_allow("I 0-99"), parse_allow("IO 128-143")), "profile cell3"
     )
     profile = TargetProfile("cell3", "127.0.0.1", port, "Cell 3 — welding", "red", policy)
-    return Engine(
-        "127.0.0.1", port, interval=0.2, cycles=True, policy=policy, profile=profile
-    )
+    return Engine("127.0.0.1", port, interval=0.2, cycles=True, policy=policy, profile=profile)
 
 
 async def take(
@@ -132,16 +130,25 @@ async def take(
     print(f"wrote screenshots/{name}.svg", file=sys.stderr)
 
 
-async def main() -> None:
+async def main(only: list[str]) -> None:
+    """Every scene, or the ones named on the command line."""
     OUT.mkdir(exist_ok=True)
+
+    def wanted(name: str) -> bool:
+        return not only or name in only
+
     for name, (size, lines, typed) in SCENES.items():
-        await take(name, size, lines, typed)
+        if wanted(name):
+            await take(name, size, lines, typed)
     for name, (size, lines, keys) in KEYED_SCENES.items():
-        await take(name, size, lines, "", keys)
+        if wanted(name):
+            await take(name, size, lines, "", keys)
     for name, (size, lines, typed) in PROFILE_SCENES.items():
+        if not wanted(name):
+            continue
         with SimulatorThread() as sim:
             await take(name, size, lines, typed, engine=profile_engine(sim.port))
 
 
 if __name__ == "__main__":
-    asyncio.run(main())
+    asyncio.run(main(sys.argv[1:]))

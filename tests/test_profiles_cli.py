@@ -145,7 +145,7 @@ def test_the_simulator_server_does_not_need_the_config(
 
 
 def test_a_missing_config_is_fine(env: dict[str, str], tmp_path: Path) -> None:  # noqa: F811
-    env["RAC_CONSOLE_CONFIG"] = str(tmp_path / "nowhere" / "config.toml")
+    env["XDG_CONFIG_HOME"] = str(tmp_path / "nowhere")  # no config.toml at the default path
     result = cli(env, "get", "I", "1", "--json")
     assert result.returncode == 0, result.stderr
 

@@ -67,8 +67,8 @@ async def test_a_confirm_question_is_asked_and_answered(tmp_path: Path) -> None:
         for typed, expected in (("\r", False), ("n\r", False), ("y\r", True), ("yes\r", True)):
             d.engine.outbox.put_many([QUESTION])
             await d.until(lambda _: d.repl.asking is not None, "the question")
-            asked = time.monotonic()  # a yes within the guard time is asked again
-            await d.until(lambda _: time.monotonic() > asked + 0.5, "the guard time to pass")
+            ready = time.monotonic() + 0.5  # a yes within the guard time is asked again
+            await d.until(lambda _, at=ready: time.monotonic() > at, "the guard time to pass")
             d.type(typed)
             await d.until(lambda _: len(answers) == len(seen) + 1, "the answer")
             seen.append(expected)

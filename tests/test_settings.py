@@ -458,7 +458,9 @@ async def test_a_change_undone_before_the_save_writes_nothing(tmp_path: Path, co
     app = console(tmp_path)
     async with app.run_test(size=WIDE) as pilot:
         await started(pilot)
-        await pilot.press("f7", "f7")
+        app.action_toggle_hex()  # both in one go: no save can fall between them
+        app.action_toggle_hex()
+        await pilot.pause()
     assert config.read_text() == PROFILES
 
 

@@ -22,6 +22,7 @@ from tui_helpers import WIRE_RECORD, until
 
 from rac_console.commands.policy import TargetProfile, WritePolicy, Writes
 from rac_console.engine import Engine, Status
+from rac_console.present import status
 from rac_console.present.history import History
 from rac_console.present.status import contrast, label_style, status_text
 from rac_console.session import Frame
@@ -225,6 +226,16 @@ def test_contrast_figures() -> None:
     assert contrast(black, white) == pytest.approx(21.0)
     assert contrast(white, white) == pytest.approx(1.0)
     assert contrast(Color.parse("#777777"), white) == pytest.approx(4.48, abs=0.01)
+
+
+@pytest.mark.parametrize(
+    "name",
+    ["LIVE", "SIMULATOR", "NO_SESSION", "READ_ONLY", "CONFIRM", "ALARM", "CSV", "RUNNING"],
+)
+def test_every_badge_reads(name: str) -> None:
+    style = getattr(status, f"{name}_STYLE")
+    assert style.color.triplet is not None and style.bgcolor.triplet is not None  # truecolor
+    assert contrast(style.color, style.bgcolor) >= 4.5
 
 
 def test_an_unknown_colour_gets_the_default_reversed_block() -> None:

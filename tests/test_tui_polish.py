@@ -202,7 +202,7 @@ async def test_the_footer_shows_whole_keys_in_every_pane(
         await pilot.press("f6")
         assert app.focused is app.frame_log
         await footer_fits(pilot, "frame log")
-        await pilot.press("f5", "f6", "f6")
+        await pilot.press("f5", "f6", "f6", "f6")  # log → command line → table → grid
         await until(pilot, lambda: app.focused is app.io_panel, "the grid focused")
         await footer_fits(pilot, "I/O grid")
         await pilot.press("escape")
@@ -251,6 +251,13 @@ async def test_a_writable_target_offers_the_toggle(tmp_path: Path) -> None:
 # ------------------------------------------------------------- 4. hex view
 
 
+def last_hex_message(app: RacConsoleApp) -> str:
+    """The last hex view message, unwrapped."""
+    text = results_text(app)
+    at = text.rfind("hex view")
+    return " ".join(text[at:].split()) if at >= 0 else ""
+
+
 async def test_hex_view_says_where_the_bytes_are_and_lines_them_up(tmp_path: Path) -> None:
     app = make_app(tmp_path)
     async with app.run_test(size=(80, 30)) as pilot:
@@ -258,15 +265,16 @@ async def test_hex_view_says_where_the_bytes_are_and_lines_them_up(tmp_path: Pat
         await until(pilot, lambda: "I1 =" in results_text(app), "a reply")
         await pilot.press("f7")
         await until(pilot, lambda: "hex view" in results_text(app), "the message")
-        assert "under" in results_text(app).splitlines()[-1]
+        assert "under" in last_hex_message(app)
         await pilot.press("f7")
         await pilot.resize_terminal(160, 30)
         await pilot.pause()
-        await type_line(pilot, "get P 1")
+        await type_line(pilot, "get I 2")
         await type_line(pilot, "get S 1")
         await until(pilot, lambda: "S1 =" in results_text(app), "replies")
         await pilot.press("f7")
-        await until(pilot, lambda: "beside" in results_text(app).splitlines()[-1], "beside")
+        await until(pilot, lambda: "hex view" in last_hex_message(app), "the message")
+        assert "under" not in last_hex_message(app), "\n".join(app.frame_log.lines)
         app.flush_log()
         lines = [line for line in app.frame_log.lines if "│" in line]
         assert len(lines) >= 4
@@ -292,14 +300,18 @@ async def test_help_searches_headings_and_reads_clearly(tmp_path: Path) -> None:
         assert "Left  Left" not in shown and "Right  Right" not in shown
         assert "Move the cursor" in shown
         assert "Edit put" not in shown
-        for query, wanted in (("frame log", "Filter"), ("gap", "gap"), ("--log", "--log")):
+        body = app.screen.query_one("#help-body")
+        for query, wanted in (("frame log", "Filter"), ("gap", "gap column"), ("--log", "--log")):
             search = app.screen.query_one("#help-search")
             search.value = query  # type: ignore[attr-defined]
             await until(
                 pilot,
-                lambda w=wanted: w.lower() in help_screen(app).shown_text.lower()
-                and "nothing matches" not in help_screen(app).shown_text,
-                f"{query!r} found",
+                lambda: (
+                    re.search(r"\d+ of \d+ lines? match", str(body.border_subtitle)) is not None
+                ),
+                f"{query!r} searched",
             )
-            subtitle = str(app.screen.query_one("#help-body").border_subtitle)
-            assert re.search(r"\d+ of \d+ lines? match", subtitle), subtitle
+            shown = help_screen(app).shown_text
+            assert wanted in shown and "nothing matches" not in shown, (query, shown)
+            search.value = ""  # type: ignore[attr-defined]
+            await until(pilot, lambda: "type to search" in str(body.border_subtitle), "cleared")

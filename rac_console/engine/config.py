@@ -17,10 +17,9 @@ from pathlib import Path
 from ..commands.policy import TargetProfile
 from ..commands.profiles import parse_config
 from ..protocol import InputError
+from .textfile import read_text_file
 
 CONFIG_ENV = "RAC_CONSOLE_CONFIG"
-#: A config file larger than this is not one: refused before it is parsed.
-MAX_FILE_BYTES = 1024 * 1024
 
 
 def config_path() -> Path:
@@ -50,23 +49,14 @@ def load_config(path: Path | None = None) -> Config:
     named = path is None and bool(os.environ.get(CONFIG_ENV))
     path = config_path() if path is None else path
     try:
-        if not path.exists() and named:  # a typo must not quietly drop a read-only profile
-            raise InputError(f"{path} (named by {CONFIG_ENV}) does not exist")
-        if not path.exists():
-            return Config(path)
-        if not path.is_file():  # a directory, a device or a pipe
-            raise InputError(f"{path} is not a regular file: not a config file")
-        with path.open("rb") as handle:
-            data = handle.read(MAX_FILE_BYTES + 1)
-        if len(data) > MAX_FILE_BYTES:
-            raise InputError(
-                f"{path} is larger than {MAX_FILE_BYTES // 1024} KiB: not a config file"
-            )
-        text = data.decode("utf-8")
+        exists = path.exists()
     except (OSError, RuntimeError) as exc:
         raise InputError(f"cannot read {path}: {getattr(exc, 'strerror', None) or exc}") from None
-    except UnicodeDecodeError:
-        raise InputError(f"{path} is not a UTF-8 text file") from None
+    if not exists and named:  # a typo must not quietly drop a read-only profile
+        raise InputError(f"{path} (named by {CONFIG_ENV}) does not exist")
+    if not exists:
+        return Config(path)
+    text = read_text_file(path, "a config file")
     try:
         table = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:  # "... (at line 3, column 8)"

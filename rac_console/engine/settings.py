@@ -22,7 +22,8 @@ from pathlib import Path
 
 from ..commands.settings import Value, read_settings, update_settings_text
 from ..protocol import InputError
-from .config import MAX_FILE_BYTES, load_config
+from .config import load_config
+from .textfile import read_text_file
 
 
 @dataclass(frozen=True)
@@ -70,13 +71,7 @@ def _read(path: Path, shown: Path) -> tuple[str, int | None]:
         info = path.stat()
     except FileNotFoundError:
         return "", None
-    if not stat.S_ISREG(info.st_mode):
-        raise InputError(f"{shown} is not a regular file: not a config file")
-    with path.open("rb") as handle:
-        data = handle.read(MAX_FILE_BYTES + 1)
-    if len(data) > MAX_FILE_BYTES:
-        raise InputError(f"{shown} is larger than {MAX_FILE_BYTES // 1024} KiB: not a config file")
-    return data.decode("utf-8"), stat.S_IMODE(info.st_mode)
+    return read_text_file(path, "a config file", shown), stat.S_IMODE(info.st_mode)
 
 
 def _replace(path: Path, data: bytes, mode: int | None) -> None:

@@ -8,9 +8,9 @@ from pathlib import Path
 
 from ..commands.language import VarRef
 from ..protocol import InputError, kind_of, parse_index
+from .textfile import read_text_file
 
 #: A watch list larger than this is not a cell's list: refused before it is parsed.
-MAX_FILE_BYTES = 1024 * 1024
 #: Rows a watch list may hold (a console polls every row over one session).
 MAX_ROWS = 4096
 #: The longest ``every`` a row may ask for, in seconds (as for ``interval``).
@@ -103,19 +103,5 @@ def save(path: str | Path, rows: Iterable[Row]) -> None:
 
 def load(path: str | Path) -> list[Row]:
     """The rows of a watch list file; InputError, one line, for anything wrong with it."""
-    try:
-        file = Path(path).expanduser()
-        if file.exists() and not file.is_file():  # a device or a pipe: endless, or no end
-            raise InputError(f"{path} is not a regular file: not a watch list")
-        with file.open("rb") as handle:
-            data = handle.read(MAX_FILE_BYTES + 1)
-        if len(data) > MAX_FILE_BYTES:
-            raise InputError(
-                f"{path} is larger than {MAX_FILE_BYTES // 1024} KiB: not a watch list"
-            )
-        text = data.decode("utf-8")
-    except (OSError, RuntimeError) as exc:
-        raise InputError(f"cannot read {path}: {getattr(exc, 'strerror', None) or exc}") from None
-    except UnicodeDecodeError:
-        raise InputError(f"{path} is not a UTF-8 text file") from None
+    text = read_text_file(Path(path).expanduser(), "a watch list", path)
     return loads(text)

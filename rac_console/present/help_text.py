@@ -86,7 +86,14 @@ def key_entries(bindings: Iterable[tuple[str, str]]) -> tuple[HelpEntry, ...]:
         shared = keys.setdefault(description, [])
         if label not in shared:
             shared.append(label)
-    return tuple(HelpEntry(" / ".join(labels), text) for text, labels in keys.items())
+    return tuple(
+        HelpEntry(("" if set(labels) <= _ARROWS else " / ").join(labels), text)
+        for text, labels in keys.items()
+    )
+
+
+#: Keys shown side by side, with no slash between them: ``←→↑↓``.
+_ARROWS = frozenset("←→↑↓")
 
 
 def command_entries() -> tuple[HelpEntry, ...]:
@@ -179,13 +186,43 @@ STATUS_FIGURES: tuple[HelpEntry, ...] = (
 )
 
 
+#: What a frame log line shows, left to right, and where frames are kept.
+FRAME_LOG_COLUMNS: tuple[HelpEntry, ...] = (
+    HelpEntry("14:03:07.123", "when the frame crossed the wire (local time, milliseconds)"),
+    HelpEntry(
+        "+12ms",
+        "the gap column: the time since the previous frame on the wire; a reply that "
+        "took half the timeout or more is highlighted (t in the frame log hides the gaps)",
+    ),
+    HelpEntry("→ ←", "sent to the controller, received from it; ↵ is the frame's CR"),
+    HelpEntry(
+        "0.21 ms  S_OK  VT_I4",
+        "after a reply: its round-trip time, its result code and the value's type",
+    ),
+    HelpEntry(
+        "│ 47 45 54 …",
+        "the hex view (F7): every byte of the frame, beside its text in one column, or "
+        "on lines under it when the terminal is too narrow",
+    ),
+    HelpEntry(
+        "--log FILE",
+        "start option: append every frame to FILE as a plain timestamped transcript",
+    ),
+    HelpEntry(
+        "--record FILE",
+        "start option: append every frame to FILE as JSON lines (replay reads them)",
+    ),
+)
+
+
 def help_sections(key_groups: Sequence[KeyGroup]) -> list[HelpSection]:
-    """The help: a ``Keys: GROUP`` section per group of keys, then the commands and
-    the status line."""
+    """The help: a ``Keys: GROUP`` section per group of keys, then the commands, the
+    frame log's columns and the status line."""
     sections = [
         HelpSection(f"Keys: {group}", key_entries(bindings)) for group, bindings in key_groups
     ]
     sections.append(HelpSection("Commands", command_entries()))
+    sections.append(HelpSection("Frame log: a line, left to right", FRAME_LOG_COLUMNS))
     sections.append(HelpSection("Status line", STATUS_FIGURES))
     return sections
 
@@ -194,13 +231,17 @@ def filter_sections(
     sections: Sequence[HelpSection], query: str
 ) -> tuple[list[HelpSection], int, int]:
     """The sections cut to the entries where ``query`` occurs (case-insensitive; a
-    section with none left goes), how many entries matched, and how many there are."""
+    section with none left goes; a section whose title holds it stays whole), how
+    many entries are shown, and how many there are."""
     total = sum(len(section.entries) for section in sections)
     folded = query.strip().casefold()
     if not folded:
         return list(sections), total, total
     shown = []
     for section in sections:
+        if folded in section.title.casefold():
+            shown.append(section)
+            continue
         entries = tuple(entry for entry in section.entries if entry.matches(folded))
         if entries:
             shown.append(HelpSection(section.title, entries))

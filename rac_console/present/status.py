@@ -93,11 +93,11 @@ def _cut(text: str, width: int) -> str:
 #: The label's share of a line of a given width: a quarter, within these bounds (cells).
 LABEL_MIN = 8
 #: Styles of the badges; truecolor, so a theme cannot turn them into one another.
-LIVE_STYLE = Style.parse("bold #ffffff on #5f0000")
+LIVE_STYLE = Style.parse("bold #ff5f5f on #262626")  # not a block of red: labels are
 SIMULATOR_STYLE = Style.parse("bold #000000 on #ffd700")
 NO_SESSION_STYLE = Style.parse("bold #ffffff on #585858")
 READ_ONLY_STYLE = Style.parse("bold #ffffff on #005fd7")
-CONFIRM_STYLE = Style.parse("bold #ffd700 on #262626")
+CONFIRM_STYLE = Style.parse("bold #ffffff on #8700af")
 ALARM_STYLE = Style.parse("bold #ffffff on #d70000")
 CSV_STYLE = Style.parse("bold #000000 on #5fd75f")
 RUNNING_STYLE = Style.parse("bold #000000 on #ffd700")

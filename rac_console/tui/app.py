@@ -67,16 +67,16 @@ class RacConsoleApp(PaletteActions, TableActions, LogActions, App[int]):
     BINDINGS: ClassVar[list[BindingType]] = [
         # In the footer in this order, after the focused pane's keys, as many as fit.
         Binding("escape", "cancel_command", "Cancel command", id="cancel-command"),
-        Binding("ctrl+q", "quit", "Quit", id="quit", priority=True),
         Binding("f1", "help", "Help", id="help"),
+        # Priority: taken as the key arrives, so the keys typed right after it go to the
+        # new pane (without it they were already on their way to the old one).
+        Binding("f6", "focus_pane(1)", "Next pane", id="next-pane", priority=True),
         # F2 and F4 say what they will do: check_action shows one of each pair.
         Binding("f2", "toggle_polling", "Pause polls", id="toggle-polling"),
         Binding("f2", "toggle_polling('resume')", "Resume polls", id="resume-polling"),
         Binding("f4", "toggle_scroll", "Freeze log", id="toggle-scroll"),
         Binding("f4", "toggle_scroll('follow')", "Follow log", id="follow-log"),
-        # Priority: taken as the key arrives, so the keys typed right after it go to the
-        # new pane (without it they were already on their way to the old one).
-        Binding("f6", "focus_pane(1)", "Next pane", id="next-pane", priority=True),
+        Binding("ctrl+q", "quit", "Quit", id="quit", priority=True),
         Binding("f5", "toggle_io_grid", "I/O grid", id="toggle-io-grid"),
         Binding("f3", "toggle_poll_frames", "Poll frames", id="toggle-poll-frames"),
         Binding("f7", "toggle_hex", "Hex view", id="toggle-hex"),

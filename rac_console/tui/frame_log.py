@@ -86,6 +86,10 @@ class FrameLog(Log):
         self._filter = FrameFilter()
         self._narrowed = False  # a filter, or poll frames hidden: not every frame shows
         self._hex_width = 0  # the width the hex was laid out for
+        #: The column the hex starts at, for the frames drawn (their longest text that
+        #: leaves room for its bytes); a frame with no room has them under its text.
+        self._hex_column = 0
+        self._hex_placed = [0, 0]  # frames drawn since the last redraw: beside, under
         self._title: Text | None = None
 
     # ------------------------------------------------------------- options
@@ -111,6 +115,15 @@ class FrameLog(Log):
         if shown != self._hex_view:
             self._hex_view = shown
             self._redraw()
+
+    @property
+    def hex_placement(self) -> str:
+        """Where the hex view draws the bytes of the frames on screen: ``beside``,
+        ``under``, ``mixed`` (under the lines too long), or ``none`` (no frame yet)."""
+        beside, under = self._hex_placed
+        if beside and under:
+            return "mixed"
+        return "beside" if beside else "under" if under else "none"
 
     @property
     def show_gaps(self) -> bool:
@@ -221,6 +234,9 @@ class FrameLog(Log):
             self.update_title()
         if not self.is_mounted:
             return len(events)  # drawn from what is kept once mounted
+        if self._hex_view and self._hex_grows(shown[-MAX_LINES_PER_FLUSH:]):
+            self._redraw()  # a longer line: the hex column moves right, for every line
+            return len(events)
         lines = self._draw(shown[-MAX_LINES_PER_FLUSH:])
         if count > MAX_LINES_PER_FLUSH:
             skipped = count - MAX_LINES_PER_FLUSH
@@ -347,6 +363,8 @@ class FrameLog(Log):
         self.update_title()
         if not self.is_mounted:
             return
+        self._hex_column = 0
+        self._hex_placed = [0, 0]
         lines = self._draw(shown[-MAX_LINES:])
         super().clear()
         if lines:
@@ -369,27 +387,54 @@ class FrameLog(Log):
     def _width_now(self) -> int:
         return self.scrollable_content_region.width if self.is_mounted else 0
 
+    def _frame_line(self, event: Frame, gap: float | None) -> tuple[str, int]:
+        """A frame's line, and where its text starts (after the time and the gap)."""
+        head = self._head(event.time, gap)
+        return f"{head} {self._bodies.get(id(event)) or frame_body(event)}", len(head) + 1
+
+    def _hex_fits(self, width: int, line: str, hexed: str) -> bool:
+        return not width or len(line) + len(HEX_SEPARATOR) + len(hexed) <= width
+
+    def _hex_column_of(self, shown: list[Drawn], width: int) -> int:
+        """The longest text among these frames that leaves room for its hex beside it."""
+        column = 0
+        for event, gap, _ in shown:
+            if isinstance(event, Frame):
+                line, _ = self._frame_line(event, gap)
+                if self._hex_fits(width, line, hex_text(event.data)):
+                    column = max(column, len(line))
+        return column
+
+    def _hex_grows(self, shown: list[Drawn]) -> bool:
+        """True when new frames move the hex column (or the width changed)."""
+        width = self._width_now()
+        return width != self._hex_width or self._hex_column_of(shown, width) > self._hex_column
+
     def _draw(self, shown: list[Drawn]) -> list[str]:
         lines: list[str] = []
         hex_view = self._hex_view
         width = self._hex_width = self._width_now() if hex_view else 0
-        bodies = self._bodies  # made by a text filter: else made here, not kept
+        if hex_view:
+            self._hex_column = column = max(self._hex_column, self._hex_column_of(shown, width))
+        placed = self._hex_placed
         for event, gap, _ in shown:
             if not isinstance(event, Frame):
                 stamp, text = event
                 lines.append(f"{self._head(stamp, None)} ── {terminal_safe(text)} ──")
                 continue
-            head = self._head(event.time, gap)
-            line = f"{head} {bodies.get(id(event)) or frame_body(event)}"
+            line, indent = self._frame_line(event, gap)
             if not hex_view:
                 lines.append(line)
                 continue
             hexed = hex_text(event.data)
-            if not width or len(line) + len(HEX_SEPARATOR) + len(hexed) <= width:
-                lines.append(line + HEX_SEPARATOR + hexed)
+            padded = f"{line:<{column}}"
+            if self._hex_fits(width, padded, hexed):
+                lines.append(padded + HEX_SEPARATOR + hexed)
+                placed[0] += 1
             else:
                 lines.append(line)
-                lines.extend(_hex_under(hexed, len(head) + 1, width))
+                lines.extend(_hex_under(hexed, indent, width))
+                placed[1] += 1
         return lines
 
     def _update_size(self, updates: int, lines: list[str]) -> None:  # type: ignore[override]
@@ -459,9 +504,15 @@ class LogActions:
     def action_toggle_hex(self) -> None:
         log = self.frame_log
         log.hex_view = not log.hex_view
+        where = {
+            "beside": "beside its text, in one column",
+            "under": "on lines under its text (wider terminals put them beside)",
+            "mixed": "beside its text, or under it when the line is too long",
+            "none": "beside its text, or under it when both do not fit",
+        }[log.hex_placement]
         self.show(
             Message(
-                "hex view: each frame's bytes beside its text (F7 hides them)"
+                f"hex view: each frame's bytes {where} (F7 hides them)"
                 if log.hex_view
                 else "hex view off"
             )

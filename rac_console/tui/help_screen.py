@@ -182,7 +182,8 @@ class HelpScreen(Screen[None]):
         if not query:
             body.border_subtitle = f"{self.total} entries · type to search"
         else:
-            body.border_subtitle = f"{self.matched} of {self.total} match"
+            lines = "line matches" if self.total == 1 else "lines match"
+            body.border_subtitle = f"{self.matched} of {self.total} {lines}"
         if shown:
             text.update(render_sections(shown, query))
             self.shown_text = "\n".join(plain_lines(shown))

@@ -55,10 +55,15 @@ class IoPanel(VerticalScroll, can_focus=True):
     """The grid, scrolled when it has more lines than room; hidden until F5."""
 
     BINDINGS: ClassVar[list[BindingType]] = [
-        Binding("left", "move(-1, 0)", "Left", show=False, id="io-left"),
-        Binding("right", "move(1, 0)", "Right", show=False, id="io-right"),
-        Binding("up", "move(0, -1)", "Up", show=False, id="io-up"),
-        Binding("down", "move(0, 1)", "Down", show=False, id="io-down"),
+        # One entry in the help: ←→↑↓  Move the cursor.
+        Binding(
+            "left", "move(-1, 0)", "Move the cursor", key_display="←", show=False, id="io-left"
+        ),
+        Binding(
+            "right", "move(1, 0)", "Move the cursor", key_display="→", show=False, id="io-right"
+        ),
+        Binding("up", "move(0, -1)", "Move the cursor", key_display="↑", show=False, id="io-up"),
+        Binding("down", "move(0, 1)", "Move the cursor", key_display="↓", show=False, id="io-down"),
         Binding("space", "toggle_bit", "Toggle bit", id="io-toggle-bit"),
         Binding("escape", "app.focus_command_line", "Command line", id="io-leave"),
     ]

@@ -47,13 +47,26 @@ class WatchTable(DataTable[object]):
     """The app calls :meth:`refresh_rows` at ~5 Hz with every row it holds."""
 
     BINDINGS: ClassVar[list[BindingType]] = [
-        Binding("enter", "row('put')", "Edit put", id="row-put"),
+        # In the footer in this order, as many as fit.
+        Binding(
+            "enter",
+            "row('put')",
+            "Edit value",
+            tooltip="Put the row's value on the command line, to edit and write",
+            id="row-put",
+        ),
         Binding("space", "row('toggle')", "Toggle", id="row-toggle"),
         Binding("delete", "row('unwatch')", "Unwatch", id="row-unwatch"),
         Binding("slash", "row('filter')", "Filter", id="row-filter"),
-        Binding("s", "cycle_sort", "Sort", id="row-sort"),
-        Binding("f", "cycle_field", "Field", id="row-field"),
         Binding("t", "row('trend')", "Trend", id="row-trend"),
+        Binding("s", "cycle_sort", "Sort", id="row-sort"),
+        Binding(
+            "f",
+            "cycle_field",
+            "Trend field",
+            tooltip="Trend the next field (X, Y, Z…) of a position row",
+            id="row-field",
+        ),
         Binding("escape", "app.focus_command_line", "Command line", id="row-leave"),
         Binding("tab", "app.focus_pane(1)", "Next pane", show=False, id="row-next-pane"),
         Binding("shift+tab", "app.focus_pane(-1)", "Previous pane", show=False, id="row-prev-pane"),
@@ -104,9 +117,7 @@ class WatchTable(DataTable[object]):
 
     def check_action(self, action: str, parameters: tuple[object, ...]) -> bool | None:
         """No Space in the footer on a read-only target (it still says why, see on_key)."""
-        if action == "row" and parameters == ("toggle",) and self._writes_refused():
-            return False
-        return True
+        return not (action == "row" and parameters == ("toggle",) and self._writes_refused())
 
     def _writes_refused(self) -> bool:
         status = getattr(self.app, "status", None)
