@@ -80,3 +80,17 @@ def test_benchmark_smoke_run_reports_every_figure(tmp_path: Path) -> None:
     for row in ROWS:
         assert row in result.stdout, row
     assert "session client under cProfile" in result.stdout
+
+
+def test_the_write_benchmark_reports_the_three_rates() -> None:
+    result = subprocess.run(
+        [sys.executable, "write_bench.py", "--count", "20", "--rounds", "1"],
+        cwd=BENCHMARKS,
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert result.returncode == 0, result.stderr[-2000:]
+    (line,) = [text for text in result.stdout.splitlines() if text.startswith("round 0:")]
+    for figure in ("bare PUT", "--no-verify", "verified"):
+        assert figure in line, line

@@ -70,8 +70,10 @@ def stage(app: RacConsoleApp) -> None:
     # The sparklines: as many samples as polling gathered would vary from run to run.
     app.trends.clear()
     samples = tuple((var, view.variant) for var, view in app.rows.items())
+    assert app.status is not None
+    target = app.status.target_id  # the cycles of the target on screen
     for n in range(20):
-        app.take_cycle(Cycle(1_700_000_000 + n / 2, 1000 + n / 2, samples))
+        app.take_cycle(Cycle(1_700_000_000 + n / 2, 1000 + n / 2, samples, target))
 
 
 def test_main_screen(snap_compare, tmp_path: Path, utc: None) -> None:

@@ -29,6 +29,8 @@ def feed_trends(app: RacConsoleApp, cycles: int = 40) -> None:
     """Replace what polling gathered by a fixed sequence of cycles, 0.5 s apart."""
     app.trends.clear()
     rows = {str(var): var for var in app.rows}
+    assert app.status is not None
+    target = app.status.target_id  # the cycles of the target on screen
     for n in range(cycles):
         z = 450 + 20 * math.sin(n / 4)
         samples = [
@@ -39,7 +41,7 @@ def feed_trends(app: RacConsoleApp, cycles: int = 40) -> None:
             (rows["I4"], Variant(VT.I4, n * 3 % 50)),
             (rows["S1"], Variant(VT.BSTR, "")),
         ]
-        app.take_cycle(Cycle(1_700_000_000 + n / 2, 1000 + n / 2, tuple(samples)))
+        app.take_cycle(Cycle(1_700_000_000 + n / 2, 1000 + n / 2, tuple(samples), target))
 
 
 async def staged(pilot) -> None:
