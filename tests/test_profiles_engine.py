@@ -91,14 +91,15 @@ def test_connect_name_takes_the_profile_and_connect_sim_drops_it(cell: Simulator
         assert front.engine.policy == WritePolicy()
 
 
-def test_a_read_only_profile_refuses_puts_and_connect_host_drops_it(cell: SimulatorThread) -> None:
+def test_a_read_only_profile_refuses_puts_and_connect_sim_drops_it(cell: SimulatorThread) -> None:
     with started(profiles=profiles_for(cell)) as front:
         text(front, "connect cell4")
         assert front.status is not None and front.status.writes == "read-only"
         assert "read-only" in text(front, "put I 1 5")
         assert not [f for f in front.frames if f.direction == "tx" and f.data.startswith(b"PUT")]
-        said = text(front, f"connect {cell.host}:{cell.port}")
-        assert f"LIVE controller {cell.host}:{cell.port}" in said
+        text(front, f"connect {cell.host}:{cell.port}")  # its address: still read-only
+        assert front.status is not None and front.status.writes == "read-only"
+        text(front, "connect sim")
         status = front.status
         assert status is not None and (status.profile, status.writes) == (None, "open")
         assert not front.engine.read_only
@@ -113,16 +114,18 @@ def test_read_only_from_the_command_line_stays_through_connect(cell: SimulatorTh
         assert front.engine.read_only
 
 
-def test_started_on_a_profile_connect_host_keeps_the_command_lines_policy(
-    cell: SimulatorThread,
-) -> None:
+def test_connect_to_a_profiles_address_keeps_its_rules(cell: SimulatorThread) -> None:
+    """Typing the address instead of the name must not drop the rules (nor a name in
+    another case); two profiles at one address: the stricter one's."""
     found = profiles_for(cell)
     cell3 = found["cell3"]
-    with started(profiles=found, profile=cell3, policy=cell3.policy) as front:
-        assert front.engine.policy.confirms
+    with started(profiles=found) as front:
         text(front, f"connect {cell.host}:{cell.port}")
-        assert front.engine.policy == WritePolicy()
-        assert front.engine.profile is None
+        assert front.engine.profile == found["cell4"]  # read-only beats confirm
+        assert front.engine.read_only
+        text(front, "connect sim")
+        text(front, "connect CELL3")
+        assert front.engine.profile == cell3
 
 
 def test_connect_a_bare_name_that_is_no_profile_says_which_there_are(

@@ -276,6 +276,8 @@ def test_cli_allow_refuses_outside_its_ranges_with_the_rule_and_nothing_sent(
     assert "profile cell3 allows writes only to I 100-199, IO 64-71" in one_error_line(result)
     refused = cli(cell, "-H", "cell3", "send", "PUT:RC8:10:I:3,5")
     assert refused.returncode == 2
+    hidden = cli(cell, "-H", "cell3", "send", "\x0bPUT:RC8:10:I:3,5")  # a lenient controller
+    assert hidden.returncode == 2
     assert controller.lines == []
     allowed = cli(cell, "-H", "cell3", "put", "I", "150", "5")
     assert allowed.returncode == 0, allowed.stderr
@@ -310,6 +312,7 @@ class ChangingFront(AnsweringFront):
     def __init__(self, engine: Engine, value: int) -> None:
         super().__init__(engine, True)
         self.value = value
+        self.step = 0  # added to the value after each question
 
     def drain(self) -> None:
         from rac_console.session import Session
@@ -323,8 +326,10 @@ class ChangingFront(AnsweringFront):
                 assert simulator is not None
                 other = Session(simulator.host, simulator.port, timeout=2)
                 try:
-                    put = Put.of(VarRef(kind_of("I"), 10), Variant(VT.I4, self.value), "3,33")
+                    text = f"3,{self.value}"
+                    put = Put.of(VarRef(kind_of("I"), 10), Variant(VT.I4, self.value), text)
                     other.exchange(put.request)
+                    self.value += self.step
                 finally:
                     other.close()
                 self.engine.answer_confirm(event.seq, True)
@@ -334,18 +339,35 @@ class ChangingFront(AnsweringFront):
                 self.frames.append(event)
 
 
-def test_a_value_that_changed_while_the_question_was_asked_is_not_written() -> None:
+def test_a_value_that_changed_while_the_question_was_open_is_asked_about_again() -> None:
+    engine = Engine(None, timeout=1.0, policy=WritePolicy(Writes.CONFIRM, source="profile cell3"))
+    engine.start()
+    try:
+        front = AnsweringFront(engine, True)
+        assert outcome_of(front, "put I 10 5").ok
+        changing = ChangingFront(engine, 33)  # another tool writes 33 during each question
+        outcome = outcome_of(changing, "put I 10 6")
+        first, second = changing.asked
+        assert (first.before, second.before, second.after) == ("5", "33", "6")
+        assert outcome.ok and outcome.before == Variant(VT.I4, 33)  # the value truly before
+        assert outcome_text(outcome).plain.startswith("I10: 33 → 6  S_OK  read back 6 ✓")
+    finally:
+        engine.stop()
+
+
+def test_a_value_that_keeps_changing_while_asked_is_not_written() -> None:
     engine = Engine(None, timeout=1.0, policy=WritePolicy(Writes.CONFIRM, source="profile cell3"))
     engine.start()
     try:
         front = AnsweringFront(engine, True)
         assert outcome_of(front, "put I 10 5").ok
         changing = ChangingFront(engine, 33)
+        changing.step = 1  # a counter the robot program bumps during every question
         outcome = outcome_of(changing, "put I 10 6")
         assert outcome.status == ExitStatus.REFUSED
-        assert "I10 changed from 5 to 33" in (outcome.error or "")
+        assert "while the question was open, 3 times" in (outcome.error or "")
+        assert len(changing.asked) == 3
         assert "PUT:RC8:10:I:3,6" not in sent(changing)
-        assert outcome_of(front, "get I 10").variant == Variant(VT.I4, 33)
     finally:
         engine.stop()
 
@@ -395,3 +417,105 @@ def test_a_read_only_profile_is_named_in_the_refusal() -> None:
         assert outcome.status == ExitStatus.REFUSED
         assert "profile cell4 is read-only" in (outcome.error or "")
         assert sent(front) == []
+
+
+@pytest.mark.parametrize(
+    "line", ["\x0bPUT:RC8:10:I:3,5", "SIM:SET:delay_ms=1", "put:rc8:10:I:3,5x"]
+)
+def test_a_raw_line_that_is_no_checkable_put_is_refused_on_an_allow_target(line: str) -> None:
+    policy = WritePolicy(allow=(parse_allow("I 50-99"),), source="profile cell3")
+    for front in engine_front(policy=policy):
+        outcome = outcome_of(front, f"send {line}")
+        assert outcome.status == ExitStatus.REFUSED, outcome
+        assert sent(front) == []
+
+
+def test_a_raw_line_that_is_no_checkable_put_is_refused_on_a_confirm_target() -> None:
+    for front in engine_front(policy=WritePolicy(Writes.CONFIRM, source="profile cell3")):
+        outcome = outcome_of(front, "send SIM:SET:delay_ms=1")  # no PUT it can ask about
+        assert outcome.status == ExitStatus.REFUSED
+        assert sent(front) == []
+
+
+@pytest.mark.slow
+def test_a_raw_put_written_as_another_type_is_not_called_a_mismatch(
+    env: dict[str, str],  # noqa: F811
+    server: Callable[..., RecordingServer],
+) -> None:
+    controller = server(ignoring_put(b"0,3,15\r"))  # it converted the string "15"
+    result = cli(env, *controller.args, "--json", "send", "PUT:RC8:10:I:8,15")
+    assert result.returncode == 0, result.stderr
+    data = json.loads(result.stdout)
+    assert data["read_back"] == 15 and data["verified"] is None
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize(
+    "text",
+    [
+        '[target.cell3]\nhost = "h"\nport = ' + "9" * 5000 + "\n",
+        '[target.cell3]\nhost = "h"\nallow = ["I 0-' + "0" * 7000 + '1"]\n',
+        '[settings]\ntheme = "x"\nio_grid = ' + "1" * 5000 + "\n",
+    ],
+    ids=["huge-port", "huge-allow", "huge-setting"],
+)
+def test_a_hostile_config_is_one_line_not_a_traceback(
+    env: dict[str, str],  # noqa: F811
+    tmp_path: Path,
+    text: str,
+) -> None:
+    config = tmp_path / "config.toml"
+    config.write_text(text, encoding="utf-8")
+    result = cli(env | {"RAC_CONSOLE_CONFIG": str(config)}, "get", "I", "1")
+    assert result.returncode == 2
+    assert "config.toml" in one_error_line(result)
+
+
+@pytest.mark.slow
+def test_a_config_path_that_cannot_be_expanded_is_one_line(env: dict[str, str]) -> None:  # noqa: F811
+    result = cli(env | {"RAC_CONSOLE_CONFIG": "~nosuchuser4242/c.toml"}, "get", "I", "1")
+    assert result.returncode == 2
+    assert "nosuchuser4242" in one_error_line(result)
+
+
+@pytest.mark.slow
+def test_a_profile_applies_when_its_address_or_its_name_in_another_case_is_typed(
+    env: dict[str, str],  # noqa: F811
+    server: Callable[..., RecordingServer],
+    tmp_path: Path,
+) -> None:
+    controller = server(ignoring_put(b"0,3,5\r"))
+    cell = profile_env(env, tmp_path, controller.port, 'writes = "read-only"')
+    by_address = cli(cell, *controller.args, "put", "I", "10", "5")
+    by_case = cli(cell, "-H", "CELL3", "put", "I", "10", "5")
+    assert (by_address.returncode, by_case.returncode) == (2, 2)
+    assert "profile cell3 is read-only" in one_error_line(by_address)
+    assert controller.lines == []
+
+
+@pytest.mark.slow
+def test_a_config_saved_with_a_bom_is_read(
+    env: dict[str, str],  # noqa: F811
+    server: Callable[..., RecordingServer],
+    tmp_path: Path,
+) -> None:
+    """Notepad on Windows has saved UTF-8 with a byte order mark."""
+    controller = server(ignoring_put(b"0,3,5\r"))
+    cell = profile_env(env, tmp_path, controller.port, 'writes = "read-only"')
+    config = Path(cell["RAC_CONSOLE_CONFIG"])
+    config.write_bytes(b"\xef\xbb\xbf" + config.read_bytes())
+    result = cli(cell, "-H", "cell3", "put", "I", "10", "5")
+    assert result.returncode == 2
+    assert "profile cell3 is read-only" in one_error_line(result)
+
+
+def test_settings_saved_into_a_file_with_a_bom_keep_it(tmp_path: Path) -> None:
+    from rac_console.engine.settings import SettingsFile
+
+    config = tmp_path / "config.toml"
+    original = b'\xef\xbb\xbf# cells\r\n[target.cell3]\r\nhost = "h"\r\n'
+    config.write_bytes(original)
+    SettingsFile(config).save({"hex_view": True})
+    data = config.read_bytes()
+    assert data.startswith(original)
+    assert b"hex_view = true" in data

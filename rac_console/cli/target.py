@@ -12,6 +12,7 @@ from pathlib import Path
 from typing import Any
 
 from ..commands.policy import TargetProfile, WritePolicy, Writes
+from ..commands.profiles import find_profile
 from ..engine import SIMULATOR_NOTICE
 from ..engine.config import Config, load_config
 from ..engine.recorder import FrameRecorder
@@ -49,7 +50,7 @@ def resolve_target(args: argparse.Namespace) -> Target:
     config = load_config()
     flag = bool(args.read_only)
     port: int | None = args.port
-    profile = config.profiles.get(args.host) if args.host else None
+    profile = find_profile(config.profiles, args.host, port) if args.host else None
     if profile is None:
         hint = None
         if args.host and _bare_name(args.host):

@@ -38,7 +38,7 @@ class AllowRange:
         return f"{self.kind.code} {span}"
 
 
-_RANGE = re.compile(r"\s*([A-Za-z]+)\s*\[?\s*(\d+)\s*(?:-\s*(\d+)\s*)?\]?\s*", re.ASCII)
+_RANGE = re.compile(r"\s*([A-Za-z]+)\s*\[?\s*(\d{1,6})\s*(?:-\s*(\d{1,6})\s*)?\]?\s*", re.ASCII)
 
 
 def parse_allow(text: str) -> AllowRange:

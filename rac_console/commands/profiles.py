@@ -189,3 +189,26 @@ def _allow(where: str, table: dict[str, object], fail: _Fail) -> tuple[AllowRang
         except InputError as exc:
             raise fail(f"{where} allow: {exc}") from None
     return tuple(ranges)
+
+
+#: How strict a profile's writes are: of two profiles at one address, the stricter rules.
+_STRICTNESS = {Writes.OPEN: 0, Writes.CONFIRM: 1, Writes.READ_ONLY: 2}
+
+
+def find_profile(
+    profiles: Mapping[str, TargetProfile], name_or_host: str, port: int | None = None
+) -> TargetProfile | None:
+    """The profile named ``name_or_host`` (in any case); else the one whose address it is
+    (``port`` None: the default), so an address typed by hand keeps the rules of the
+    controller there; of several, the strictest."""
+    key = name_or_host.casefold()
+    for name, profile in profiles.items():
+        if name.casefold() == key:
+            return profile
+    wanted = DEFAULT_PORT if port is None else port
+    same = [p for p in profiles.values() if p.host.casefold() == key and p.port == wanted]
+    return max(
+        same,
+        key=lambda p: (_STRICTNESS[p.policy.writes], p.policy.allow is not None),
+        default=None,
+    )

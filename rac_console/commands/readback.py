@@ -18,6 +18,19 @@ from ..protocol.variant import canonical_r4
 DOUBLE_TOLERANCE = 1e-12
 
 
+def comparable(kind: VarKind, written: Variant) -> bool:
+    """Whether a value written can be compared with the variable's own type: a raw PUT
+    may write a string to an I (the controller converts it), which is no mismatch."""
+    value = written.value
+    if kind.labels:
+        return isinstance(value, list)
+    if kind.code == "S":
+        return isinstance(value, str)
+    if kind.code in ("I", "IO"):
+        return isinstance(value, bool | int)
+    return isinstance(value, bool | int | float | Decimal) and not isinstance(value, bool)
+
+
 def same_value(kind: VarKind, written: Variant, read: Variant) -> bool:
     """True when ``read`` (a GET's answer) holds what ``written`` (a PUT's value) wrote."""
     if kind.code == "IO":

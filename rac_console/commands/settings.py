@@ -146,7 +146,7 @@ def update_settings_text(text: str, values: Mapping[str, Value], source: str) ->
     expected["settings"] = {**(old_settings if isinstance(old_settings, dict) else {}), **values}
     try:
         after = tomllib.loads(new)
-    except (tomllib.TOMLDecodeError, RecursionError):
+    except (ValueError, RecursionError):  # TOMLDecodeError is a ValueError
         after = None
     if after != expected:
         raise InputError(
@@ -163,6 +163,8 @@ def _parse(text: str, source: str) -> dict[str, object]:
         raise InputError(f"{source}: not valid TOML: {exc}") from None
     except RecursionError:
         raise InputError(f"{source}: not valid TOML: nested too deeply") from None
+    except ValueError as exc:  # an integer of thousands of digits, say
+        raise InputError(f"{source}: not valid TOML: {exc}") from None
 
 
 def _rewrite_block(

@@ -23,10 +23,14 @@ CONFIG_ENV = "RAC_CONSOLE_CONFIG"
 
 
 def config_path() -> Path:
-    """Where the config file is: ``$RAC_CONSOLE_CONFIG``, or the user's config directory."""
+    """Where the config file is: ``$RAC_CONSOLE_CONFIG``, or the user's config directory;
+    InputError when the variable names a path that cannot be expanded."""
     named = os.environ.get(CONFIG_ENV)
     if named:
-        return Path(named).expanduser()
+        try:
+            return Path(named).expanduser()
+        except RuntimeError as exc:  # ~user that does not exist, no home directory
+            raise InputError(f"{CONFIG_ENV}={named}: {exc}") from None
     from platformdirs import user_config_path
 
     return user_config_path("rac-console") / "config.toml"
@@ -63,5 +67,7 @@ def load_config(path: Path | None = None) -> Config:
         raise InputError(f"{path}: not valid TOML: {exc}") from None
     except RecursionError:
         raise InputError(f"{path}: not valid TOML: nested too deeply") from None
+    except ValueError as exc:  # an integer of thousands of digits, say
+        raise InputError(f"{path}: not valid TOML: {exc}") from None
     parsed = parse_config(table, str(path))
     return Config(path, True, parsed.profiles, parsed.settings)

@@ -565,6 +565,8 @@ class Engine:
         (Esc, Ctrl-C) or a stop is a No."""
         with self._answers_lock:
             self._answers.pop(question.seq, None)
+        if self.stopping:  # cancelled already: no question about a write that ended
+            return False
         self.emit(question)
         self.publish_status(force=True)
         self.flush_events()

@@ -29,6 +29,7 @@ from ..commands.language import (
 )
 from ..commands.outcome import Outcome
 from ..commands.policy import WritePolicy, Writes
+from ..commands.profiles import find_profile
 from ..commands.registry import help_lines, parse_command
 from ..protocol import InputError, Variant
 from ..protocol.text import counted, terminal_safe
@@ -38,7 +39,7 @@ from .conditions import wait_for
 from .engine import Engine
 from .events import OK, ConfirmWrite, Feedback, Message, Result, UiStep
 from .execute import execute, measure_latency
-from .writes import plain_value, write
+from .writes import may_write, plain_value, write
 
 NOT_CONNECTED = "not connected: connect HOST[:PORT] first"
 
@@ -74,8 +75,7 @@ def run(engine: Engine, command: Command, line: str | None) -> list[Feedback]:
                 return [Message(NOT_CONNECTED, "error")]
             if isinstance(command, Get | Put):
                 engine.see((command.var,))
-            if isinstance(command, Put) or command.request.write:
-                assert not isinstance(command, Get)
+            if isinstance(command, Put | Raw) and may_write(command):
                 return [_noted(engine, _write(engine, session, command, line))]
             outcome = execute(session, command, read_only=engine.read_only, line=line)
             return [_noted(engine, outcome)]
@@ -265,7 +265,8 @@ def _connect(engine: Engine, command: Connect) -> Message:
     and with it the profile (label, colour) and the write rules: a profile's, the
     simulator's (open), or for a plain host the ones the engine started with. The
     command line's ``--read-only`` stays whatever the target."""
-    profile = engine.profiles.get(command.host) if command.host is not None else None
+    given = command.port if command.port_given else None
+    profile = find_profile(engine.profiles, command.host, given) if command.host else None
     host, port = command.host, command.port
     if profile is not None:
         host, port = profile.host, command.port if command.port_given else profile.port

@@ -23,7 +23,7 @@ from pathlib import Path
 from ..commands.settings import Value, read_settings, update_settings_text
 from ..protocol import InputError
 from .config import load_config
-from .textfile import read_text_file
+from .textfile import BOM, read_text_file
 
 
 @dataclass(frozen=True)
@@ -55,8 +55,9 @@ class SettingsFile:
         real = Path(os.path.realpath(path))  # a symlink's target: the link stays
         try:
             text, mode = _read(real, path)
-            new = update_settings_text(text, values, str(path))
-            _replace(real, new.encode("utf-8"), mode)
+            bom = BOM if text.startswith(BOM) else ""  # kept, as every other byte
+            new = update_settings_text(text.removeprefix(BOM), values, str(path))
+            _replace(real, (bom + new).encode("utf-8"), mode)
         except UnicodeDecodeError:
             raise InputError(f"{path} is not a UTF-8 text file") from None
         except OSError as exc:
@@ -71,7 +72,7 @@ def _read(path: Path, shown: Path) -> tuple[str, int | None]:
         info = path.stat()
     except FileNotFoundError:
         return "", None
-    return read_text_file(path, "a config file", shown), stat.S_IMODE(info.st_mode)
+    return read_text_file(path, "a config file", shown, keep_bom=True), stat.S_IMODE(info.st_mode)
 
 
 def _replace(path: Path, data: bytes, mode: int | None) -> None:

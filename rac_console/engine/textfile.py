@@ -11,9 +11,16 @@ from ..protocol import InputError
 MAX_FILE_BYTES = 1024 * 1024
 
 
-def read_text_file(path: Path, what: str, shown: str | Path | None = None) -> str:
-    """The UTF-8 text of the regular file ``path``; InputError naming it as ``shown``
-    (the path as the user gave it) and saying it is not ``what`` ("a watch list")."""
+#: The byte order mark Notepad on Windows has written at the start of UTF-8 files.
+BOM = "\ufeff"
+
+
+def read_text_file(
+    path: Path, what: str, shown: str | Path | None = None, *, keep_bom: bool = False
+) -> str:
+    """The UTF-8 text of the regular file ``path`` (a leading BOM dropped, unless
+    ``keep_bom``: a writer puts it back); InputError naming it as ``shown`` (the path as
+    the user gave it) and saying it is not ``what`` ("a watch list")."""
     shown = path if shown is None else shown
     try:
         if path.exists() and not path.is_file():  # a device or a pipe: endless, or no end
@@ -22,7 +29,8 @@ def read_text_file(path: Path, what: str, shown: str | Path | None = None) -> st
             data = handle.read(MAX_FILE_BYTES + 1)
         if len(data) > MAX_FILE_BYTES:
             raise InputError(f"{shown} is larger than {MAX_FILE_BYTES // 1024} KiB: not {what}")
-        return data.decode("utf-8")
+        text = data.decode("utf-8")
+        return text if keep_bom else text.removeprefix(BOM)
     except (OSError, RuntimeError) as exc:
         raise InputError(f"cannot read {shown}: {getattr(exc, 'strerror', None) or exc}") from None
     except UnicodeDecodeError:

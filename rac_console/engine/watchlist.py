@@ -49,6 +49,8 @@ def loads(text: str) -> list[Row]:
         raise InputError(f"not a TOML watch list: {exc}") from None
     except RecursionError:
         raise InputError("not a watch list: its TOML is nested too deeply") from None
+    except ValueError as exc:  # an integer of thousands of digits, say
+        raise InputError(f"not a TOML watch list: {exc}") from None
     entries = data.get("watch", [])
     if isinstance(entries, dict):
         entries = [entries]

@@ -15,7 +15,7 @@ from dataclasses import replace
 from ..commands.language import Get, Put, Raw, VarRef
 from ..commands.outcome import ExitStatus, Outcome, refused
 from ..commands.policy import WritePolicy, Writes, written_var
-from ..commands.readback import same_value
+from ..commands.readback import comparable, same_value
 from ..protocol import ProtocolError, Variant
 from ..protocol.variant import parse_variant
 from ..session import ConnectFailed, Session
@@ -29,6 +29,50 @@ NO_ONE_TO_ASK = (
     'PUT {var} refused: {source}asks before every write (writes = "confirm"); '
     "add --yes to write from a script or the command line (nothing was sent)"
 )
+
+
+#: Questions asked at most for one write whose value keeps changing while it is asked.
+MAX_QUESTIONS = 3
+
+
+def _confirmed(
+    session: Session,
+    var: VarRef,
+    before: Variant | None,
+    written: Variant,
+    command: Put | Raw,
+    confirm: Confirm,
+    line: str | None,
+) -> Variant | Outcome | None:
+    """Ask; after a yes read the variable again: the value answered about must still be
+    the value there, or the yes was for another write, and the question is asked again
+    with the value now (at most :data:`MAX_QUESTIONS` times). The value before the write,
+    or the Outcome that ends it (no, a failed read, a value that kept changing)."""
+    wire = command.request.text
+    for _ in range(MAX_QUESTIONS):
+        if not confirm(var, before, written, command):
+            return refused(line, f"PUT {var} not confirmed: nothing was sent", wire)
+        now = execute(session, Get(var))
+        if now.status == ExitStatus.TRANSPORT:
+            error = f"PUT {var} not sent: reading it again after the question failed: {now.error}"
+            return replace(now, request=wire, input_line=line, var=var, error=error)
+        held = now.variant if now.ok else None
+        if before is None or held is None or same_value(var.kind, before, held):
+            return held if held is not None else before
+        changed = f"{var} changed from {plain_value(var, before)} to {plain_value(var, held)}"
+        before = held
+    return refused(
+        line,
+        f"PUT {var} not sent: {changed} while the question was open, {MAX_QUESTIONS} times",
+        wire,
+    )
+
+
+def may_write(command: Put | Raw) -> bool:
+    """Whether a command goes the write path: a put, and any raw line but a well-formed
+    GET (a line that does not start with PUT may still write on a lenient controller, so
+    a target's rules see it too)."""
+    return isinstance(command, Put) or not command.request.read_only_safe
 
 
 def write(
@@ -83,30 +127,10 @@ def write(
             )
         before = first.variant if first.ok else None
     if policy.confirms and confirm is not None and written is not None:
-        if not confirm(var, before, written, command):
-            return refused(line, f"PUT {var} not confirmed: nothing was sent", wire)
-        # The question may have been open a while: the value answered about must still be
-        # the value there, or the user said yes to a write that is not this one.
-        now = execute(session, Get(var))
-        if now.status == ExitStatus.TRANSPORT:
-            return replace(
-                now,
-                request=wire,
-                input_line=line,
-                var=var,
-                error=(
-                    f"PUT {var} not sent: reading it again after the question failed: {now.error}"
-                ),
-            )
-        held = now.variant if now.ok else None
-        if before is not None and held is not None and not same_value(var.kind, before, held):
-            return refused(
-                line,
-                f"PUT {var} not sent: {var} changed from {plain_value(var, before)} to "
-                f"{plain_value(var, held)} while the question was open; type the put again",
-                wire,
-            )
-        before = held if held is not None else before
+        asked = _confirmed(session, var, before, written, command, confirm, line)
+        if isinstance(asked, Outcome):
+            return asked
+        before = asked
     outcome = execute(session, command, line=line)
     outcome = replace(outcome, var=var, written=written, before=before)
     if not verify or isinstance(outcome.failure, ConnectFailed):  # nothing went out
@@ -125,8 +149,8 @@ def _read_back(session: Session, outcome: Outcome, var: VarRef, written: Variant
             return replace(outcome, status=after.status, read_back_error=problem, error=problem)
         return replace(outcome, read_back_error=problem)
     held = after.variant
-    matches = written is not None and held is not None and same_value(var.kind, written, held)
-    verified = matches if written is not None else None
+    checkable = written is not None and held is not None and comparable(var.kind, written)
+    verified = same_value(var.kind, written, held) if checkable else None  # type: ignore[arg-type]
     outcome = replace(outcome, read_back=held, verified=verified)
     if outcome.ok and verified is False:
         return replace(

@@ -224,6 +224,7 @@ class RacConsoleApp(PaletteActions, TableActions, LogActions, App[int]):
         self._removed -= batch.rows.keys()
         for event in batch.events:
             if isinstance(event, Result):
+                self._close_question(event.seq)
                 if self.lines_pending.pop(event.seq, None) is not None and not self.lines_pending:
                     self.refresh_bindings()  # Esc has nothing to cancel any more
                 self.take_result(event)
@@ -422,6 +423,12 @@ class RacConsoleApp(PaletteActions, TableActions, LogActions, App[int]):
         self.io_panel.show(shown)
         self.table.set_hide_io(shown)
         self.refresh_table()
+
+    def _close_question(self, seq: int) -> None:
+        """A write that ended (a cancel came before its answer) asks nothing any more."""
+        screen = self.screen
+        if isinstance(screen, ConfirmWriteScreen) and screen.question.seq == seq:
+            screen.dismiss(False)
 
     def confirm_write(self, question: ConfirmWrite) -> None:
         """A write on a ``confirm`` target asks first: old → new, ``[y/N]``, default No;
