@@ -196,8 +196,7 @@ async def test_palette_lists_the_consoles_commands_with_their_keys(tmp_path: Pat
             "Quit  Ctrl+Q",
         ):
             assert any(p.startswith(expected) for p in prompts), (expected, prompts)
-        if hasattr(app, "action_toggle_hex"):
-            assert any(p.startswith("Hex view") for p in prompts), prompts
+        assert any(p.startswith("Hex view") for p in prompts), prompts
 
 
 @pytest.mark.slow
