@@ -15,8 +15,8 @@ from ..commands.outcome import ExitStatus, Outcome, refused, worst
 from ..commands.policy import Writes
 from ..commands.registry import parse_command
 from ..engine.conditions import wait_for
-from ..engine.execute import execute, measure_latency
-from ..engine.writes import may_write, write
+from ..engine.execute import measure_latency
+from ..engine.writes import exchange
 from ..present.render import error_text, make_console, notice_text, print_error, print_outcome
 from ..protocol import InputError
 from ..session import ConnectFailed, Disconnected, Session
@@ -118,19 +118,12 @@ def run_script(args: argparse.Namespace) -> ExitStatus:
 def _exchange(session: Session, command: Exchange, args: argparse.Namespace, line: str) -> Outcome:
     """One GET, PUT or raw line; a write by the target's rules, read back unless
     ``--no-verify``, and on a ``confirm`` target only with ``--yes``."""
-    if isinstance(command, Put | Raw) and may_write(command):
-        policy = write_policy(args)
-        if args.yes and policy.confirms:  # said yes ahead: nothing to ask, nothing to read
-            policy = replace(policy, writes=Writes.OPEN)
-        return write(
-            session,
-            command,
-            policy=policy,
-            read_only=args.read_only,
-            verify=args.verify,
-            line=line,
-        )
-    return execute(session, command, read_only=args.read_only, line=line)
+    policy = write_policy(args)
+    if args.yes and policy.confirms:  # said yes ahead: nothing to ask, nothing to read
+        policy = replace(policy, writes=Writes.OPEN)
+    return exchange(
+        session, command, policy=policy, read_only=args.read_only, verify=args.verify, line=line
+    )
 
 
 def _run_line(session: Session, line: str, args: argparse.Namespace) -> Outcome | None:

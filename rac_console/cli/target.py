@@ -12,7 +12,7 @@ from pathlib import Path
 from typing import Any
 
 from ..commands.policy import TargetProfile, WritePolicy, Writes
-from ..commands.profiles import find_profile
+from ..commands.profiles import could_be_profile_name, find_profile
 from ..engine import SIMULATOR_NOTICE
 from ..engine.config import Config, load_config
 from ..engine.recorder import FrameRecorder
@@ -53,7 +53,7 @@ def resolve_target(args: argparse.Namespace) -> Target:
     profile = find_profile(config.profiles, args.host, port) if args.host else None
     if profile is None:
         hint = None
-        if args.host and _bare_name(args.host):
+        if args.host and could_be_profile_name(args.host):
             where = config.path if config.found else f"{config.path} (no such file)"
             hint = f"no profile named {args.host} in {where}"
         return Target(
@@ -77,11 +77,6 @@ def resolve_target(args: argparse.Namespace) -> Target:
         config_path=config.path,
         config=config,
     )
-
-
-def _bare_name(host: str) -> bool:
-    """A word that could be a misspelt profile: no dot, no colon, not localhost."""
-    return "." not in host and ":" not in host and host.lower() != "localhost"
 
 
 def settle_target(args: argparse.Namespace) -> bool:

@@ -212,3 +212,9 @@ def find_profile(
         key=lambda p: (_STRICTNESS[p.policy.writes], p.policy.allow is not None),
         default=None,
     )
+
+
+def could_be_profile_name(host: str) -> bool:
+    """A word that could be a misspelt profile (said so when it cannot be reached): no
+    dot, no colon, not localhost."""
+    return "." not in host and ":" not in host and host.lower() != "localhost"

@@ -25,6 +25,7 @@ import tomllib
 from collections.abc import Collection, Iterator, Mapping
 
 from ..protocol import InputError
+from .tomltext import parse_toml
 
 #: A setting's value: only simple types are ever written.
 Value = str | bool
@@ -116,7 +117,7 @@ def update_settings_text(text: str, values: Mapping[str, Value], source: str) ->
     for key, value in values.items():
         if key not in SETTINGS_KEYS or not isinstance(value, SETTINGS_KEYS[key]):
             raise ValueError(f"not a setting: {key} = {value!r}")  # a bug, not the file's
-    before = _parse(text, source)
+    before = parse_toml(text, source)
     lines = _LINES.findall(text)  # at \n only: TOML ends lines nowhere else
     newline = "\r\n" if lines and lines[0].endswith("\r\n") else "\n"
     starts = list(_line_states(lines))  # (clean at its start, a table header)
@@ -154,17 +155,6 @@ def update_settings_text(text: str, values: Mapping[str, Value], source: str) ->
             "table with one key = value a line"
         )
     return new
-
-
-def _parse(text: str, source: str) -> dict[str, object]:
-    try:
-        return tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:  # "... (at line 3, column 8)"
-        raise InputError(f"{source}: not valid TOML: {exc}") from None
-    except RecursionError:
-        raise InputError(f"{source}: not valid TOML: nested too deeply") from None
-    except ValueError as exc:  # an integer of thousands of digits, say
-        raise InputError(f"{source}: not valid TOML: {exc}") from None
 
 
 def _rewrite_block(

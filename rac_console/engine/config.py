@@ -9,13 +9,13 @@ a traceback, so that a broken file cannot silently drop a profile's read-only gu
 from __future__ import annotations
 
 import os
-import tomllib
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 
 from ..commands.policy import TargetProfile
 from ..commands.profiles import parse_config
+from ..commands.tomltext import parse_toml
 from ..protocol import InputError
 from .textfile import read_text_file
 
@@ -61,13 +61,5 @@ def load_config(path: Path | None = None) -> Config:
     if not exists:
         return Config(path)
     text = read_text_file(path, "a config file")
-    try:
-        table = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:  # "... (at line 3, column 8)"
-        raise InputError(f"{path}: not valid TOML: {exc}") from None
-    except RecursionError:
-        raise InputError(f"{path}: not valid TOML: nested too deeply") from None
-    except ValueError as exc:  # an integer of thousands of digits, say
-        raise InputError(f"{path}: not valid TOML: {exc}") from None
-    parsed = parse_config(table, str(path))
+    parsed = parse_config(parse_toml(text, str(path)), str(path))
     return Config(path, True, parsed.profiles, parsed.settings)

@@ -12,6 +12,7 @@ from ..commands.language import (
     Command,
     Connect,
     CsvLog,
+    Exchange,
     Frames,
     Get,
     Help,
@@ -29,7 +30,7 @@ from ..commands.language import (
 )
 from ..commands.outcome import Outcome
 from ..commands.policy import WritePolicy, Writes
-from ..commands.profiles import find_profile
+from ..commands.profiles import could_be_profile_name, find_profile
 from ..commands.registry import help_lines, parse_command
 from ..protocol import InputError, Variant
 from ..protocol.text import counted, terminal_safe
@@ -38,8 +39,8 @@ from . import watchlist
 from .conditions import wait_for
 from .engine import Engine
 from .events import OK, ConfirmWrite, Feedback, Message, Result, UiStep
-from .execute import execute, measure_latency
-from .writes import may_write, plain_value, write
+from .execute import measure_latency
+from .writes import exchange, plain_value
 
 NOT_CONNECTED = "not connected: connect HOST[:PORT] first"
 
@@ -75,10 +76,7 @@ def run(engine: Engine, command: Command, line: str | None) -> list[Feedback]:
                 return [Message(NOT_CONNECTED, "error")]
             if isinstance(command, Get | Put):
                 engine.see((command.var,))
-            if isinstance(command, Put | Raw) and may_write(command):
-                return [_noted(engine, _write(engine, session, command, line))]
-            outcome = execute(session, command, read_only=engine.read_only, line=line)
-            return [_noted(engine, outcome)]
+            return [_noted(engine, _exchange(engine, session, command, line))]
         case Wait():
             session = engine.session
             if session is None:
@@ -127,9 +125,10 @@ def run(engine: Engine, command: Command, line: str | None) -> list[Feedback]:
     raise AssertionError(f"no handler for {command!r}")  # the registry and this match agree
 
 
-def _write(engine: Engine, session: Session, command: Put | Raw, line: str | None) -> Outcome:
-    """A PUT by the target's rules: allow, confirm (asked through the front end), the
-    value before and the read-back; a watched row shows the value read back at once."""
+def _exchange(engine: Engine, session: Session, command: Exchange, line: str | None) -> Outcome:
+    """One exchange; a write by the target's rules: allow, confirm (asked through the
+    front end), the value before and the read-back; a watched row shows the value read
+    back at once."""
 
     def known_before(var: VarRef) -> Variant | None:
         row = engine.watch.rows.get(var)
@@ -147,7 +146,7 @@ def _write(engine: Engine, session: Session, command: Put | Raw, line: str | Non
         )
         return engine.ask_confirm(question)
 
-    outcome = write(
+    outcome = exchange(
         session,
         command,
         policy=engine.policy,
@@ -283,7 +282,7 @@ def _connect(engine: Engine, command: Connect) -> Message:
         engine.session.connect()
     except (ConnectFailed, Disconnected) as exc:
         text = f"{exc}; will keep retrying while variables are watched"
-        if profile is None and command.host and _bare_name(command.host):
+        if profile is None and command.host and could_be_profile_name(command.host):
             names = ", ".join(sorted(engine.profiles))
             known = f"profiles: {names}" if names else "the config file names none"
             text += f"; no profile named {command.host} ({known})"
@@ -302,11 +301,6 @@ def _connect(engine: Engine, command: Connect) -> Message:
         f"connected to {label} (profile {profile.name}): LIVE controller {host}:{port}, "
         f"{writes}{rules}"
     )
-
-
-def _bare_name(host: str) -> bool:
-    """A word that could be a misspelt profile: no dot, no colon, not localhost."""
-    return "." not in host and ":" not in host and host.lower() != "localhost"
 
 
 def _watch_file(engine: Engine, command: WatchFile) -> Message:

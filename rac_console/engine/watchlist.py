@@ -2,11 +2,11 @@
 
 from __future__ import annotations
 
-import tomllib
 from collections.abc import Iterable
 from pathlib import Path
 
 from ..commands.language import VarRef
+from ..commands.tomltext import parse_toml
 from ..protocol import InputError, kind_of, parse_index
 from .textfile import read_text_file
 
@@ -43,14 +43,7 @@ def dumps(rows: Iterable[Row]) -> str:
 def loads(text: str) -> list[Row]:
     """Rows of a watch list; InputError naming the first bad entry (nothing is guessed:
     an unknown key, an index written as text or a row written twice is refused)."""
-    try:
-        data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise InputError(f"not a TOML watch list: {exc}") from None
-    except RecursionError:
-        raise InputError("not a watch list: its TOML is nested too deeply") from None
-    except ValueError as exc:  # an integer of thousands of digits, say
-        raise InputError(f"not a TOML watch list: {exc}") from None
+    data = parse_toml(text, "the watch list")
     entries = data.get("watch", [])
     if isinstance(entries, dict):
         entries = [entries]

@@ -12,7 +12,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import replace
 
-from ..commands.language import Get, Put, Raw, VarRef
+from ..commands.language import Exchange, Get, Put, Raw, VarRef
 from ..commands.outcome import ExitStatus, Outcome, refused
 from ..commands.policy import WritePolicy, Writes, written_var
 from ..commands.readback import comparable, same_value
@@ -68,11 +68,34 @@ def _confirmed(
     )
 
 
-def may_write(command: Put | Raw) -> bool:
-    """Whether a command goes the write path: a put, and any raw line but a well-formed
-    GET (a line that does not start with PUT may still write on a lenient controller, so
-    a target's rules see it too)."""
-    return isinstance(command, Put) or not command.request.read_only_safe
+def exchange(
+    session: Session,
+    command: Exchange,
+    *,
+    policy: WritePolicy,
+    read_only: bool = False,
+    verify: bool = True,
+    known_before: Callable[[VarRef], Variant | None] = lambda var: None,
+    confirm: Confirm | None = None,
+    line: str | None = None,
+) -> Outcome:
+    """One GET, PUT or raw line, from any front end: a put, and any raw line but a
+    well-formed GET (a line that does not start with PUT may still write on a lenient
+    controller), goes by the target's rules (:func:`write`); a read is just sent."""
+    if isinstance(command, Put) or (
+        isinstance(command, Raw) and not command.request.read_only_safe
+    ):
+        return write(
+            session,
+            command,
+            policy=policy,
+            read_only=read_only,
+            verify=verify,
+            known_before=known_before,
+            confirm=confirm,
+            line=line,
+        )
+    return execute(session, command, read_only=read_only, line=line)
 
 
 def write(

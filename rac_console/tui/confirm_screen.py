@@ -19,13 +19,13 @@ from textual.containers import Horizontal, Vertical
 from textual.screen import ModalScreen
 from textual.widgets import Button, Static
 
-from ..engine import ConfirmWrite
+from ..engine import CONFIRM_GUARD_SECONDS, ConfirmWrite
 from ..present.status import profile_colour
 from ..protocol.text import terminal_safe
 
 #: Keys in the first this many seconds of the question (and any typed before it) are
 #: ignored; Esc still answers No.
-GUARD_SECONDS = 0.4
+GUARD_SECONDS = CONFIRM_GUARD_SECONDS  # as the REPL's (tests lengthen it here)
 
 
 def border_colour(colour: str | None) -> Color | None:
