@@ -11,12 +11,18 @@ import time
 from dataclasses import replace
 from pathlib import Path
 
+import pytest
+from prompt_toolkit.completion import CompleteEvent
+from prompt_toolkit.document import Document
 from test_profiles_present import CELL3, SIM
 from test_repl import Driver
 
 from rac_console.commands.policy import WritePolicy, Writes
 from rac_console.engine import ConfirmWrite
+from rac_console.engine.config import CONFIG_ENV, load_config
+from rac_console.present.status import LABEL_WIDTH
 from rac_console.repl.prompt_parts import confirm_message, prompt_fragments, toolbar_fragments
+from rac_console.sim.thread import SimulatorThread
 
 
 def plain(fragments) -> str:  # type: ignore[no-untyped-def]
@@ -130,3 +136,59 @@ def test_the_completer_offers_sim_and_the_profiles() -> None:
         for c in completer.get_completions(Document("connect ", 8), None)  # type: ignore[arg-type]
     ]
     assert found == [("sim", "the built-in simulator"), ("cell3", "Cell 3 — welding")]
+
+
+#: One character of the long label: shown nowhere else, one cell wide.
+MARK = "Ŵ"
+
+
+async def test_a_long_label_is_cut_wherever_the_repl_shows_it(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """``rac-console -H cell3`` whose config file gives it a label of 10,000 characters."""
+    with SimulatorThread() as cell:
+        config = tmp_path / "config.toml"
+        config.write_text(
+            f'[target.cell3]\nhost = "{cell.host}"\nport = {cell.port}\n'
+            f'label = "{MARK * 10_000}"\nwrites = "confirm"\n',
+            encoding="utf-8",
+        )
+        monkeypatch.setenv(CONFIG_ENV, str(config))
+        profiles = load_config().profiles
+        profile = profiles["cell3"]
+        driver = Driver(
+            tmp_path,
+            profile.host,
+            port=profile.port,
+            policy=profile.policy,
+            profile=profile,
+            profiles=profiles,
+        )
+
+        async def steps(d: Driver) -> None:
+            d.type("connect cell3\r")
+            await d.until(lambda out: "(profile cell3)" in out, "connected")
+            assert d.repl.status is not None
+            for fragments in (
+                prompt_fragments(d.repl.status, lost=False),
+                toolbar_fragments(d.repl.status),
+            ):
+                assert 0 < plain(fragments).count(MARK) <= LABEL_WIDTH
+            completer = d.repl.prompt.completer
+            assert completer is not None
+            offered = {
+                c.text: c.display_meta_text
+                for c in completer.get_completions(Document("connect ", 8), CompleteEvent())
+            }
+            assert 0 < offered["cell3"].count(MARK) <= LABEL_WIDTH
+            d.type("put I 10 15\r")
+            await d.until(lambda _: d.repl.asking is not None, "the question")
+            question = d.repl.asking
+            assert question is not None and question.label == profile.label
+            assert 0 < plain(confirm_message(question)).count(MARK) <= LABEL_WIDTH
+            d.type("n\r")
+            await d.until(lambda out: "nothing was sent" in out, "the refusal")
+
+        out = await driver.run(steps)
+    assert 0 < out.count(MARK) <= LABEL_WIDTH, out.count(MARK)  # the connect message's
+    assert "…" in out

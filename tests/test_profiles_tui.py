@@ -9,6 +9,7 @@ end-to-end confirm tests need the write pipeline's confirm question (engine/writ
 from __future__ import annotations
 
 from collections.abc import Iterator
+from dataclasses import replace
 from pathlib import Path
 
 import pytest
@@ -18,7 +19,9 @@ from tui_helpers import WIRE_RECORD, FrameTap, results_text, type_line, until
 
 from rac_console.commands.policy import TargetProfile, WritePolicy, Writes
 from rac_console.engine import ConfirmWrite, Engine
+from rac_console.engine.config import CONFIG_ENV, load_config
 from rac_console.present.history import History
+from rac_console.present.status import LABEL_WIDTH
 from rac_console.sim.thread import SimulatorThread
 from rac_console.tui import confirm_screen
 from rac_console.tui.app import RacConsoleApp
@@ -294,3 +297,55 @@ async def test_tab_completes_profile_names_after_connect(
         await type_line(pilot, "connect c", enter=False)
         await pilot.press("tab")
         assert app.command_line.value == "connect cell3 "
+
+
+# ------------------------------------------------------------- a long label
+
+#: One character of the long label: shown nowhere else, one cell wide.
+MARK = "Ŵ"
+
+
+def long_label_profile(
+    tmp_path: Path, cell: SimulatorThread, monkeypatch: pytest.MonkeyPatch
+) -> TargetProfile:
+    """``[target.cell3]`` with a label of 10,000 characters, read from a config file named
+    by RAC_CONSOLE_CONFIG as ``rac-console -H cell3`` reads it."""
+    config = tmp_path / "config.toml"
+    config.write_text(
+        f'[target.cell3]\nhost = "{cell.host}"\nport = {cell.port}\nlabel = "{MARK * 10_000}"\n'
+        'colour = "red"\n',
+        encoding="utf-8",
+    )
+    monkeypatch.setenv(CONFIG_ENV, str(config))
+    profile = load_config().profiles["cell3"]
+    assert profile.label == MARK * 10_000
+    return profile
+
+
+async def test_a_long_label_is_cut_wherever_the_console_shows_it(
+    tmp_path: Path, cell: SimulatorThread, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    profile = long_label_profile(tmp_path, cell, monkeypatch)
+    app = console(tmp_path, profile)
+    async with app.run_test(size=(100, 30)) as pilot:
+        await until(pilot, lambda: "LIVE controller" in results_text(app), "the welcome")
+        shown = results_text(app).count(MARK)
+        assert 0 < shown <= LABEL_WIDTH, shown  # the welcome names the profile's label once
+        assert "…" in results_text(app)
+        await type_line(pilot, "connect ", enter=False)
+        await pilot.press("tab")  # two candidates: listed, each with its help
+        await until(pilot, lambda: app.completions.has_class("-visible"), "the candidates")
+        listed = str(app.completions.content)
+        assert "cell3" in listed and 0 < listed.count(MARK) <= LABEL_WIDTH
+        await pilot.press("c", "e", "l", "l", "3")
+        await pilot.press("enter")
+        await until(pilot, lambda: "(profile cell3)" in results_text(app), "connected")
+        assert 0 < results_text(app).count(MARK) - shown <= LABEL_WIDTH
+        assert str(app.screen_stack[0].border_title).count(MARK) <= LABEL_WIDTH
+        assert status_line(app).count(MARK) <= LABEL_WIDTH
+        app.confirm_write(replace(QUESTION, label=profile.label))
+        screen = await question_up(pilot, app)
+        title = str(screen.query_one("#confirm-box").border_title)
+        assert 0 < title.count(MARK) <= LABEL_WIDTH
+        shown_in_modal = "\n".join(str(w.content) for w in screen.query("Static"))
+        assert shown_in_modal.count(MARK) <= LABEL_WIDTH

@@ -254,6 +254,46 @@ def test_a_timed_out_put_is_unknown_and_the_read_back_says_what_is_held(
     assert "read back 15" in result.stderr
 
 
+def failing_read_back(held: bytes = b"0,3,14\r") -> Callable[[bytes], bytes]:
+    """A controller that takes the PUT (S_OK), then answers every later GET E_FAIL."""
+    gets = 0
+
+    def reply(line: bytes) -> bytes:
+        nonlocal gets
+        if line.startswith(b"PUT:"):
+            return b"0\r"
+        gets += 1
+        return held if gets == 1 else b"-2147467259\r"  # E_FAIL, signed decimal
+
+    return reply
+
+
+@pytest.mark.slow
+def test_a_read_back_that_fails_is_said_once(
+    env: dict[str, str],  # noqa: F811
+    server: Callable[..., RecordingServer],
+) -> None:
+    controller = server(failing_read_back())
+    result = cli(env, *controller.args, "put", "I", "10", "15")
+    assert result.returncode == 1, result.stderr
+    line = one_error_line(result)
+    assert "I10: 14 → 15  S_OK  read back failed: " in line
+    assert "E_FAIL" in line
+    assert (result.stdout + result.stderr).count("read back failed") == 1, line
+    assert controller.lines == [b"GET:RC8:10:I:", b"PUT:RC8:10:I:3,15", b"GET:RC8:10:I:"]
+
+    controller = server(failing_read_back())
+    result = cli(env, *controller.args, "put", "I", "10", "15", "--json")
+    assert result.returncode == 1, result.stderr
+    assert "Traceback" not in result.stderr
+    (data,) = [json.loads(line) for line in result.stdout.splitlines() if line.strip()]
+    assert data["ok"] is False
+    assert (data["result_name"], data["response"]) == ("S_OK", "0")  # the PUT's answer
+    assert (data["before"], data["read_back"], data["verified"]) == (14, None, None)
+    assert data["read_back_error"].startswith("read back failed: ")
+    assert "E_FAIL" in data["read_back_error"]
+
+
 def profile_env(base: dict[str, str], tmp_path: Path, port: int, rules: str) -> dict[str, str]:
     config = tmp_path / "config.toml"
     config.write_text(

@@ -20,6 +20,8 @@ from pathlib import Path
 
 import pytest
 
+from rac_console.sim.replay import MAX_FILE_BYTES, MAX_LINE_BYTES
+
 pytestmark = pytest.mark.slow
 
 DEADLINE = 15.0
@@ -254,3 +256,43 @@ def test_missing_empty_and_useless_files_exit_2(env: dict[str, str], tmp_path: P
     )
     assert "nothing to replay" in one_error_line(serve(env, "--replay", str(puts)))
     assert "--replay-end needs --replay" in one_error_line(serve(env, "--replay-end", "cycle"))
+
+
+#: One answered GET as --record writes it (two lines).
+PAIR = (
+    '{"t": 1712345678.123456, "dir": "tx", "text": "GET:RC8:10:I:"}\n'
+    '{"t": 1712345678.124012, "dir": "rx", "text": "0,3,14", "rtt_ms": 0.556}\n'
+)
+
+
+def test_a_line_longer_than_the_limit_is_refused_not_read(
+    env: dict[str, str], tmp_path: Path
+) -> None:
+    path = tmp_path / "long.jsonl"
+    head = '{"dir": "rx", "text": "0,8,'
+    tail = '"}'
+    filler = "A" * (MAX_LINE_BYTES + 1 - len(head) - len(tail))  # one byte over
+    path.write_text(PAIR + head + filler + tail + "\n" + PAIR, encoding="ascii")
+    line = one_error_line(serve(env, "--replay", str(path)))
+    assert line.startswith(f"rac-console: {path} line 3 is longer than ")
+    assert f"{MAX_LINE_BYTES // 1024} KiB" in line
+    assert "--record" in line
+    assert filler[:100] not in line
+
+
+def test_a_file_larger_than_the_limit_is_refused_not_read(
+    env: dict[str, str], tmp_path: Path
+) -> None:
+    path = tmp_path / "big.jsonl"
+    block = PAIR * (1024 * 1024 // len(PAIR))
+    with path.open("w", encoding="ascii") as file:
+        for _ in range(MAX_FILE_BYTES // len(block)):
+            file.write(block)
+        file.write(PAIR * ((MAX_FILE_BYTES - file.tell()) // len(PAIR) + 1))  # just over
+    assert MAX_FILE_BYTES < path.stat().st_size <= MAX_FILE_BYTES + len(PAIR)
+    started = time.monotonic()
+    line = one_error_line(serve(env, "--replay", str(path)))
+    assert line.startswith(f"rac-console: {path} is larger than ")
+    assert f"{MAX_FILE_BYTES // (1024 * 1024)} MiB" in line
+    assert "split" in line  # how to replay it anyway
+    assert time.monotonic() - started < DEADLINE

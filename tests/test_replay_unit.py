@@ -9,10 +9,13 @@ from __future__ import annotations
 
 import asyncio
 import json
+import os
+import threading
 from pathlib import Path
 
 import pytest
 
+from rac_console.engine.recorder import FrameRecorder
 from rac_console.protocol import escape_bytes, parse_response
 from rac_console.protocol.hresult import (
     E_ACCESSDENIED,
@@ -21,9 +24,13 @@ from rac_console.protocol.hresult import (
     E_INVALIDRCVPACKET,
     E_NOTIMPL,
 )
+from rac_console.session import Frame
+from rac_console.session.types import MAX_REPLY_LINE
+from rac_console.sim import replay
 from rac_console.sim.controller import SimulatedController
 from rac_console.sim.faults import FaultSettings
 from rac_console.sim.replay import (
+    MAX_LINE_BYTES,
     ReplayController,
     ReplayError,
     load_recording,
@@ -191,6 +198,79 @@ def test_a_file_with_no_answered_get_is_refused(tmp_path: Path) -> None:
         path = write(tmp_path / "rec.jsonl", records)
         with pytest.raises(ReplayError, match="nothing to replay"):
             load_recording(str(path))
+
+
+# ------------------------------------------------------------ the limits
+
+
+def test_the_longest_line_record_writes_is_within_the_line_limit(tmp_path: Path) -> None:
+    """A reply as long as a session takes, every byte escaped: --record's longest line."""
+    path = tmp_path / "rec.jsonl"
+    recorder = FrameRecorder(str(path))
+    recorder(Frame(1.0, "tx", b"GET:RC8:1:S:\r"))
+    recorder(Frame(1.1, "rx", b"0,8," + b"\x1b" * (MAX_REPLY_LINE - 5) + b"\r", rtt=0.1))
+    recorder.close()
+    longest = max(len(line) for line in path.read_bytes().splitlines())
+    assert MAX_REPLY_LINE * 4 < longest <= MAX_LINE_BYTES
+    assert load_recording(str(path)).answers[("S", 1)][0].count(b"\x1b") == MAX_REPLY_LINE - 5
+
+
+def test_a_line_of_the_limit_is_read_and_one_byte_more_is_refused(tmp_path: Path) -> None:
+    good = "".join(json.dumps(r) + "\n" for r in frames(I10[0]))
+    head, tail = '{"dir": "tx", "text": "GET:RC8:1:S:", "x": "', '"}'
+    path = tmp_path / "rec.jsonl"
+    for size, refused in ((MAX_LINE_BYTES, False), (MAX_LINE_BYTES + 1, True)):
+        line = head + "y" * (size - len(head) - len(tail)) + tail
+        assert len(line) == size
+        path.write_text(good + line + "\n" + good, encoding="ascii")
+        if refused:
+            with pytest.raises(ReplayError, match=r"line 3 is longer than 512 KiB"):
+                load_recording(str(path))
+        else:
+            assert load_recording(str(path)).count == 2
+    path.write_text(good + line, encoding="ascii")  # the last line, with no newline
+    with pytest.raises(ReplayError, match=r"line 3 is longer than"):
+        load_recording(str(path))
+
+
+def test_a_file_of_the_limit_is_read_and_one_byte_more_is_refused(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    pair = "".join(json.dumps(r) + "\n" for r in frames(I10[0]))
+    path = tmp_path / "rec.jsonl"
+    path.write_text(pair * 10, encoding="ascii")
+    monkeypatch.setattr(replay, "MAX_FILE_BYTES", len(pair) * 10)
+    assert load_recording(str(path)).count == 10
+    with path.open("a", encoding="ascii") as file:
+        file.write("\n")  # a blank line: one byte more
+    with pytest.raises(ReplayError, match=r"rec\.jsonl is larger than .*split"):
+        load_recording(str(path))
+
+
+@pytest.mark.skipif(not hasattr(os, "mkfifo"), reason="no named pipes here")
+def test_a_stream_is_counted_as_it_is_read(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """A pipe has no size to ask: reading stops once the limit is passed."""
+    pair = ("".join(json.dumps(r) + "\n" for r in frames(I10[0]))).encode("ascii")
+    monkeypatch.setattr(replay, "MAX_FILE_BYTES", len(pair) * 10)
+    path = tmp_path / "pipe.jsonl"
+    os.mkfifo(path)
+    written: list[int] = []
+
+    def feed() -> None:  # far more than the limit; stops when the reader goes away
+        try:
+            with open(path, "wb", buffering=0) as pipe:
+                for _ in range(10_000):
+                    written.append(pipe.write(pair) or 0)
+        except BrokenPipeError:
+            pass
+
+    writer = threading.Thread(target=feed, daemon=True)
+    writer.start()
+    with pytest.raises(ReplayError, match=r"pipe\.jsonl is larger than"):
+        load_recording(str(path))
+    writer.join(timeout=DEADLINE)
+    assert not writer.is_alive()
+    assert len(written) < 10_000
 
 
 # ------------------------------------------------------------ the answers

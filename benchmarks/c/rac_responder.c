@@ -104,7 +104,7 @@ int main(int argc, char **argv) {
                 if (c == '\r') {
                     size_t size;
                     const char *reply = reply_for(line, &size);
-                    send(fds[i].fd, reply, size, 0);
+                    send(fds[i].fd, reply, size, MSG_NOSIGNAL);  /* a client may reset */
                     memset(line, 0, sizeof *line);
                 } else if (c == ':') {
                     line->colons++;

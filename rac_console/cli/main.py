@@ -610,6 +610,9 @@ def _interactive(args: argparse.Namespace) -> int:
     except InputError as exc:
         print(f"rac-console: {terminal_safe(str(exc))}", file=sys.stderr)
         return 2
+    if args.command is None:  # the REPL had them on stderr; the console shows them here
+        for notice in args.target.notices:
+            engine.alert(notice)
     if args.command is None and args.watch:
         from ..engine.watchlist import load
 

@@ -12,7 +12,7 @@ from pathlib import Path
 from typing import Any
 
 from ..commands.policy import TargetProfile, WritePolicy, Writes
-from ..commands.profiles import could_be_profile_name, find_profile
+from ..commands.profiles import could_be_profile_name, match_profile
 from ..engine import SIMULATOR_NOTICE
 from ..engine.config import Config, load_config
 from ..engine.recorder import FrameRecorder
@@ -21,6 +21,7 @@ from ..protocol import InputError
 from ..protocol.request import Request
 from ..protocol.text import terminal_safe
 from ..session import ConnectFailed, Reply, Session
+from ..session.endpoints import addresses
 
 DEFAULT_PORT = 5006
 OPEN = WritePolicy()
@@ -42,6 +43,8 @@ class Target:
     config: Config | None = None  # the file as loaded ([settings] too)
     #: Said when the host cannot be reached: it was a bare name and no profile.
     unreachable_hint: str | None = None
+    #: Said once at start: profiles whose host could not be resolved, matched by text only.
+    notices: tuple[str, ...] = ()
 
 
 def resolve_target(args: argparse.Namespace) -> Target:
@@ -50,7 +53,9 @@ def resolve_target(args: argparse.Namespace) -> Target:
     config = load_config()
     flag = bool(args.read_only)
     port: int | None = args.port
-    profile = find_profile(config.profiles, args.host, port) if args.host else None
+    match = match_profile(config.profiles, args.host, port, addresses) if args.host else None
+    profile = match.profile if match is not None else None
+    notices = tuple(match.notices()) if match is not None else ()
     if profile is None:
         hint = None
         if args.host and could_be_profile_name(args.host):
@@ -65,9 +70,11 @@ def resolve_target(args: argparse.Namespace) -> Target:
             config_path=config.path,
             config=config,
             unreachable_hint=hint,
+            notices=notices,
         )
+    named = profile.name.casefold() == args.host.casefold()
     return Target(
-        profile.host,
+        profile.host if named else args.host,  # at its address: the address typed
         profile.port if port is None else port,  # -p given: it wins
         profile,
         profile.policy,
@@ -76,6 +83,7 @@ def resolve_target(args: argparse.Namespace) -> Target:
         profiles=config.profiles,
         config_path=config.path,
         config=config,
+        notices=notices,
     )
 
 
@@ -90,6 +98,9 @@ def settle_target(args: argparse.Namespace) -> bool:
         return False
     args.target = target
     args.host, args.port, args.read_only = target.host, target.port, target.read_only
+    if args.command is not None:  # the console shows them in its results pane
+        for notice in target.notices:
+            print(f"rac-console: {notice}", file=sys.stderr)
     return True
 
 
@@ -126,9 +137,15 @@ class _HintedSession(Session):
         with self._hinted():
             super().connect()
 
-    def exchange(self, request: Request, *, poll: bool = False) -> Reply:
+    def exchange(
+        self,
+        request: Request,
+        *,
+        poll: bool = False,
+        cancelled: Callable[[], bool] | None = None,
+    ) -> Reply:
         with self._hinted():
-            return super().exchange(request, poll=poll)
+            return super().exchange(request, poll=poll, cancelled=cancelled)
 
     @contextmanager
     def _hinted(self) -> Iterator[None]:

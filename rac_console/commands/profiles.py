@@ -195,23 +195,72 @@ def _allow(where: str, table: dict[str, object], fail: _Fail) -> tuple[AllowRang
 _STRICTNESS = {Writes.OPEN: 0, Writes.CONFIRM: 1, Writes.READ_ONLY: 2}
 
 
-def find_profile(
-    profiles: Mapping[str, TargetProfile], name_or_host: str, port: int | None = None
-) -> TargetProfile | None:
-    """The profile named ``name_or_host`` (in any case); else the one whose address it is
-    (``port`` None: the default), so an address typed by hand keeps the rules of the
-    controller there; of several, the strictest."""
+#: The addresses a host name or address text stands for (an IPv4-mapped IPv6 address as
+#: its IPv4 form), or None when it cannot be resolved. Given by the caller: this module
+#: is pure, and resolving is a socket affair (see :mod:`rac_console.session.endpoints`).
+Addresses = Callable[[str], "frozenset[str] | None"]
+
+
+@dataclass(frozen=True)
+class ProfileMatch:
+    """The profile whose rules a target gets, and the profiles of its port whose host
+    could not be resolved (matched by name and text only: said to the user once)."""
+
+    profile: TargetProfile | None
+    unresolved: tuple[TargetProfile, ...] = ()
+
+    def notices(self) -> list[str]:
+        """One line per profile that could not be matched by its address."""
+        return [
+            f"profile {p.name}: its host {terminal_safe(p.host)} cannot be resolved, so its "
+            f"rules apply only when the target is typed as {p.name} or {terminal_safe(p.host)}"
+            for p in self.unresolved
+        ]
+
+
+def match_profile(
+    profiles: Mapping[str, TargetProfile],
+    name_or_host: str,
+    port: int | None = None,
+    addresses: Addresses | None = None,
+) -> ProfileMatch:
+    """The profile named ``name_or_host`` (in any case); else every profile at the same
+    endpoint (``port`` None: the default), the host compared as text and, with
+    ``addresses``, as the addresses both sides resolve to (``127.1``, ``localhost`` and
+    ``0x7f000001`` are all 127.0.0.1); of several, the strictest."""
     key = name_or_host.casefold()
     for name, profile in profiles.items():
         if name.casefold() == key:
-            return profile
+            return ProfileMatch(profile)
     wanted = DEFAULT_PORT if port is None else port
-    same = [p for p in profiles.values() if p.host.casefold() == key and p.port == wanted]
-    return max(
+    at_port = [p for p in profiles.values() if p.port == wanted]
+    same = [p for p in at_port if p.host.casefold() == key]
+    unresolved: list[TargetProfile] = []
+    others = [p for p in at_port if p.host.casefold() != key]
+    typed = addresses(name_or_host) if addresses is not None and others else None
+    if addresses is not None and typed:  # a host that cannot be resolved reaches nothing
+        for profile in others:
+            theirs = addresses(profile.host)
+            if theirs is None:
+                unresolved.append(profile)
+            elif theirs & typed:
+                same.append(profile)
+    strictest = max(
         same,
         key=lambda p: (_STRICTNESS[p.policy.writes], p.policy.allow is not None),
         default=None,
     )
+    return ProfileMatch(strictest, tuple(unresolved))
+
+
+def find_profile(
+    profiles: Mapping[str, TargetProfile],
+    name_or_host: str,
+    port: int | None = None,
+    addresses: Addresses | None = None,
+) -> TargetProfile | None:
+    """:func:`match_profile`'s profile."""
+    return match_profile(profiles, name_or_host, port, addresses).profile
 
 
 def could_be_profile_name(host: str) -> bool:

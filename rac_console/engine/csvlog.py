@@ -7,6 +7,13 @@ when not (a UTF-8 byte order mark before it, as Excel writes one, is no differen
 a last line without its line end is ended first. A named pipe is opened only when a
 program reads it (never waited for). Each row is one unbuffered write (flushed each
 cycle); a write that fails stops the log for good, told once, like ``--record``.
+
+A controller's string is data, never a formula or a terminal command: a text cell (a
+string's value, a column name: anything but a number formatted here) has its control
+characters escaped as the screen and the transcript show them (``\\x1b``, an LF
+``\\x0a``), so each row is one line whatever the controller sent; one starting like a
+formula (``=``, ``+``, ``-``, ``@``, TAB, CR) is prefixed with ``'`` and quoted, as OWASP
+advises against CSV injection. A number is left as it is: an I of -5 is ``-5``.
 """
 
 from __future__ import annotations
@@ -19,41 +26,82 @@ import os
 import stat
 from collections.abc import Callable, Iterable
 from datetime import datetime
+from decimal import Decimal
+from typing import Any
 
 from ..commands.language import VarRef
 from ..protocol import InputError, Variant
-from ..protocol.text import counted, scalar_text
+from ..protocol.text import counted, scalar_text, terminal_safe
+from ..protocol.variant import float_text
 from .recorder import append_whole
 
 #: Bytes of an existing file read to find its header.
 MAX_HEADER = 1 << 20
 
+#: How a cell starts that a spreadsheet takes for a formula (OWASP, CSV injection).
+FORMULA_STARTS = ("=", "+", "-", "@", "\t", "\r")
+
+#: A cell holding one of these is quoted, by the csv rules.
+_QUOTED = frozenset(',"\r\n')
+
+#: The values written as numbers, as formatted here.
+_NUMBERS = (int, float, Decimal)
+
+
+def text_cell(text: str) -> str:
+    """Text that is not a number formatted here, made safe to open and to ``cat``:
+    controls escaped (:func:`terminal_safe`, as shown on screen), so no ESC reaches a
+    terminal and no CR or LF splits a row; a formula start prefixed with ``'``."""
+    safe = terminal_safe(text)
+    return "'" + safe if text.startswith(FORMULA_STARTS) else safe
+
+
+def csv_field(cell: str) -> str:
+    """A cell as written: quoted when the csv rules need it, and always when it starts
+    with ``'`` (a neutralised formula: OWASP wants it quoted too)."""
+    if cell.startswith("'") or not _QUOTED.isdisjoint(cell):
+        return '"' + cell.replace('"', '""') + '"'
+    return cell
+
 
 def columns_of(variables: Iterable[VarRef]) -> list[str]:
-    """``time``, then one column per field of each variable, in order."""
+    """``time``, then one column per field of each variable, in order; each name a
+    :func:`text_cell`, as a value is (a label is text too)."""
     names = ["time"]
     for var in variables:
         labels = var.kind.labels
         if labels:
-            names.extend(f"{var}.{label}" for label in labels)
+            names.extend(text_cell(f"{var}.{label}") for label in labels)
         else:
-            names.append(str(var))
+            names.append(text_cell(str(var)))
     return names
 
 
-def cells_of(var: VarRef, variant: Variant | None) -> list[str]:
-    """A variable's cells: empty when its value is unknown or its last poll failed."""
+def fields_of(var: VarRef, variant: Variant | None) -> list[str]:
+    """A variable's fields as written: empty when its value is unknown or its last
+    poll failed; each value a :func:`value_field`."""
     width = len(var.kind.labels) or 1
     if variant is None:
         return [""] * width
     value = variant.value
     if var.kind.labels:
         if isinstance(value, list) and len(value) == width:
-            return [scalar_text(v) for v in value]
+            return [value_field(v) for v in value]
         return [""] * width
     if var.kind.code == "IO":
         return ["1" if value else "0"]
-    return [value if isinstance(value, str) else scalar_text(value)]
+    return [value_field(value)]
+
+
+def value_field(value: Any) -> str:
+    """A number as :func:`scalar_text` formats it (-5 stays ``-5``, never quoted);
+    anything else, a string above all, is text from the controller: a
+    :func:`text_cell`, quoted when it must be (:func:`csv_field`)."""
+    if type(value) is float:  # the fields of P, J, T, V: most of a row
+        return float_text(value)
+    if isinstance(value, _NUMBERS):  # bool too: true, false
+        return scalar_text(value)
+    return csv_field(text_cell(value if isinstance(value, str) else scalar_text(value)))
 
 
 def timestamp(wall: float) -> str:
@@ -131,9 +179,9 @@ class CsvLog:
         self.failure: str | None = None
         self._on_failure = on_failure
         self._started = False  # a write failing before is the header's: nothing written
-        self._buffer = io.StringIO()
-        self._writer = csv.writer(self._buffer, lineterminator="\r\n")
-        self._cells: dict[VarRef, tuple[Variant | None, list[str]]] = {}
+        #: Each variable's last value and its fields as written, joined: a value seen
+        #: again is not formatted again.
+        self._fields: dict[VarRef, tuple[Variant | None, str]] = {}
         header = columns_of(variables)
         try:
             existing, last = _existing(path)
@@ -154,7 +202,7 @@ class CsvLog:
         if self.appending and last != b"\n":
             self._write(b"\n" if last == b"\r" else b"\r\n")
         if not self.appending and self._fd is not None:
-            self._write_row(header)
+            self._write_line(",".join(csv_field(name) for name in header))
         self._started = True
 
     def write(self, wall: float, values: dict[VarRef, Variant | None]) -> None:
@@ -162,23 +210,20 @@ class CsvLog:
         if self._fd is None:
             return
         row = [timestamp(wall)]
-        cells = self._cells
+        fields = self._fields
         for var in self.variables:
             variant = values.get(var)
-            kept = cells.get(var)
+            kept = fields.get(var)
             if kept is None or kept[0] is not variant:  # a value seen again: no new text
-                kept = (variant, cells_of(var, variant))
-                cells[var] = kept
-            row.extend(kept[1])
-        if self._write_row(row):
+                kept = (variant, ",".join(fields_of(var, variant)))
+                fields[var] = kept
+            row.append(kept[1])
+        if self._write_line(",".join(row)):
             self.rows += 1
 
-    def _write_row(self, row: list[str]) -> bool:
-        buffer = self._buffer
-        buffer.seek(0)
-        buffer.truncate()
-        self._writer.writerow(row)
-        return self._write(buffer.getvalue().encode("utf-8", "surrogateescape"))
+    def _write_line(self, line: str) -> bool:
+        """One row, its fields joined already; every cell is escaped, so one line."""
+        return self._write(f"{line}\r\n".encode("utf-8", "surrogateescape"))
 
     def _write(self, data: bytes) -> bool:
         fd = self._fd

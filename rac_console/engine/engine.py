@@ -44,6 +44,8 @@ STATUS_EVERY = 0.1
 #: Events are handed to the outbox in batches at least this often while polling (and at
 #: once when the engine goes idle or answers a line): one lock per batch, not per frame.
 EVENTS_EVERY = 0.01
+#: How often an idle engine (nothing to poll) looks whether its connection still lives.
+LINK_CHECK_EVERY = 1.0
 #: How often a write waiting for its confirmation looks for the answer (polling between).
 CONFIRM_CHECK_EVERY = 0.02
 
@@ -218,15 +220,19 @@ class Engine:
                 self._connect_at_start()
             while not self._stopping.is_set():
                 wait = self._wait_time()
+                idle = wait is None and self.connection == "connected"
                 if wait != 0:
                     self.flush_events()
                     if self._status_dirty:
                         self.publish_status(force=True)
-                item = self._next(wait)
+                item = self._next(LINK_CHECK_EVERY if idle else wait)
                 if item is None:
                     break  # stop
                 if item:
                     handle(self, *item)
+                    continue
+                if idle:
+                    self._check_idle_link()
                     continue
                 self._poll_once()
         except Exception as exc:  # a bug must not leave the front end waiting in silence
@@ -250,6 +256,18 @@ class Engine:
             return self._inbox.get(timeout=wait)
         except queue.Empty:
             return ()
+
+    def _check_idle_link(self) -> None:
+        """Nothing polled, nothing typed: a connection that died in the quiet (the
+        controller closed it, keepalive gave up on it) is shown now, not at the next
+        command."""
+        session = self.session
+        reason = session.check_idle() if session is not None else None
+        if reason is not None:
+            self._lost = True  # "reconnected" is said when the next command gets through
+            self.connection = "lost"  # not "closed": that reads as a quiet, healthy target
+            self._status_dirty = True
+            self.note(f"connection lost while idle: {reason}; the next command reconnects")
 
     def _connect_at_start(self) -> None:
         """Open the connection at start, so the status line tells the truth at once."""

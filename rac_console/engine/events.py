@@ -12,10 +12,20 @@ from enum import Enum
 from ..commands.language import Command, VarRef
 from ..commands.outcome import Outcome
 from ..protocol import Variant
+from ..protocol.text import terminal_safe
 from ..session import Frame
 
 OK = "OK"
 WAITING = "…"
+#: Characters of a profile's label shown (the badges after it must fit 80 columns).
+LABEL_WIDTH = 32
+
+
+def shown_label(label: str, width: int = LABEL_WIDTH) -> str:
+    """A profile's label as every front end shows it: escaped, and cut with ``…`` to
+    ``width`` characters (present/status.py's ``label_text`` then cuts it to cells)."""
+    safe = terminal_safe(label)
+    return safe if len(safe) <= width else safe[: width - 1].rstrip() + "…"
 
 
 @dataclass(frozen=True, slots=True)

@@ -13,7 +13,15 @@ from ..commands.language import Exchange, Get, Put, VarRef
 from ..commands.latency import LatencySummary, summarize
 from ..commands.outcome import ExitStatus, Outcome, refused
 from ..protocol import describe_hresult, escape_bytes
-from ..session import BadReply, ConnectFailed, RequestTimeout, Session, TransportError
+from ..session import (
+    BadReply,
+    ConnectFailed,
+    Disconnected,
+    NotSent,
+    RequestTimeout,
+    Session,
+    TransportError,
+)
 
 
 def read_only_refusal(command: Exchange) -> str | None:
@@ -30,24 +38,39 @@ def read_only_refusal(command: Exchange) -> str | None:
     )
 
 
+def never() -> bool:
+    """The cancel check of a job nobody can cancel."""
+    return False
+
+
 def execute(
     session: Session,
     command: Exchange,
     *,
     read_only: bool = False,
     line: str | None = None,
+    cancelled: Callable[[], bool] = never,
 ) -> Outcome:
-    """Send one command and describe what came of it; never raises for I/O."""
+    """Send one command and describe what came of it; never raises for I/O.
+
+    ``cancelled`` is the job's cancel, asked right before the request goes out."""
     request = command.request
     wire = request.text
     var = command.var if isinstance(command, Get | Put) else None
     if read_only and (refusal := read_only_refusal(command)) is not None:
         return refused(line, refusal, wire)
     try:
-        reply = session.exchange(request)
+        reply = session.exchange(request, cancelled=cancelled)
+    except NotSent as exc:
+        return Outcome(wire, ExitStatus.REFUSED, var, error=str(exc), input_line=line, failure=exc)
     except RequestTimeout as exc:
         message = str(exc)
         if request.write:
+            message += ": outcome unknown, the PUT may have been applied or may still arrive"
+        return Outcome(wire, ExitStatus.TRANSPORT, var, error=message, input_line=line, failure=exc)
+    except Disconnected as exc:
+        message = str(exc)
+        if request.write and cancelled():  # cut while the PUT was on its way
             message += ": outcome unknown, the PUT may have been applied"
         return Outcome(wire, ExitStatus.TRANSPORT, var, error=message, input_line=line, failure=exc)
     except TransportError as exc:

@@ -30,15 +30,16 @@ from ..commands.language import (
 )
 from ..commands.outcome import Outcome
 from ..commands.policy import WritePolicy, Writes
-from ..commands.profiles import could_be_profile_name, find_profile
+from ..commands.profiles import could_be_profile_name, match_profile
 from ..commands.registry import help_lines, parse_command
 from ..protocol import InputError, Variant
-from ..protocol.text import counted, terminal_safe
+from ..protocol.text import counted
 from ..session import ConnectFailed, Disconnected, Session, TransportError
+from ..session.endpoints import addresses
 from . import watchlist
 from .conditions import wait_for
 from .engine import Engine
-from .events import OK, ConfirmWrite, Feedback, Message, Result, UiStep
+from .events import OK, ConfirmWrite, Feedback, Message, Result, UiStep, shown_label
 from .execute import measure_latency
 from .writes import exchange, plain_value
 
@@ -155,6 +156,7 @@ def _exchange(engine: Engine, session: Session, command: Exchange, line: str | N
         known_before=known_before,
         confirm=confirm,
         line=line,
+        cancelled=lambda: engine.stopping,
     )
     row = engine.watch.rows.get(outcome.var) if outcome.var is not None else None
     held = outcome.read_back
@@ -265,10 +267,15 @@ def _connect(engine: Engine, command: Connect) -> Message:
     simulator's (open), or for a plain host the ones the engine started with. The
     command line's ``--read-only`` stays whatever the target."""
     given = command.port if command.port_given else None
-    profile = find_profile(engine.profiles, command.host, given) if command.host else None
+    match = match_profile(engine.profiles, command.host, given, addresses) if command.host else None
+    profile = match.profile if match is not None else None
+    for notice in match.notices() if match is not None else ():
+        engine.alert(notice)
     host, port = command.host, command.port
-    if profile is not None:
-        host, port = profile.host, command.port if command.port_given else profile.port
+    if profile is not None and command.host is not None:
+        named = profile.name.casefold() == command.host.casefold()
+        host = profile.host if named else command.host  # at its address: the address typed
+        port = command.port if command.port_given else profile.port
         policy = profile.policy
     else:
         policy = WritePolicy() if host is None else engine.base_policy
@@ -294,7 +301,7 @@ def _connect(engine: Engine, command: Connect) -> Message:
     if profile is None:
         rules = f" ({writes})" if writes != "writes open" else ""
         return Message(f"connected to LIVE controller {host}:{port}{rules}")
-    label = terminal_safe(profile.label or profile.name)
+    label = shown_label(profile.label or profile.name)
     allow = profile.policy.allow
     rules = f", allow {', '.join(map(str, allow)) or 'nothing'}" if allow is not None else ""
     return Message(

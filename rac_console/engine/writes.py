@@ -18,8 +18,8 @@ from ..commands.policy import WritePolicy, Writes, written_var
 from ..commands.readback import comparable, same_value
 from ..protocol import ProtocolError, Variant
 from ..protocol.variant import parse_variant
-from ..session import ConnectFailed, Session
-from .execute import execute, read_only_refusal
+from ..session import ConnectFailed, NotSent, RequestTimeout, Session
+from .execute import execute, never, read_only_refusal
 
 #: Asks whether to write: (the variable, its value now or None, the value to write,
 #: the write) -> yes.
@@ -43,6 +43,7 @@ def _confirmed(
     command: Put | Raw,
     confirm: Confirm,
     line: str | None,
+    cancelled: Callable[[], bool],
 ) -> Variant | Outcome | None:
     """Ask; after a yes read the variable again: the value answered about must still be
     the value there, or the yes was for another write, and the question is asked again
@@ -52,7 +53,11 @@ def _confirmed(
     for _ in range(MAX_QUESTIONS):
         if not confirm(var, before, written, command):
             return refused(line, f"PUT {var} not confirmed: nothing was sent", wire)
-        now = execute(session, Get(var))
+        now = execute(session, Get(var), cancelled=cancelled)
+        if isinstance(now.failure, NotSent):
+            return replace(
+                now, request=wire, input_line=line, var=var, error=f"PUT {var} {now.error}"
+            )
         if now.status == ExitStatus.TRANSPORT:
             error = f"PUT {var} not sent: reading it again after the question failed: {now.error}"
             return replace(now, request=wire, input_line=line, var=var, error=error)
@@ -78,10 +83,12 @@ def exchange(
     known_before: Callable[[VarRef], Variant | None] = lambda var: None,
     confirm: Confirm | None = None,
     line: str | None = None,
+    cancelled: Callable[[], bool] = never,
 ) -> Outcome:
     """One GET, PUT or raw line, from any front end: a put, and any raw line but a
     well-formed GET (a line that does not start with PUT may still write on a lenient
-    controller), goes by the target's rules (:func:`write`); a read is just sent."""
+    controller), goes by the target's rules (:func:`write`); a read is just sent.
+    ``cancelled`` is the job's cancel, asked before each of its sends."""
     if isinstance(command, Put) or (
         isinstance(command, Raw) and not command.request.read_only_safe
     ):
@@ -94,8 +101,9 @@ def exchange(
             known_before=known_before,
             confirm=confirm,
             line=line,
+            cancelled=cancelled,
         )
-    return execute(session, command, read_only=read_only, line=line)
+    return execute(session, command, read_only=read_only, line=line, cancelled=cancelled)
 
 
 def write(
@@ -108,6 +116,7 @@ def write(
     known_before: Callable[[VarRef], Variant | None] = lambda var: None,
     confirm: Confirm | None = None,
     line: str | None = None,
+    cancelled: Callable[[], bool] = never,
 ) -> Outcome:
     """Send one write the way the target allows; never raises for I/O.
 
@@ -124,7 +133,7 @@ def write(
     if var is None:  # a raw line we cannot read: sent as typed, nothing to read back
         if policy.confirms:
             return refused(line, _no_one_to_ask("this line", policy), wire)
-        return execute(session, command, line=line)
+        return execute(session, command, line=line, cancelled=cancelled)
     if policy.confirms and confirm is None:
         return refused(line, _no_one_to_ask(str(var), policy), wire)
     written = _value_of(command)
@@ -138,7 +147,9 @@ def write(
         )
     before = known_before(var)
     if before is None and (verify or policy.confirms):
-        first = execute(session, Get(var))
+        first = execute(session, Get(var), cancelled=cancelled)
+        if isinstance(first.failure, NotSent):
+            return replace(first, request=wire, error=f"PUT {var} {first.error}", input_line=line)
         if first.status == ExitStatus.TRANSPORT:  # the controller does not answer: no PUT
             return replace(
                 first,
@@ -150,22 +161,34 @@ def write(
             )
         before = first.variant if first.ok else None
     if policy.confirms and confirm is not None and written is not None:
-        asked = _confirmed(session, var, before, written, command, confirm, line)
+        asked = _confirmed(session, var, before, written, command, confirm, line, cancelled)
         if isinstance(asked, Outcome):
             return asked
         before = asked
-    outcome = execute(session, command, line=line)
+    outcome = execute(session, command, line=line, cancelled=cancelled)
+    if isinstance(outcome.failure, NotSent):
+        return replace(outcome, var=var, before=before, error=f"PUT {var} {outcome.error}")
     outcome = replace(outcome, var=var, written=written, before=before)
     if not verify or isinstance(outcome.failure, ConnectFailed):  # nothing went out
         return outcome
+    if cancelled():  # the user said stop: nothing more goes out, not even the GET
+        return replace(outcome, read_back_error="not read back: cancelled")
     return _read_back(session, outcome, var, written)
 
 
 def _read_back(session: Session, outcome: Outcome, var: VarRef, written: Variant | None) -> Outcome:
     """The GET after the PUT: what the controller holds now, and whether it is the value
     written. A mismatch after S_OK is a failure (exit 1); after a timeout or an error
-    answer the outcome keeps its own status and the read-back says what happened."""
+    answer the outcome keeps its own status and the read-back says what happened.
+
+    A PUT that timed out may still be on its way (held up on the network, or unread in
+    a slow controller's buffer): its read-back says what the controller held then, and
+    never whether the write happened (``verified`` stays None, the outcome unknown)."""
     after = execute(session, Get(var))
+    if isinstance(outcome.failure, RequestTimeout):
+        if not after.ok:
+            return replace(outcome, read_back_error=f"read back failed: {after.error}")
+        return replace(outcome, read_back=after.variant, verified=None)
     if not after.ok:
         problem = f"read back failed: {after.error}"
         if outcome.ok:

@@ -113,8 +113,10 @@ def error_text(outcome: Outcome, prefix: str = "") -> str:
     """One clear line: what failed and why, with the request and raw reply."""
     var = outcome.var
     if var is not None and outcome.response is not None and read_back_checked(outcome):
-        # The PUT was answered: the write line says it all, and why it is a failure.
-        why = f" ({outcome.error})" if outcome.error and outcome.response.ok else ""
+        # The PUT was answered: the write line says it all, and why it is a failure (a
+        # failed read-back is already on it: said once).
+        said = outcome.error == outcome.read_back_error
+        why = f" ({outcome.error})" if outcome.error and outcome.response.ok and not said else ""
         if not outcome.response.ok:
             why = f" ({outcome.summary()})"
         return terminal_safe(prefix + write_text(var, outcome).plain + why)
@@ -126,10 +128,12 @@ def error_text(outcome: Outcome, prefix: str = "") -> str:
         if len(reply) > MAX_QUOTED_REPLY:  # the whole reply is in --json, the log and --record
             reply = f"{reply[:MAX_QUOTED_REPLY]}… ({len(reply)} characters)"
         parts.append(f"(request {outcome.request}, reply {reply})")
-    if var is not None and outcome.read_back is not None:  # a PUT whose outcome was unknown
-        parts.append("; read back")
-        parts.append(value_text(var, outcome.read_back).plain)
-        if outcome.verified is not None:
+    if var is not None and outcome.read_back is not None:  # a PUT that got no answer
+        parts[-1] += ";"
+        parts.append(f"read back {value_text(var, outcome.read_back).plain}")
+        if outcome.verified is None:  # it timed out: it may land after this read
+            parts.append("just after, which proves nothing")
+        else:
             parts.append("(the value written)" if outcome.verified else "(not the value written)")
     return terminal_safe(" ".join(parts))
 

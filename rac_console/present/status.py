@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import time
+from collections.abc import Mapping
 from dataclasses import dataclass
 from itertools import pairwise
 
@@ -11,7 +12,9 @@ from rich.color import Color, ColorParseError
 from rich.style import Style
 from rich.text import Text
 
-from ..engine.events import Status
+from ..commands.policy import TargetProfile
+from ..commands.profiles import completion_targets
+from ..engine.events import LABEL_WIDTH, Status, shown_label
 from ..protocol.text import terminal_safe
 
 #: A reply is shown as awaited once it is this late (seconds): quicker ones would flicker.
@@ -20,8 +23,6 @@ WAITING_SHOWN_AFTER = 0.2
 RUNNING_SHOWN_AFTER = 0.5
 #: Characters of a running line shown.
 RUNNING_WIDTH = 24
-#: Characters of a profile's label shown (the badges after it must fit 80 columns).
-LABEL_WIDTH = 32
 
 
 def profile_colour(colour: str | None) -> Color | None:
@@ -80,7 +81,19 @@ def target_label(status: Status, width: int = LABEL_WIDTH) -> str | None:
     text = status.label or status.profile
     if not text:
         return None
-    return _cut(terminal_safe(text), width)
+    return label_text(text, width)
+
+
+def label_text(label: str, width: int = LABEL_WIDTH) -> str:
+    """A profile's label wherever it is shown: escaped, cut with ``…`` to ``width``
+    cells (:data:`LABEL_WIDTH` by default; wide characters count 2)."""
+    return _cut(shown_label(label, width), width)
+
+
+def connect_targets(profiles: Mapping[str, TargetProfile]) -> list[tuple[str, str]]:
+    """What ``connect`` completes to besides sim: each profile's name, with its label (or
+    its address) cut as a label is shown, as the candidate's help."""
+    return [(name, label_text(about)) for name, about in completion_targets(profiles)]
 
 
 def _cut(text: str, width: int) -> str:
@@ -138,7 +151,7 @@ def _fields(
     text = status.label or status.profile
     if text:  # first: two consoles on two robots can't be mixed up
         style = label_style(status.colour)
-        safe = terminal_safe(text)
+        safe = shown_label(text)  # at most LABEL_WIDTH characters: cut again below
         widths = range(min(label_width, cell_len(safe)), LABEL_MIN - 1, -1)
         forms: list[Text] = []
         for width in widths:
@@ -220,6 +233,15 @@ def _connection(status: Status) -> _Field:
             Text(f"{what}, retrying in {wait:.1f} s", style="bold red"),
             Text(f"{short}, retry {wait:.1f} s", style="bold red"),
             Text(f"retry {wait:.1f} s", style="bold red"),
+            essential=True,
+            droppable=False,
+            last_resort=1,
+        )
+    if state == "lost":  # found dead while idle: nothing retries until a command
+        return _figure(
+            Text("lost, the next command reconnects", style="bold red"),
+            Text("connection lost", style="bold red"),
+            Text("lost", style="bold red"),
             essential=True,
             droppable=False,
             last_resort=1,

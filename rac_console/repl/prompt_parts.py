@@ -20,7 +20,7 @@ from ..commands.completion import complete, hint
 from ..commands.tokens import tokenize
 from ..engine import ConfirmWrite, Status
 from ..present.history import History
-from ..present.status import ink_on, profile_colour, target_label
+from ..present.status import ink_on, label_text, profile_colour, target_label
 from ..protocol.text import terminal_safe
 
 STYLE = Style.from_dict(
@@ -91,7 +91,7 @@ def toolbar_fragments(status: Status) -> FormattedText:
 def confirm_message(question: ConfirmWrite) -> FormattedText:
     """``Write I10: 14 → 15 on Cell 3 — welding? [y/N] `` (default No)."""
     before = question.before
-    where = question.label or question.target
+    where = label_text(question.label) if question.label else terminal_safe(question.target)
     return FormattedText(
         [
             ("class:confirm", f"Write {terminal_safe(question.var)}: "),
@@ -101,7 +101,7 @@ def confirm_message(question: ConfirmWrite) -> FormattedText:
             ),
             ("class:confirm", " → "),
             ("class:confirm.value", terminal_safe(question.after)),
-            ("class:confirm", f" on {terminal_safe(where)}? "),
+            ("class:confirm", f" on {where}? "),
             ("bold", "[y/N] "),
         ]
     )

@@ -23,7 +23,6 @@ from rich.text import Text
 from ..commands.completion import hint
 from ..commands.language import Unwatch, VarRef, Watch
 from ..commands.outcome import ExitStatus, Outcome
-from ..commands.profiles import completion_targets
 from ..engine import (
     CONFIRM_GUARD_SECONDS,
     SIMULATOR_NOTICE,
@@ -43,6 +42,7 @@ from ..present.cells import age_text, status_cell, value_cell
 from ..present.frames import frame_line
 from ..present.history import History
 from ..present.render import error_text, make_console, notice_text, outcome_text
+from ..present.status import connect_targets
 from ..protocol.text import terminal_safe
 from ..session import Frame
 from .prompt_parts import (
@@ -105,7 +105,7 @@ class Repl:
             message=self.prompt_message,
             history=SharedHistory(history),
             auto_suggest=AutoSuggestFromHistory(),
-            completer=RacCompleter(self._seen, completion_targets(engine.profiles)),
+            completer=RacCompleter(self._seen, connect_targets(engine.profiles)),
             complete_while_typing=False,
             lexer=RacLexer(),
             input_processors=[HintProcessor()],

@@ -23,6 +23,7 @@ import socket
 import struct
 import sys
 import time
+from collections.abc import Callable
 from typing import Any
 
 from ..protocol import Variant, VarKind, format_variant
@@ -38,6 +39,7 @@ from .types import (
     Disconnected,
     Frame,
     FrameObserver,
+    NotSent,
     Reply,
     RequestTimeout,
     State,
@@ -54,6 +56,14 @@ READ_SIZE = 65536
 #: the wait, up to MAX_SETTLE. A well-behaved controller never pays it.
 SETTLE = 0.002
 MAX_SETTLE = 0.05
+
+#: TCP keepalive: an idle connection is probed after KEEPALIVE_IDLE seconds of silence,
+#: every KEEPALIVE_INTERVAL seconds, and given up after KEEPALIVE_COUNT unanswered
+#: probes: a controller that vanished (rebooted while the cable was out) is known dead
+#: about 11 s into a quiet spell, not at the next command.
+KEEPALIVE_IDLE = 5
+KEEPALIVE_INTERVAL = 2
+KEEPALIVE_COUNT = 3
 
 
 class Session:
@@ -128,12 +138,35 @@ class Session:
     def send_raw(self, text: str) -> Reply:
         return self.exchange(raw_request(text))
 
-    def exchange(self, request: Request, *, poll: bool = False) -> Reply:
+    def exchange(
+        self,
+        request: Request,
+        *,
+        poll: bool = False,
+        cancelled: Callable[[], bool] | None = None,
+    ) -> Reply:
         """Send one request and wait for its reply.
 
         Raises a TransportError when no trustworthy reply came; the connection is then
-        gone, and the next request opens a fresh one.
+        gone, and the next request opens a fresh one. ``cancelled`` is the job's: asked
+        right before the bytes go out, and NotSent raised (nothing sent) when it says so.
+        A GET whose reused connection turns out dead before any byte of its reply came
+        (a controller that rebooted during a quiet spell) is sent once more on a fresh
+        connection: it changes nothing. Nothing else is ever sent twice.
         """
+        reused = self._sock is not None
+        try:
+            return self._exchange_once(request, poll, cancelled)
+        except Disconnected as exc:
+            if not (reused and exc.before_reply and request.read_only_safe):
+                raise
+            if self._interrupted or self._cancel_requested:
+                raise
+        return self._exchange_once(request, poll, cancelled)
+
+    def _exchange_once(
+        self, request: Request, poll: bool, cancelled: Callable[[], bool] | None
+    ) -> Reply:
         sock = self._connected()
         if self._settle:
             # This peer has sent lines nobody asked for: leave it a moment after each
@@ -147,6 +180,8 @@ class Session:
         quiet = self._poll is not None and not machine.pending and not self._poll.poll(0)
         if not quiet and self._peer_spoke(sock) and self._discard_waiting(sock):
             sock = self._connected()
+        if cancelled is not None and cancelled():
+            raise NotSent("not sent: cancelled")
         data = machine.begin(request)
         # Both clocks read before sendall: after it the thread may run again only once
         # the reply is in (the GIL, the scheduler), and the frame must say when it left.
@@ -160,7 +195,9 @@ class Session:
             raise self._lost() from None
         except OSError as exc:
             self._drop()
-            raise Disconnected(f"the connection failed while sending: {_reason(exc)}") from None
+            raise Disconnected(
+                f"the connection failed while sending: {_reason(exc)}", before_reply=True
+            ) from None
         if self._frame_observers:
             self._publish(Frame(sent_time, "tx", data, poll=poll))
         return self._await_reply(sock, sent_at, sent_time, poll)
@@ -251,7 +288,9 @@ class Session:
             sock.settimeout(seconds)
 
     def _timed_out(self) -> RequestTimeout:
-        self._drop()
+        # Aborted, not closed: a graceful close lets the kernel keep re-sending the
+        # request, so a PUT held up on the network could land after its read-back.
+        self._drop(abort=True)
         return RequestTimeout(f"no reply within {self.timeout:g} s")
 
     def _lost(self, message: str = "the controller closed the connection") -> Disconnected:
@@ -260,9 +299,9 @@ class Session:
         fragment = self._machine.pending
         if fragment:
             self._publish(Frame(time.time(), "rx", fragment))
-        self._drop()
+        self._drop(abort=True)  # nothing more of ours may reach a peer that dropped us
         detail = f" after '{escape_bytes(fragment)}'" if fragment else ""
-        return Disconnected(f"{message}{detail}", fragment or None)
+        return Disconnected(f"{message}{detail}", fragment or None, before_reply=not fragment)
 
     # ---------------------------------------------------------- stray bytes
 
@@ -327,6 +366,7 @@ class Session:
             raise ConnectFailed(f"cannot connect to {self.address}: {_reason(exc)}") from None
         with contextlib.suppress(OSError):
             sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+        _set_keepalive(sock)
         self._kernel_timeout = _set_kernel_timeout(sock, self.timeout)
         sock.settimeout(None if self._kernel_timeout else self.timeout)
         self._sock = sock
@@ -341,14 +381,41 @@ class Session:
         self._set_state("connected")
         return sock
 
-    def _drop(self) -> None:
-        """Close the connection so nothing more it carries can be read."""
+    def _drop(self, abort: bool = False) -> None:
+        """Close the connection so nothing more it carries can be read; with ``abort``,
+        reset it, so what it still holds unsent is discarded rather than delivered."""
         sock, self._sock, self._poll = self._sock, None, None
         self._machine.reset()
         if sock is not None:
+            if abort:
+                _discard_unsent(sock)
             with contextlib.suppress(OSError):
                 sock.close()
         self._set_state("closed")
+
+    def check_idle(self) -> str | None:
+        """For an idle session (the owning thread, between requests): why its open
+        connection is dead (the peer closed it, keepalive gave up), which drops it; None
+        while it lives or when none is open. Bytes nobody asked for are left for the
+        next request's stray check."""
+        sock = self._sock
+        if sock is None or not self._peer_spoke(sock) or self._machine.holds_stray():
+            return None
+        timeout = sock.gettimeout()
+        try:
+            sock.setblocking(False)
+            try:
+                if sock.recv(1, socket.MSG_PEEK):
+                    return None  # a stray line: the next request logs it
+                reason = "the controller closed the connection"
+            finally:
+                sock.settimeout(timeout)
+        except BlockingIOError:
+            return None
+        except OSError as exc:
+            reason = f"the connection failed: {_reason(exc)}"
+        self._drop()
+        return reason
 
     def cancel(self) -> None:
         """Cut short the request in flight from another thread (it fails with
@@ -391,6 +458,32 @@ def _set_kernel_timeout(sock: socket.socket, seconds: float) -> bool:
     except (OSError, AttributeError, struct.error, OverflowError):
         return False
     return True
+
+
+def _set_keepalive(sock: socket.socket) -> None:
+    """TCP keepalive with an idle time of seconds (the systems' default is two hours),
+    on Linux, macOS and Windows; left at the system's where an option is missing."""
+    with contextlib.suppress(OSError, AttributeError, ValueError):
+        sock.setsockopt(socket.SOL_SOCKET, socket.SO_KEEPALIVE, 1)
+        if sys.platform == "win32":
+            ms = (1, KEEPALIVE_IDLE * 1000, KEEPALIVE_INTERVAL * 1000)
+            sock.ioctl(socket.SIO_KEEPALIVE_VALS, ms)  # type: ignore[attr-defined]
+            return
+        idle = getattr(socket, "TCP_KEEPIDLE", None) or getattr(socket, "TCP_KEEPALIVE", None)
+        for option, value in (
+            (idle, KEEPALIVE_IDLE),
+            (getattr(socket, "TCP_KEEPINTVL", None), KEEPALIVE_INTERVAL),
+            (getattr(socket, "TCP_KEEPCNT", None), KEEPALIVE_COUNT),
+        ):
+            if option is not None:
+                sock.setsockopt(socket.IPPROTO_TCP, option, value)
+
+
+def _discard_unsent(sock: socket.socket) -> None:
+    """SO_LINGER on, time 0: the close that follows resets the connection."""
+    layout = "=HH" if sys.platform == "win32" else "ii"
+    with contextlib.suppress(OSError, struct.error):
+        sock.setsockopt(socket.SOL_SOCKET, socket.SO_LINGER, struct.pack(layout, 1, 0))
 
 
 def _closed_at_once(sock: socket.socket) -> bool:

@@ -33,7 +33,17 @@ class RequestTimeout(TransportError):
 
 
 class Disconnected(TransportError):
-    pass
+    """The connection ended. ``before_reply``: no byte of the reply had come."""
+
+    def __init__(
+        self, message: str, raw: bytes | None = None, *, before_reply: bool = False
+    ) -> None:
+        super().__init__(message, raw)
+        self.before_reply = before_reply
+
+
+class NotSent(TransportError):
+    """The job was cancelled before its request went out: nothing was sent."""
 
 
 class BadReply(TransportError):

@@ -19,14 +19,19 @@ Only what the controller said is served, never an invented value:
   shows a change that did not happen) or starts again from its first (``cycle``).
 
 The order is the replay's, shared by every connection, like one controller's values.
-Pure: no I/O but reading the file; what the user should hear goes to ``notify``.
+Pure: no I/O but reading the file; what the user should hear goes to ``notify``. The
+file is read a line at a time, never a line longer than :data:`MAX_LINE_BYTES` nor more
+than :data:`MAX_FILE_BYTES` in all: a bigger one is refused, said in one line.
 """
 
 from __future__ import annotations
 
+import itertools
 import json
-from collections.abc import Callable, Iterable
+import os
+from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass, field
+from typing import BinaryIO
 
 from ..protocol.hresult import (
     E_ACCESSDENIED,
@@ -44,6 +49,13 @@ NOT_RECORDED = E_NOTIMPL
 READ_ONLY = E_ACCESSDENIED
 QUOTED = 40  # characters of a file's value quoted in an error
 MAX_TOLD = 4096  # variables told about once each; past that, the notices' rate limit only
+#: The longest line a replay reads, in bytes. A --record line holds one frame of at most
+#: 64 KiB (the longest reply a session takes), each byte at most 5 characters once
+#: escaped and put in JSON (``\\x1b``): about 320 KiB. Longer is no --record line.
+MAX_LINE_BYTES = 512 * 1024
+#: The largest file a replay loads, in bytes (about half a million answers of a number):
+#: every answer is held in memory, so a bigger file is refused, not read.
+MAX_FILE_BYTES = 64 * 1024 * 1024
 
 Key = tuple[str, int]  # (type code, index): ("I", 10)
 Notify = Callable[[str, str], None]  # (kind, text), as Notices.note takes them
@@ -115,11 +127,15 @@ def _is_hex(pair: str) -> bool:
 
 
 def load_recording(path: str) -> Recording:
-    """Read a ``--record`` file; ReplayError (one line) when it cannot be replayed."""
+    """Read a ``--record`` file; ReplayError (one line) when it cannot be replayed, or
+    is larger than :data:`MAX_FILE_BYTES` or has a line longer than :data:`MAX_LINE_BYTES`
+    (refused before either is read whole)."""
     name = terminal_safe(path)
     try:
         with open(path, "rb") as file:
-            recording = read_records(file, path)
+            if os.fstat(file.fileno()).st_size > MAX_FILE_BYTES:  # a pipe says 0: counted
+                raise ReplayError(_too_large(name))
+            recording = read_records(_bounded_lines(file, name), path)
     except OSError as exc:
         reason = terminal_safe(exc.strerror or str(exc))
         raise ReplayError(f"cannot read the replay file {name}: {reason}") from None
@@ -129,6 +145,33 @@ def load_recording(path: str) -> Recording:
             "(record one with --record FILE)"
         )
     return recording
+
+
+def _too_large(name: str) -> str:
+    size = f"{MAX_FILE_BYTES // (1024 * 1024)} MiB"
+    return (
+        f"{name} is larger than {size}, the most a replay loads: replay it in parts "
+        f"(split -l 400000 {name} part-) or record shorter sessions"
+    )
+
+
+def _bounded_lines(file: BinaryIO, name: str) -> Iterator[bytes]:
+    """The file's lines, none read past :data:`MAX_LINE_BYTES` and none past
+    :data:`MAX_FILE_BYTES` in all (a file that grows, or a pipe, is counted as read)."""
+    total = 0
+    for number in itertools.count(1):
+        raw = file.readline(MAX_LINE_BYTES + 1)
+        if not raw:
+            return
+        total += len(raw)
+        if total > MAX_FILE_BYTES:
+            raise ReplayError(_too_large(name))
+        if len(raw.removesuffix(b"\n")) > MAX_LINE_BYTES:
+            raise ReplayError(
+                f"{name} line {number} is longer than {MAX_LINE_BYTES // 1024} KiB, "
+                "more than any --record line (not a --record file?)"
+            )
+        yield raw
 
 
 def read_records(lines: Iterable[bytes], path: str) -> Recording:

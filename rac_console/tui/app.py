@@ -18,7 +18,6 @@ from textual.worker import Worker, WorkerState
 from .. import __version__
 from ..commands.language import Simple, Step, VarRef, WatchFile
 from ..commands.outcome import Outcome
-from ..commands.profiles import completion_targets
 from ..engine import (
     SIMULATOR_NOTICE,
     Alert,
@@ -37,7 +36,7 @@ from ..engine.settings import SettingsFile
 from ..present.history import History
 from ..present.render import error_text, notice_text, outcome_text
 from ..present.row_actions import PendingToggles
-from ..present.status import target_label
+from ..present.status import connect_targets, label_text, target_label
 from ..present.trends import TrendStore
 from ..protocol.text import counted, terminal_safe
 from .command_line import CommandLine
@@ -133,7 +132,7 @@ class RacConsoleApp(PaletteActions, TableActions, LogActions, App[int]):
             id="command",
             placeholder="get P 1 · put IO 20 on · watch IO 0-7 · help",
         )
-        self.command_line.targets = tuple(completion_targets(engine.profiles))
+        self.command_line.targets = tuple(connect_targets(engine.profiles))
 
     def compose(self) -> ComposeResult:
         yield self.status_bar
@@ -463,7 +462,7 @@ def _profile_words(status: Status) -> str:
     """``, profile cell3 (Cell 3 — welding): writes confirm`` for a profile, else ''."""
     if status.profile is None:
         return ""
-    label = f" ({terminal_safe(status.label)})" if status.label else ""
+    label = f" ({label_text(status.label)})" if status.label else ""
     return f", profile {terminal_safe(status.profile)}{label}: writes {status.writes}"
 
 

@@ -20,7 +20,7 @@ from textual.screen import ModalScreen
 from textual.widgets import Button, Static
 
 from ..engine import CONFIRM_GUARD_SECONDS, ConfirmWrite
-from ..present.status import profile_colour
+from ..present.status import label_text, profile_colour
 from ..protocol.text import terminal_safe
 
 #: Keys in the first this many seconds of the question (and any typed before it) are
@@ -74,7 +74,7 @@ class ConfirmWriteScreen(ModalScreen[bool]):
 
     def compose(self) -> ComposeResult:
         question = self.question
-        where = terminal_safe(question.label or question.target)
+        where = label_text(question.label) if question.label else terminal_safe(question.target)
         with Vertical(id="confirm-box") as box:
             box.border_title = Text(f" {where} ")
             if question.label:
