@@ -132,11 +132,30 @@ def test_an_idle_console_shows_a_pulled_cable(link: Link) -> None:
             assert time.monotonic() < deadline, "an idle connection over a pulled cable"
             time.sleep(0.1)
             front.drain()
-        assert any("connection lost while idle" in note for note in front.notes), front.notes
+        assert any("connection lost while idle" in alert for alert in front.alerts), front.alerts
         link.restore()
         seq = engine.submit("get I 1")  # the first command after the outage gets through
         front.until(lambda: seq in front.results, "the get after the restore")
         [outcome] = front.results[seq].feedback
         assert isinstance(outcome, Outcome) and outcome.ok, outcome
+    finally:
+        engine.stop()
+
+
+def test_a_reconnect_over_a_pulled_cable_is_never_shown_as_connected(link: Link) -> None:
+    """A poll times out and the session is reset; the connect that follows blocks for a
+    whole timeout: meanwhile the status line says connecting, not connected."""
+    engine = Engine(link.address, link.port, interval=0.2, timeout=1.0)
+    engine.start()
+    try:
+        front = Front(engine)
+        front.run("watch I 1")
+        front.until(lambda: "I1" in front.rows and front.rows["I1"].status == "OK", "a polled row")
+        link.pull()
+        front.until(
+            lambda: front.status is not None and front.status.connection == "connecting",
+            "connecting… on the status line while the connect blocks",
+        )
+        link.restore()
     finally:
         engine.stop()

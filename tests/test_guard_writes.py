@@ -334,9 +334,28 @@ def test_an_idle_engine_notices_its_connection_died(
             lambda: front.status is not None and front.status.connection == "lost",
             "the idle connection seen closed",
         )
-        assert any("closed the connection" in note for note in front.notes), front.notes
+        assert any("closed the connection" in alert for alert in front.alerts), front.alerts
         assert front.status is not None
         shown = status_text(front.status, None, 0.0).plain
         assert "lost, the next command reconnects" in shown, shown
+    finally:
+        engine.stop()
+
+
+def test_a_get_sent_again_is_marked_in_the_log(
+    dropping: Callable[..., DroppingServer],
+) -> None:
+    server = dropping(b"GET:RC8:2:I:")
+    engine = Engine("127.0.0.1", server.port, interval=0.05, timeout=1.0)
+    engine.start()
+    try:
+        front = Front(engine)
+        front.run("get I 1")
+        seq = engine.submit("get I 2")
+        front.until(lambda: seq in front.results, "the answer to get I 2")
+        [outcome] = front.results[seq].feedback
+        assert isinstance(outcome, Outcome) and outcome.ok, outcome
+        assert any("sent again on a fresh connection" in note for note in front.notes)
+        assert front.sent().count(b"GET:RC8:2:I:\r") == 2
     finally:
         engine.stop()

@@ -22,6 +22,7 @@ PURE_MODULES = [
     "rac_console.protocol.variables",
     "rac_console.protocol.framing",
     "rac_console.commands.argv",
+    "rac_console.commands.check",
     "rac_console.commands.language",
     "rac_console.commands.outcome",
     "rac_console.commands.completion",
@@ -32,7 +33,12 @@ PURE_MODULES = [
     "rac_console.sim.controller",
 ]
 FORBIDDEN_IN_PURE = ["asyncio", "socket", "selectors", "textual", "prompt_toolkit", "rich"]
-SOCKET_OWNERS = {"session/blocking.py", "session/endpoints.py", "sim/server.py"}
+SOCKET_OWNERS = {
+    "session/blocking.py",
+    "session/diagnose.py",
+    "session/endpoints.py",
+    "sim/server.py",
+}
 SOCKET_CALLS = {
     "create_connection",
     "create_server",

@@ -39,6 +39,10 @@ WATCH_USAGE = "rac-console watch TYPE INDEX [TYPE INDEX|TYPE FIRST-LAST]..., e.g
 _READER_GONE = {errno.EPIPE, *([errno.EINVAL] if sys.platform == "win32" else [])}
 
 
+#: watch's default cycle, as the console's poll interval.
+WATCH_EVERY = 0.5
+
+
 class Schedule:
     """When each repetition (or watch cycle) starts: ``interval`` seconds start to start.
 
@@ -293,7 +297,7 @@ def watch(args: argparse.Namespace) -> ExitStatus:
 
     try:
         return run_live(
-            args, output, cycle, count=args.count, interval=args.every, until_ctrl_c=True
+            args, output, cycle, count=args.count, interval=_every(args), until_ctrl_c=True
         )
     finally:
         if log is not None:
@@ -401,3 +405,9 @@ def _cycle_json(number: int, started: str, results: dict[VarRef, Outcome | None]
         elif not outcome.ok:
             errors[str(var)] = outcome.summary()
     return {"time": started, "cycle": number, "ok": not errors, "values": values, "errors": errors}
+
+
+def _every(args: argparse.Namespace) -> float:
+    """``watch --every S`` (or ``--interval S``, before or after the command): 0.5 s
+    unless given, as the console polls."""
+    return WATCH_EVERY if args.every is None else float(args.every)

@@ -247,8 +247,10 @@ def _watch_options(watch: argparse.ArgumentParser) -> None:
     )
     watch.add_argument(
         "--every",
+        "--interval",
+        dest="every",
         type=_seconds(allow_zero=True),
-        default=0.5,
+        default=None,  # 0.5
         metavar="S",
         help="seconds from the start of one cycle to the next (default 0.5, as the console)",
     )
@@ -266,6 +268,14 @@ def _watch_options(watch: argparse.ArgumentParser) -> None:
         help="also log each cycle to FILE as a CSV row, as the console's log FILE.csv",
     )
 
+
+CHECK_EPILOG = """\
+Each step prints one line, ok or FAILED with the likely cause and what to check;
+the check stops at the first that fails. Only GETs of I0 are sent.
+  rac-console check -H 192.168.0.1
+  rac-console check -H cell3 --json
+Exit status: 0 all ok, 1 the controller answered the GET with an error,
+3 a connection step failed."""
 
 LOG_CSV_COMMANDS = (None, "repl", "watch")
 """Where ``--log-csv`` means something: the console, the REPL and ``watch``."""
@@ -302,9 +312,10 @@ def build_cli() -> CliParser:
         console.add_argument(
             "--interval",
             type=_seconds(allow_zero=True),
-            default=0.5,
+            default=None,  # 0.5; before get, latency or watch: their own interval
             metavar="SECONDS",
-            help="time between poll cycles (default 0.5)",
+            help="time between poll cycles (default 0.5); before get -r, latency or watch, "
+            "their own interval",
         ),
     ]
     commands = parser.add_subparsers(dest="command", metavar="COMMAND")
@@ -360,21 +371,36 @@ def build_cli() -> CliParser:
     run, _ = command("run", "run console commands from FILE (or - for stdin) over one session")
     run.add_argument("file", metavar="FILE|-")
     latency, _ = command(
-        "latency", "measure round trips of repeated GETs (like redis-cli --latency)"
+        "latency",
+        "measure round trips of repeated GETs (like redis-cli --latency): "
+        "latency [COUNT] [TYPE INDEX], as in the console",
+        usage="%(prog)s [options] [COUNT] [TYPE INDEX]",
     )
     latency.add_argument(
-        "--count", type=_count(int), default=100, metavar="N", help="how many GETs (default 100)"
+        "words",
+        metavar="COUNT TYPE INDEX",
+        nargs="*",
+        help="as the console's latency: latency 20 I 1 (or --count 20 --var 'I 1')",
+    )
+    latency.add_argument(
+        "--count", type=_count(int), default=None, metavar="N", help="how many GETs (default 100)"
     )
     latency.add_argument(
         "--interval",
         dest="latency_interval",
         type=_seconds(allow_zero=True),
-        default=0.0,
+        default=None,  # 0
         metavar="S",
         help="pause between GETs (default 0)",
     )
     latency.add_argument(
-        "--var", default="I 0", metavar="'TYPE INDEX'", help="the variable to read (default 'I 0')"
+        "--var", default=None, metavar="'TYPE INDEX'", help="the variable to read (default 'I 0')"
+    )
+    command(
+        "check",
+        "what stands between here and the controller: the name, the TCP connection, a GET, "
+        "the round trip, a second session (GETs only; exit 3 at a connection failure)",
+        epilog=CHECK_EPILOG,
     )
     watch, _ = command("watch", WATCH_HELP, usage="%(prog)s [options] VAR...")
     _watch_options(watch)
@@ -547,6 +573,11 @@ def _dispatch(args: argparse.Namespace) -> int:
             file=sys.stderr,
         )
         return 2
+    from .option_scope import refusal
+
+    if (why := refusal(args)) is not None:  # an option given where it means nothing
+        print(f"rac-console: {why}", file=sys.stderr)
+        return 2
     if args.command != "sim":
         from .target import settle_target
 
@@ -568,6 +599,10 @@ def _dispatch(args: argparse.Namespace) -> int:
         from .oneshot import latency
 
         return latency(args)
+    if args.command == "check":
+        from .check import check
+
+        return check(args)
     if args.command == "run":
         from .oneshot import run_script
 
@@ -589,7 +624,7 @@ def _dispatch(args: argparse.Namespace) -> int:
 
 def _interactive(args: argparse.Namespace) -> int:
     """The full-screen console, or the REPL: one engine and history file for both."""
-    from ..engine import Engine
+    from ..engine import DEFAULT_INTERVAL, Engine
     from ..present.history import History, default_history_path
     from ..protocol import InputError
     from ..protocol.text import terminal_safe
@@ -602,7 +637,7 @@ def _interactive(args: argparse.Namespace) -> int:
             timeout=args.timeout,
             record=args.record,
             transcript=args.transcript,
-            interval=args.interval,
+            interval=DEFAULT_INTERVAL if args.interval is None else args.interval,
             log_csv=getattr(args, "log_csv", None),
             cycles=args.command is None,  # the console draws trends; the REPL has none
             **engine_target(args),
@@ -613,7 +648,7 @@ def _interactive(args: argparse.Namespace) -> int:
     if args.command is None:  # the REPL had them on stderr; the console shows them here
         for notice in args.target.notices:
             engine.alert(notice)
-    if args.command is None and args.watch:
+    if args.watch:
         from ..engine.watchlist import load
 
         try:
@@ -630,8 +665,11 @@ def _interactive(args: argparse.Namespace) -> int:
         return 2
     history = History(args.history or default_history_path())
     if args.command == "repl":
+        from ..commands.language import WatchFile
         from ..repl.repl import run_repl
 
+        if args.watch:  # run first, its result printed as the REPL starts
+            engine.submit_command(WatchFile("load", args.watch))
         return run_repl(engine, history)
     from ..tui.app import run_console
 

@@ -144,14 +144,32 @@ def _run_line(session: Session, line: str, args: argparse.Namespace) -> Outcome 
     return _exchange(session, command, args, line)
 
 
+def _latency_command(args: argparse.Namespace) -> Latency:
+    """``latency 20 I 1`` as in the console, or ``--count 20 --var 'I 1'``: one parser
+    (the console's) for both; the two forms at once are refused, not merged."""
+    words = " ".join(args.words)
+    options = (args.count, args.var)
+    if words and options != (None, None):
+        raise InputError(
+            "give the count and the variable as words (latency 20 I 1) or as options "
+            "(--count 20 --var 'I 1'), not both"
+        )
+    if not words:
+        count = "" if args.count is None else str(max(1, int(args.count)))
+        words = f"{count} {args.var or ''}".strip()
+    command = parse_command(f"latency {words}".strip())
+    assert isinstance(command, Latency)
+    return command
+
+
 def latency(args: argparse.Namespace) -> ExitStatus:
     """``latency``: one summary line (or JSON object); exit 3 when nothing answered."""
     output = Output(args.json)
     try:
-        command = parse_command(f"latency {max(1, int(args.count))} {args.var}")
-        assert isinstance(command, Latency)
+        command = _latency_command(args)
         with open_session(args, output.local_failure) as session:
-            summary = measure_latency(session, command.var, command.count, args.latency_interval)
+            pause = args.latency_interval or 0.0
+            summary = measure_latency(session, command.var, command.count, pause)
     except InputError as exc:
         print_error(output.err, str(exc))
         return ExitStatus.REFUSED

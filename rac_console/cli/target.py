@@ -152,7 +152,7 @@ class _HintedSession(Session):
         try:
             yield
         except ConnectFailed as exc:
-            raise ConnectFailed(f"{exc} ({self.hint})") from None
+            raise ConnectFailed(f"{exc} ({self.hint})", problem=exc.problem) from None
 
 
 @contextmanager

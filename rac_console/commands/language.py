@@ -11,6 +11,7 @@ import re
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from enum import Enum
+from typing import Literal
 
 from ..protocol import (
     KINDS,
@@ -178,6 +179,28 @@ class CsvLog:
     stop: bool = False
 
 
+@dataclass(frozen=True)
+class FrameFile:
+    """``record FILE`` (JSON lines, as ``--record``) or ``transcript FILE`` (plain text,
+    as ``--log``) from now on; ``… stop``; alone: where frames go."""
+
+    kind: Literal["record", "transcript"]
+    path: str | None
+    stop: bool = False
+
+
+def frame_file_parser(kind: Literal["record", "transcript"]) -> Callable[[str], FrameFile]:
+    """The parser of ``record`` or ``transcript``: ``FILE``, ``stop``, or nothing."""
+
+    def parse(rest: str) -> FrameFile:
+        text = rest.strip()
+        if text.lower() == "stop":
+            return FrameFile(kind, None, stop=True)
+        return FrameFile(kind, text or None)
+
+    return parse
+
+
 class Step(Enum):
     """What a command without arguments asks for."""
 
@@ -209,6 +232,7 @@ Command = (
     | Latency
     | Wait
     | CsvLog
+    | FrameFile
     | Simple
 )
 

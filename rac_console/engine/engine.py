@@ -14,6 +14,7 @@ import time
 from collections import deque
 from collections.abc import Mapping
 
+from ..commands.check import check_pointer
 from ..commands.language import Command, VarRef
 from ..commands.policy import TargetProfile, WritePolicy, Writes
 from ..protocol import Variant, describe_hresult, hresult_name
@@ -114,10 +115,13 @@ class Engine:
         # --log FILE: the plain-text transcript, with the notes (InputError as record).
         self.transcript = FrameTranscript(transcript, self.alert) if transcript else None
         self.csv = CsvSink(self.alert, self._csv_changed)
+        #: Why a record or transcript file that has since been stopped failed.
+        self._files_failed: dict[str, str] = {}
         if log_csv:
             self.csv.wait_for_rows(log_csv)
         self._lost = False
         self._early_drop = False
+        self.ever_connected = False  # on this target: "not connected yet" until it has
         self._cycle: deque[WatchRow] = deque()  # rows still to poll in this cycle
         self._cycle_started = 0.0  # perf_counter()
         self._cycle_count = 0
@@ -202,10 +206,14 @@ class Engine:
         """A new line starts: a cancel meant for the one before is forgotten."""
         self._cancelled.clear()
 
-    def connect_failed(self) -> None:
+    def connect_failed(self, error: ConnectFailed | None = None) -> None:
         """A typed command found the controller unreachable: that was no early drop of a
-        connection (none was made), so the poller marks none."""
+        connection (none was made), so the poller marks none; the status line says why
+        (refused, unreachable, …) rather than a state that looks quiet and healthy."""
         self._early_drop = False
+        if error is not None:
+            self.connection = error.problem
+            self._status_dirty = True
 
     # ---------------------------------------------------- engine thread
 
@@ -257,6 +265,18 @@ class Engine:
         except queue.Empty:
             return ()
 
+    def set_frame_file(self, kind: str, path: str | None) -> None:
+        """Start (``path``) or forget (None, closed by the caller) the ``record`` or
+        ``transcript`` file; raises InputError when it cannot be opened."""
+        ended = self.recorder if kind == "record" else self.transcript
+        if ended is not None and ended.failure is not None:  # still said in the exit status
+            self._files_failed[kind] = ended.failure
+        if kind == "record":
+            self.recorder = FrameRecorder(path, self.alert) if path is not None else None
+        else:
+            self.transcript = FrameTranscript(path, self.alert) if path is not None else None
+        self._status_dirty = True
+
     def _check_idle_link(self) -> None:
         """Nothing polled, nothing typed: a connection that died in the quiet (the
         controller closed it, keepalive gave up on it) is shown now, not at the next
@@ -267,7 +287,8 @@ class Engine:
             self._lost = True  # "reconnected" is said when the next command gets through
             self.connection = "lost"  # not "closed": that reads as a quiet, healthy target
             self._status_dirty = True
-            self.note(f"connection lost while idle: {reason}; the next command reconnects")
+            # An alert, not a note: the REPL prints it without frames on, at once.
+            self.alert(f"connection lost while idle: {reason}; the next command reconnects")
 
     def _connect_at_start(self) -> None:
         """Open the connection at start, so the status line tells the truth at once."""
@@ -276,7 +297,10 @@ class Engine:
         try:
             self.session.connect()
         except (ConnectFailed, Disconnected) as exc:
-            self.emit(Result(0, (Message(f"{exc}: commands will retry", "error"),)))
+            if isinstance(exc, ConnectFailed):
+                self.connect_failed(exc)
+            retry = f"{exc}: commands will retry {check_pointer(self.host, self.port)}"
+            self.emit(Result(0, (Message(retry, "error"),)))
             self.flush_events()
 
     # ------------------------------------------------------------ target
@@ -294,9 +318,11 @@ class Engine:
             if ended is not None:  # one file, one controller
                 self.alert(f"CSV log stopped at the change of target: {ended.path}")
         self.backoff, self._early_drop, self._lost = Backoff(), False, False
+        self.ever_connected = False
         session = Session(host, port, timeout=self.timeout)
         session.add_frame_observer(self._on_frame)
         session.add_state_observer(self._on_state)
+        session.add_resend_observer(self._on_resend)
         self.session = session
         self.wake()
 
@@ -376,10 +402,22 @@ class Engine:
         if state in ("connecting", "connected"):  # closed while connecting counts too
             self.backoff.connected()
             self.retry_at = None
+            if state == "connected":
+                self.ever_connected = True
             if state == "connected" and self._lost:
                 self._lost = False
                 self.note(f"reconnected to {self.host}:{self.port}")
         self._status_dirty = True
+        if state == "connecting":
+            # A connect can block for a whole timeout: the line must not say "connected"
+            # meanwhile, so the change is published now, not when the loop next idles.
+            self.publish_status(force=True)
+            self.flush_events()
+
+    def _on_resend(self, reason: str) -> None:
+        """A GET found its connection dead and went again on a fresh one: marked in the
+        log, so the request seen twice there is explained."""
+        self.note(f"{reason}: the GET was sent again on a fresh connection")
 
     def _forget_figures(self) -> None:
         """Round trips and poll rates measured on a connection that is gone say nothing now."""
@@ -424,10 +462,12 @@ class Engine:
                 cycle_seconds=self.cycle_seconds,
                 polls_per_second=self.polls_per_second,
                 interval_met=self._interval_met(period),
-                record_failure=self.recorder.failure if self.recorder is not None else None,
+                record_failure=(self.recorder.failure if self.recorder is not None else None)
+                or self._files_failed.get("record"),
                 transcript_failure=(
                     self.transcript.failure if self.transcript is not None else None
-                ),
+                )
+                or self._files_failed.get("transcript"),
                 csv_log=self.csv.path,
                 csv_failure=self.csv.failure,
                 seen=self._seen_frozen,
@@ -437,6 +477,9 @@ class Engine:
                 writes="read-only" if self.read_only else self.policy.writes.value,
                 verify=self.verify,
                 target_id=self.target_id,
+                ever_connected=self.ever_connected,
+                recording=self.recorder.path if self.recorder is not None else None,
+                transcribing=self.transcript.path if self.transcript is not None else None,
             )
         )
 
@@ -518,12 +561,13 @@ class Engine:
                 self._lost = True
                 for failed in self.watch.mark_all("DISCONNECTED"):
                     self.show_row(failed)
-                self.note(f"connection lost: {exc}")
+                # A connection that never opened was not lost: say why it cannot open.
+                self.note(f"connection lost: {exc}" if self.ever_connected else str(exc))
             self._cycle.clear()
             if self.csv.path is not None:  # a row per try, its cells empty: no connection
                 self.csv.cycle_ended(time.time(), self.watch.rows)
             self._early_drop = False  # this failure has its own wait
-            self._begin_retry("lost")
+            self._begin_retry("lost" if self.ever_connected else exc.problem)
             return
         self._cycle_count += 1
         self._end_cycle_if_done()

@@ -101,7 +101,9 @@ class Status:
     port: int
     timeout: float
     read_only: bool
-    connection: str  # closed, connecting, connected, lost, dropped
+    # closed, connecting, connected, lost, dropped, or why connecting failed: refused,
+    # unreachable, timed out, unknown host, failed
+    connection: str
     retry_at: float | None  # time.monotonic() of the next try, during a backoff
     rtt: float | None
     paused: bool
@@ -122,6 +124,9 @@ class Status:
     writes: str = "open"  # open, confirm or read-only (the profile's, or --read-only)
     verify: bool = True  # every PUT is read back (off: --no-verify)
     target_id: int = 0  # changes when another target is opened (connect): trends restart
+    ever_connected: bool = False  # a connection to this target opened at least once
+    recording: str | None = None  # where frames are recorded (--record, record FILE)
+    transcribing: str | None = None  # where the transcript goes (--log, transcript FILE)
 
     def exit_status(self, status: int) -> int:
         """A front end's exit status: 4 (a local I/O error) when it would be 0 but the

@@ -13,6 +13,7 @@ from ..commands.language import Exchange, Get, Put, VarRef
 from ..commands.latency import LatencySummary, summarize
 from ..commands.outcome import ExitStatus, Outcome, refused
 from ..protocol import describe_hresult, escape_bytes
+from ..protocol.text import terminal_safe
 from ..session import (
     BadReply,
     ConnectFailed,
@@ -23,17 +24,25 @@ from ..session import (
     TransportError,
 )
 
+#: Characters of a refused raw line quoted in its refusal.
+QUOTED_LINE = 40
 
-def read_only_refusal(command: Exchange) -> str | None:
-    """Why read-only keeps this off the wire; None for a well-formed GET, the only
-    thing read-only lets out (in every front end, and for raw lines alike)."""
+
+def read_only_refusal(command: Exchange, why: str = "read-only mode is on") -> str | None:
+    """Why read-only keeps this off the wire, naming what was refused (a PUT, or the
+    raw line itself); None for a well-formed GET, the only thing read-only lets out (in
+    every front end, and for raw lines alike). ``why``: whose rule it is."""
     request = command.request
     if request.read_only_safe:
         return None
     if request.write:
-        return "PUT refused: read-only mode is on (nothing was sent)"
+        what = f"PUT {command.var}" if isinstance(command, Put) else "PUT"
+        return f"{what} refused: {why} (nothing was sent)"
+    text = terminal_safe(request.text)
+    if len(text) > QUOTED_LINE:
+        text = text[: QUOTED_LINE - 1] + "…"
     return (
-        "refused: read-only mode sends only well-formed GET requests "
+        f"'{text}' refused: {why}, and only well-formed GET requests go out "
         "(GET:RC8:<index>:<type>:, e.g. GET:RC8:10:I:); nothing was sent"
     )
 

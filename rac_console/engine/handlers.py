@@ -8,11 +8,13 @@ from __future__ import annotations
 
 import time
 
+from ..commands.check import check_pointer
 from ..commands.language import (
     Command,
     Connect,
     CsvLog,
     Exchange,
+    FrameFile,
     Frames,
     Get,
     Help,
@@ -33,7 +35,7 @@ from ..commands.policy import WritePolicy, Writes
 from ..commands.profiles import could_be_profile_name, match_profile
 from ..commands.registry import help_lines, parse_command
 from ..protocol import InputError, Variant
-from ..protocol.text import counted
+from ..protocol.text import counted, terminal_safe
 from ..session import ConnectFailed, Disconnected, Session, TransportError
 from ..session.endpoints import addresses
 from . import watchlist
@@ -43,7 +45,9 @@ from .events import OK, ConfirmWrite, Feedback, Message, Result, UiStep, shown_l
 from .execute import measure_latency
 from .writes import exchange, plain_value
 
-NOT_CONNECTED = "not connected: connect HOST[:PORT] first"
+NOT_CONNECTED = (
+    "not connected: connect HOST[:PORT], connect PROFILE, or connect sim for the built-in simulator"
+)
 
 
 def handle(engine: Engine, seq: int, what: str | Command) -> None:
@@ -94,6 +98,8 @@ def run(engine: Engine, command: Command, line: str | None) -> list[Feedback]:
             return [_noted(engine, outcome)]
         case CsvLog():
             return [_csv_log(engine, command)]
+        case FrameFile():
+            return [_frame_file(engine, command)]
         case Frames(on=on):
             return [UiStep.FRAMES_ON if on else UiStep.FRAMES_OFF]
         case Latency(var=var, count=count, interval=interval):
@@ -104,7 +110,7 @@ def run(engine: Engine, command: Command, line: str | None) -> list[Feedback]:
                     engine.session, var, count, interval, cancelled=lambda: engine.stopping
                 )
             except (ConnectFailed, Disconnected) as exc:
-                engine.connect_failed()
+                engine.connect_failed(exc if isinstance(exc, ConnectFailed) else None)
                 return [Message(str(exc), "error")]
             return [Message(summary.text(f"GET {var}"))]
         case Watch(vars=variables, label=label, every=every):
@@ -169,7 +175,7 @@ def _noted(engine: Engine, outcome: Outcome) -> Outcome:
     """A typed exchange that got no trustworthy reply is marked in the log (and one that
     found the controller unreachable is no early drop of a connection)."""
     if isinstance(outcome.failure, ConnectFailed):
-        engine.connect_failed()
+        engine.connect_failed(outcome.failure)
     if isinstance(outcome.failure, TransportError):
         engine.mark_failure(outcome.failure)
     return outcome
@@ -185,7 +191,10 @@ def _step(engine: Engine, step: Step) -> Feedback:
             for row in engine.watch.mark_all("DISCONNECTED"):
                 engine.show_row(row)
             engine.note("disconnected")
-            return Message("disconnected: connect HOST[:PORT] to talk to a controller")
+            return Message(
+                "disconnected: connect HOST[:PORT] or connect PROFILE to talk to a "
+                "controller, connect sim for the built-in simulator"
+            )
         case Step.CLEAR:
             return UiStep.CLEAR
         case Step.QUIT:
@@ -261,6 +270,32 @@ def _csv_log(engine: Engine, command: CsvLog) -> Message:
     )
 
 
+def _frame_file(engine: Engine, command: FrameFile) -> Message:
+    """``record FILE`` / ``transcript FILE`` from now on (the interesting moment is rarely
+    foreseen at start), ``… stop``, or where frames go now."""
+    word = command.kind
+    flag = "--record" if word == "record" else "--log"
+    running = engine.recorder if word == "record" else engine.transcript
+    if command.stop or command.path is None:
+        if running is None:
+            return Message(f"no {word} running: {word} FILE starts one (as {flag} FILE)")
+        if not command.stop:
+            return Message(f"{word} to {terminal_safe(running.path)}: {word} stop ends it")
+        running.close()
+        engine.set_frame_file(word, None)
+        return Message(f"{word} stopped: {terminal_safe(running.path)}")
+    if running is not None:
+        return Message(
+            f"{word} already goes to {terminal_safe(running.path)}: {word} stop first", "error"
+        )
+    try:
+        engine.set_frame_file(word, command.path)
+    except InputError as exc:
+        return Message(str(exc), "error")
+    what = "every frame as JSON lines" if word == "record" else "a transcript of every frame"
+    return Message(f"{word}: {what} to {terminal_safe(command.path)} ({word} stop ends it)")
+
+
 def _connect(engine: Engine, command: Connect) -> Message:
     """``connect PROFILE``, ``connect sim`` or ``connect HOST[:PORT]``: the target changes,
     and with it the profile (label, colour) and the write rules: a profile's, the
@@ -288,7 +323,10 @@ def _connect(engine: Engine, command: Connect) -> Message:
     try:
         engine.session.connect()
     except (ConnectFailed, Disconnected) as exc:
+        if isinstance(exc, ConnectFailed):
+            engine.connect_failed(exc)
         text = f"{exc}; will keep retrying while variables are watched"
+        text += f" {check_pointer(command.host, given)}"
         if profile is None and command.host and could_be_profile_name(command.host):
             names = ", ".join(sorted(engine.profiles))
             known = f"profiles: {names}" if names else "the config file names none"

@@ -12,11 +12,13 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import replace
 
+from ..commands.check import check_pointer
 from ..commands.language import Exchange, Get, Put, Raw, VarRef
 from ..commands.outcome import ExitStatus, Outcome, refused
 from ..commands.policy import WritePolicy, Writes, written_var
 from ..commands.readback import comparable, same_value
 from ..protocol import ProtocolError, Variant
+from ..protocol.text import quoted_text
 from ..protocol.variant import parse_variant
 from ..session import ConnectFailed, NotSent, RequestTimeout, Session
 from .execute import execute, never, read_only_refusal
@@ -123,10 +125,11 @@ def write(
     ``known_before`` gives a watched variable's current value (no extra GET then);
     ``confirm`` is None where nobody can be asked (the CLI without ``--yes``)."""
     wire = command.request.text
-    if read_only and (refusal := read_only_refusal(command)) is not None:
-        if policy.writes is Writes.READ_ONLY and policy.source:
-            refusal = f"PUT refused: {policy.source} is read-only (nothing was sent)"
-        return refused(line, refusal, wire)
+    if read_only:
+        profile_rule = policy.writes is Writes.READ_ONLY and policy.source
+        why = f"{policy.source} is read-only" if profile_rule else "read-only mode is on"
+        if (refusal := read_only_refusal(command, why)) is not None:
+            return refused(line, refusal, wire)
     if (refusal := policy.refusal(command)) is not None:
         return refused(line, refusal, wire)
     var = written_var(command)
@@ -155,7 +158,7 @@ def write(
                 first,
                 request=wire,
                 error=f"PUT {var} not sent: reading its value first failed: {first.error}"
-                " (--no-verify writes without reading)",
+                f" {check_pointer(session.host, session.port)}",
                 input_line=line,
                 var=var,
             )
@@ -219,7 +222,10 @@ def _value_of(command: Put | Raw) -> Variant | None:
 
 
 def plain_value(var: VarRef, variant: Variant) -> str:
-    """``14``, ``ON``, ``X 1  Y 2  Z 3``: a value in a sentence (and the confirm question)."""
+    """``14``, ``ON``, ``X 1  Y 2  Z 3``, ``"text"``: a value in a sentence (and the
+    confirm question); a string quoted, so an empty one shows."""
+    if isinstance(variant.value, str):
+        return quoted_text(variant.value)
     fields = var.kind.fields(variant)
     return "  ".join(f"{label} {text}" if label else text for label, text in fields)
 

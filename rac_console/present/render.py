@@ -7,6 +7,7 @@ never reads as markup, and the consoles made here never expand emoji codes.
 
 from __future__ import annotations
 
+import sys
 from typing import Any
 
 from rich.console import Console
@@ -15,15 +16,26 @@ from rich.text import Text
 from ..commands.language import VarRef
 from ..commands.outcome import Outcome
 from ..protocol import Variant, vt_name
-from ..protocol.text import describe_response, terminal_safe, terminal_safe_lines
+from ..protocol.text import describe_response, quoted_text, terminal_safe, terminal_safe_lines
 
 #: Characters of a reply quoted in an error line.
 MAX_QUOTED_REPLY = 200
 
 
 def make_console(*, stderr: bool = False, **options: Any) -> Console:
-    """A console that prints text as given: no markup, no emoji codes, no highlighting."""
+    """A console that prints text as given: no markup, no emoji codes, no highlighting;
+    to a pipe or a file, never wrapped (one result is one line for grep and awk)."""
+    stream = options.get("file") or (sys.stderr if stderr else sys.stdout)
+    if not _is_terminal(stream):
+        options.setdefault("soft_wrap", True)
     return Console(stderr=stderr, highlight=False, markup=False, emoji=False, **options)
+
+
+def _is_terminal(stream: Any) -> bool:
+    try:
+        return bool(stream.isatty())
+    except (AttributeError, ValueError, OSError):  # closed, or not a real stream
+        return False
 
 
 def notice_text(text: str, *, error: bool = False, style: str = "") -> Text:
@@ -37,7 +49,10 @@ def print_error(console: Console, text: str) -> None:
 
 
 def value_text(var: VarRef, variant: Variant) -> Text:
-    """``X 350  Y 0  Z 450 ...`` with dim labels; IO as a coloured ON/OFF."""
+    """``X 350  Y 0  Z 450 ...`` with dim labels; IO as a coloured ON/OFF; a string in
+    quotes (``""``, ``" x "``: what it holds, spaces and all)."""
+    if isinstance(variant.value, str):
+        return Text(quoted_text(variant.value))
     out = Text()
     for n, (label, text) in enumerate(var.kind.fields(variant)):
         if n:

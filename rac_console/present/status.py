@@ -221,13 +221,26 @@ def _fields(
     return fields
 
 
+#: How the status line names each reason a connection could not be opened.
+CANNOT_CONNECT = {
+    "refused": ("connection refused", "refused"),
+    "unreachable": ("host unreachable", "unreachable"),
+    "timed out": ("connect timed out", "timed out"),
+    "unknown host": ("unknown host", "no host"),
+    "failed": ("cannot connect", "no connect"),
+}
+
+
 def _connection(status: Status) -> _Field:
-    """The connection's state; during a backoff, the countdown to the next try."""
+    """The connection's state; during a backoff, the countdown to the next try. A
+    connection that never opened says why (refused, unreachable, …), never a state that
+    reads as quiet and healthy."""
     state = status.connection
-    if state in ("lost", "dropped") and status.retry_at is not None:
+    if status.retry_at is not None and (state in ("lost", "dropped") or state in CANNOT_CONNECT):
         wait = max(0.0, status.retry_at - time.monotonic())
-        what = "lost" if state == "lost" else "dropped early"
-        short = "lost" if state == "lost" else "dropped"
+        what, short = {"lost": ("lost", "lost"), "dropped": ("dropped early", "dropped")}.get(
+            state, CANNOT_CONNECT.get(state, (state, state))
+        )
         return _figure(
             Text(f"{what}, retrying in {wait:.1f} s (backoff)", style="bold red"),
             Text(f"{what}, retrying in {wait:.1f} s", style="bold red"),
@@ -246,12 +259,26 @@ def _connection(status: Status) -> _Field:
             droppable=False,
             last_resort=1,
         )
+    if state in CANNOT_CONNECT:
+        long, short = CANNOT_CONNECT[state]
+        return _figure(
+            Text(f"{long}, the next command retries", style="bold red"),
+            Text(long, style="bold red"),
+            Text(short, style="bold red"),
+            essential=True,
+            droppable=False,
+            last_resort=1,
+        )
     if state == "connected":
         shown = Text("connected", style="green")
     elif state == "connecting":
         shown = Text("connecting…", style="yellow")
+    elif not status.has_session:
+        shown = Text("disconnected", style="dim")
+    elif status.ever_connected:  # closed after a timeout or a bad reply: reopened on use
+        shown = Text("closed, reopened when needed", style="yellow")
     else:
-        shown = Text("idle" if status.has_session else "disconnected", style="dim")
+        shown = Text("not connected yet", style="yellow")
     return _figure(shown, essential=True, droppable=False)
 
 

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import difflib
+from collections.abc import Iterable
 from decimal import Decimal
 from typing import Any
 
@@ -16,6 +18,14 @@ CR_MARK = "↵"
 def counted(n: int, noun: str) -> str:
     """``1 row``, ``3 rows``: a count and its noun, for messages."""
     return f"{n} {noun}{'s' * (n != 1)}"
+
+
+def close_match(word: str, choices: Iterable[str]) -> str | None:
+    """The choice closest to a mistyped ``word`` (case aside), as the choice is written;
+    None when none is close: a guess that far off would mislead more than help."""
+    by_folded = {choice.casefold(): choice for choice in choices}
+    found = difflib.get_close_matches(word.casefold(), by_folded, n=1)
+    return by_folded[found[0]] if found else None
 
 
 def escape_bytes(data: bytes) -> str:
@@ -42,6 +52,14 @@ def terminal_safe(text: str) -> str:
     if text.isprintable():
         return text
     return "".join(ch if ch.isprintable() else _escape_char(ch) for ch in text)
+
+
+def quoted_text(text: str) -> str:
+    """A string value in a result: in double quotes, so an empty string and leading or
+    trailing spaces show (``""``, ``" x "``); ``"`` and ``\\`` inside escaped with a
+    backslash, as JSON writes them, and every control character as :func:`terminal_safe`."""
+    inner = text.replace("\\", "\\\\").replace('"', '\\"')
+    return f'"{terminal_safe(inner)}"'
 
 
 def terminal_safe_lines(text: str) -> str:

@@ -16,6 +16,7 @@ answer to a later one. Before each request the socket is asked (one ``poll``, or
 from __future__ import annotations
 
 import contextlib
+import errno
 import logging
 import os
 import select
@@ -36,6 +37,7 @@ from .types import (
     MAX_REPLY_LINE,
     BadReply,
     ConnectFailed,
+    ConnectProblem,
     Disconnected,
     Frame,
     FrameObserver,
@@ -86,6 +88,7 @@ class Session:
         self._machine = SessionMachine(max_line)
         self._frame_observers: list[FrameObserver] = []
         self._state_observers: list[StateObserver] = []
+        self._resend_observers: list[Callable[[str], None]] = []
         self._state: State = "closed"
         self._sock: socket.socket | None = None
         self._poll: Any = None
@@ -113,6 +116,10 @@ class Session:
 
     def add_state_observer(self, observer: StateObserver) -> None:
         self._state_observers.append(observer)
+
+    def add_resend_observer(self, observer: Callable[[str], None]) -> None:
+        """Told why, when a GET is sent again on a fresh connection (see :meth:`exchange`)."""
+        self._resend_observers.append(observer)
 
     def _publish(self, frame: Frame) -> None:
         for observer in self._frame_observers:
@@ -162,6 +169,8 @@ class Session:
                 raise
             if self._interrupted or self._cancel_requested:
                 raise
+            for observer in self._resend_observers:
+                observer(str(exc))
         return self._exchange_once(request, poll, cancelled)
 
     def _exchange_once(
@@ -363,7 +372,9 @@ class Session:
             sock = socket.create_connection((self.host, self.port), self.connect_timeout)
         except (OSError, UnicodeError, ValueError) as exc:  # TimeoutError is an OSError
             self._set_state("closed")
-            raise ConnectFailed(f"cannot connect to {self.address}: {_reason(exc)}") from None
+            raise ConnectFailed(
+                f"cannot connect to {self.address}: {_reason(exc)}", problem=_problem(exc)
+            ) from None
         with contextlib.suppress(OSError):
             sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
         _set_keepalive(sock)
@@ -527,15 +538,77 @@ def _read_waiting(sock: socket.socket) -> tuple[bytes, bool]:
     return b"".join(chunks), still_open
 
 
-def _reason(exc: BaseException) -> str:
-    """Why a connection failed, in words: never 'Unknown error -2'."""
+#: errno values (POSIX and WinSock) of a host or network that cannot be reached.
+_UNREACHABLE = {
+    getattr(errno, "EHOSTUNREACH", 113),
+    getattr(errno, "ENETUNREACH", 101),
+    getattr(errno, "EHOSTDOWN", 112),
+    getattr(errno, "ENETDOWN", 100),
+    10065,  # WSAEHOSTUNREACH
+    10051,  # WSAENETUNREACH
+    10064,  # WSAEHOSTDOWN
+    10050,  # WSAENETDOWN
+}
+
+
+def _problem(exc: BaseException) -> ConnectProblem:
+    """Why a connection could not be opened, in a word, the same on every system."""
+    if isinstance(exc, socket.gaierror | UnicodeError | ValueError):
+        return "unknown host"
+    if isinstance(exc, ConnectionRefusedError):
+        return "refused"
     if isinstance(exc, TimeoutError):
         return "timed out"
-    if isinstance(exc, OSError):
+    if isinstance(exc, OSError) and (
+        exc.errno in _UNREACHABLE or getattr(exc, "winerror", None) in _UNREACHABLE
+    ):
+        return "unreachable"
+    return "failed"
+
+
+#: The words for the failures a user can act on, keyed by errno and WinSock code, so
+#: Linux, macOS and Windows say them alike: os.strerror knows no WinSock code (it says
+#: "Unknown error" for 10061), and each system words its own codes its own way.
+_WORDS = {
+    errno.ECONNREFUSED: "Connection refused",
+    10061: "Connection refused",  # WSAECONNREFUSED
+    errno.ETIMEDOUT: "timed out",
+    10060: "timed out",  # WSAETIMEDOUT
+    errno.EHOSTUNREACH: "No route to host",
+    10065: "No route to host",  # WSAEHOSTUNREACH
+    errno.ENETUNREACH: "Network is unreachable",
+    10051: "Network is unreachable",  # WSAENETUNREACH
+}
+
+#: getaddrinfo's codes for a name that does not exist: glibc and macOS (EAI_NONAME,
+#: EAI_NODATA) and WinSock (WSAHOST_NOT_FOUND 11001, WSANO_DATA 11004). They are a
+#: table of their own: macOS's EAI_NONAME is 8, an errno too.
+_NAME_NOT_FOUND = {
+    socket.EAI_NONAME,
+    getattr(socket, "EAI_NODATA", socket.EAI_NONAME),
+    11001,  # WSAHOST_NOT_FOUND
+    11004,  # WSANO_DATA
+}
+
+
+def _reason(exc: BaseException) -> str:
+    """Why a connection failed, in words: never 'Unknown error -2', nor Windows'
+    'Unknown error' for a WinSock code (a table first, then the exception's own text)."""
+    if isinstance(exc, TimeoutError):
+        return "timed out"
+    if isinstance(exc, socket.gaierror):
+        if exc.errno in _NAME_NOT_FOUND:
+            return "host not found"
+        if exc.strerror:
+            return exc.strerror  # "Temporary failure in name resolution"
+    elif isinstance(exc, OSError):
+        for code in (getattr(exc, "winerror", None), exc.errno):
+            if code in _WORDS:
+                return _WORDS[code]
+        if exc.strerror:
+            return exc.strerror  # the system's own words for this exception
         if exc.errno and exc.errno > 0:
             return os.strerror(exc.errno)
-        if exc.strerror:
-            return exc.strerror  # getaddrinfo: "Name or service not known"
     if isinstance(exc, UnicodeError | ValueError):
         return "not a valid host name"
     return str(exc) or type(exc).__name__

@@ -24,8 +24,18 @@ class TransportError(RacError):
         self.raw = raw
 
 
+#: Why a connection could not be opened, as the status line says it.
+ConnectProblem = Literal["refused", "unreachable", "timed out", "unknown host", "failed"]
+
+
 class ConnectFailed(TransportError):
-    pass
+    """No connection could be opened: nothing was sent. ``problem`` says why in a word."""
+
+    def __init__(
+        self, message: str, raw: bytes | None = None, *, problem: ConnectProblem = "failed"
+    ) -> None:
+        super().__init__(message, raw)
+        self.problem: ConnectProblem = problem
 
 
 class RequestTimeout(TransportError):

@@ -1,0 +1,98 @@
+"""Which commands take which option: an option given where it means nothing is refused
+(exit 2, one line naming the commands that take it), never silently ignored; one given
+before the command word does what it says for that command, as after it.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+#: The one-shot commands that print JSON with --json.
+_JSON = ("get", "put", "send", "run", "watch", "latency", "check")
+#: The commands that write, where --yes and --no-verify mean something.
+_WRITERS = ("put", "send", "run", None, "repl")
+
+#: Interval words: the top-level --interval, taken over by each command's own option.
+_INTERVAL_OF = {"get": "repeat_interval", "latency": "latency_interval", "watch": "every"}
+
+
+def _name(command: str | None) -> str:
+    return "the console" if command is None else command
+
+
+def refusal(args: argparse.Namespace) -> str | None:
+    """Why an option given cannot be used with ``args.command``; None when every option
+    given means something there. Moves a top-level ``--interval`` to the command's own."""
+    command: str | None = args.command
+    if command == "sim":
+        return _before_sim(args)
+    if getattr(args, "watch", None) is not None and command not in (None, "repl"):
+        return (
+            f"--watch loads a watch list at start: the console and the REPL take it, not "
+            f"{_name(command)} (rac-console watch takes variables: watch I 0-7)"
+        )
+    if getattr(args, "history", None) is not None and command not in (None, "repl"):
+        return (
+            f"--history names the console's and the REPL's history file: "
+            f"{_name(command)} keeps no history"
+        )
+    interval = getattr(args, "interval", None)
+    if interval is not None and command not in (None, "repl"):
+        own = _INTERVAL_OF.get(command) if command is not None else None
+        if own is None:
+            return (
+                f"--interval is the time between polls or reads: the console, the REPL, "
+                f"watch, get -r and latency take it, not {_name(command)}"
+            )
+        if getattr(args, own, None) is not None:
+            return f"the interval is given twice (--interval before {command}, and after it)"
+        setattr(args, own, interval)
+    if args.json and (command is None or (command == "repl" and sys.stdin.isatty())):
+        return (
+            "--json prints results for scripts: get, put, send, run, watch, latency and "
+            f"check take it (or rac-console repl fed from a pipe), not {_name(command)}"
+        )
+    if args.yes and command not in ("put", "send", "run"):
+        return (
+            "--yes says yes ahead to a confirm target's question: put, send and run take it; "
+            + (
+                "the console and the REPL ask"
+                if command in (None, "repl")
+                else f"{command} writes nothing"
+            )
+        )
+    if not args.verify and command not in _WRITERS:
+        return (
+            "--no-verify sends a PUT without reading it before and after: put, send, run, "
+            f"the console and the REPL take it; {command} writes nothing"
+        )
+    return None
+
+
+#: The top-level options and their defaults: any other value before ``sim`` was given.
+_TOP_DEFAULTS = {
+    "host": None,
+    "port": None,
+    "timeout": 2.0,
+    "json": False,
+    "read_only": False,
+    "record": None,
+    "transcript": None,
+    "verify": True,
+    "yes": False,
+    "watch": None,
+    "log_csv": None,
+    "history": None,
+    "interval": None,
+}
+
+
+def _before_sim(args: argparse.Namespace) -> str | None:
+    given = [
+        name for name, default in _TOP_DEFAULTS.items() if getattr(args, name, default) != default
+    ]
+    if not given:
+        return None
+    shown = ", ".join("--" + name.replace("_", "-") for name in given)
+    return f"sim takes its own options ({shown} given before it): see rac-console sim --help"
