@@ -78,6 +78,11 @@ KEYED_SCENES = {
         ["watch I 0 cycle", "get I 1", "put I 10 15", "send hello", "get S 1"],
         ["f7"],
     ),
+    "detail-80x24": (
+        (80, 24),
+        ["watch P 0 current pose", "watch J 0", "watch T 1 tool", "watch I 0 cycle"],
+        ["f6", "d"],
+    ),
     "help-80x24": ((80, 24), ["watch IO 0-3"], ["f1"]),
     "palette-100x30": ((100, 30), ["watch IO 0-3"], ["ctrl+p"]),
 }

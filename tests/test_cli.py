@@ -14,7 +14,6 @@ import socket
 import subprocess
 import sys
 import threading
-import time
 from collections.abc import Callable, Iterator
 from pathlib import Path
 
@@ -366,11 +365,9 @@ def test_connection_refused_is_exit_3(env: dict[str, str]) -> None:
 
 def test_timeout_is_exit_3(env: dict[str, str], recording: Callable[..., RecordingServer]) -> None:
     server = recording(fixed_reply(None))
-    started = time.monotonic()
     result = cli(env, *server.args, "--timeout", "0.3", "get", "I", "10")
     assert result.returncode == 3
-    assert time.monotonic() - started < 5
-    assert "0.3" in one_error_line(result)
+    assert "0.3" in one_error_line(result)  # its own timeout ended it, not the default
     assert bytes(server.received) == b"GET:RC8:10:I:\r"
 
 

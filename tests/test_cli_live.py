@@ -14,9 +14,11 @@ import signal
 import subprocess
 import sys
 import threading
-from collections.abc import Callable
+import time
+from collections.abc import Callable, Iterator
 from datetime import datetime
 from pathlib import Path
+from typing import ClassVar
 
 import pytest
 import test_cli as shared
@@ -57,12 +59,27 @@ def answer_by_line(answers: dict[bytes, bytes | object]) -> Callable[[bytes], ob
     return lambda line: answers.get(line, CLOSE)
 
 
+def _default_sigint() -> None:
+    """In the child, between fork and exec: SIGINT back to its default, so the child
+    takes Ctrl-C as from a terminal even when the tests run with SIGINT ignored (a
+    background job, nohup), which a child would otherwise inherit."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
+#: How long a subprocess has to finish what the test waits for: never a figure the
+#: test checks, only the point where a hung child is called a failure.
+DEADLINE = 20.0
+
+
 class Running:
     """The CLI as a running subprocess; its stdout lines arrive in a queue as printed.
 
     With ``keep=N`` the reader takes N lines and then closes its end of the pipe, as
-    ``| head -N`` does.
+    ``| head -N`` does. Every wait on it has a deadline; whatever a test leaves running
+    is killed when the test ends (the ``_no_process_left`` fixture).
     """
+
+    started: ClassVar[list[Running]] = []
 
     def __init__(self, env: dict[str, str], tmp_path: Path, *args: str, keep: int = 0) -> None:
         self._stderr_path = tmp_path / f"stderr-{id(self)}.txt"
@@ -75,7 +92,9 @@ class Running:
             stderr=self._stderr,
             text=True,
             encoding="utf-8",
+            preexec_fn=None if sys.platform == "win32" else _default_sigint,
         )
+        Running.started.append(self)
         self.lines: queue.Queue[str | None] = queue.Queue()
         threading.Thread(target=self._read, args=(keep,), daemon=True).start()
 
@@ -89,29 +108,52 @@ class Running:
                 return
         self.lines.put(None)
 
-    def line(self, timeout: float = 20) -> str:
-        line = self.lines.get(timeout=timeout)
+    def _next(self, deadline: float, what: str) -> str | None:
+        left = deadline - time.monotonic()
+        try:
+            if left <= 0:
+                raise queue.Empty
+            return self.lines.get(timeout=left)
+        except queue.Empty:
+            raise AssertionError(f"{what}; stderr: {self.stderr()}") from None
+
+    def line(self, timeout: float = DEADLINE) -> str:
+        line = self._next(time.monotonic() + timeout, f"no line within {timeout} s")
         assert line is not None, f"stdout ended; stderr: {self.stderr()}"
         return line
 
-    def rest(self) -> list[str]:
-        """The lines still to come, up to the end of stdout."""
+    def rest(self, timeout: float = DEADLINE) -> list[str]:
+        """The lines still to come, up to the end of stdout, which must come within
+        ``timeout`` (a watch that never took its SIGINT would print for ever)."""
+        deadline = time.monotonic() + timeout
         lines = []
-        while (line := self.lines.get(timeout=20)) is not None:
+        while (line := self._next(deadline, f"stdout did not end within {timeout} s")) is not None:
             lines.append(line)
         return lines
 
-    def finish(self, timeout: float = 20) -> int:
+    def finish(self, timeout: float = DEADLINE) -> int:
         try:
             return self.process.wait(timeout=timeout)
         finally:
-            if self.process.poll() is None:
-                self.process.kill()
-                self.process.wait(timeout=5)
-            self._stderr.close()
+            self.stop()
+
+    def stop(self) -> None:
+        """Kill it if it still runs; close what the test held open."""
+        if self.process.poll() is None:
+            self.process.kill()
+            self.process.wait(timeout=DEADLINE)
+        self._stderr.close()
 
     def stderr(self) -> str:
         return self._stderr_path.read_text(encoding="utf-8")
+
+
+@pytest.fixture(autouse=True)
+def _no_process_left() -> Iterator[None]:
+    """A test that failed half way leaves no CLI running behind it."""
+    yield
+    while Running.started:
+        Running.started.pop().stop()
 
 
 # ------------------------------------------------------------------ get -r N -i S

@@ -11,7 +11,6 @@ import asyncio
 import json
 import select
 import socket
-import time
 from collections.abc import Awaitable, Callable
 from dataclasses import dataclass
 from pathlib import Path
@@ -26,7 +25,9 @@ from rac_console.sim.server import SimulatorServer
 
 SAMPLES = json.loads((Path(__file__).parent / "rac-samples.json").read_text(encoding="utf-8"))
 HOST = "127.0.0.1"
-DEADLINE = 2.5
+#: How long a test waits for what must come: a hung request fails the test, and nothing
+#: checks how fast anything came (that is for benchmarks/).
+DEADLINE = 10.0
 
 Handler = Callable[["Conn"], Awaitable[None]]
 
@@ -139,7 +140,7 @@ async def unread(session: AsyncSession) -> bool:
 
 
 def run(coro: Awaitable[None]) -> None:
-    asyncio.run(asyncio.wait_for(coro, 10))  # type: ignore[arg-type]
+    asyncio.run(asyncio.wait_for(coro, 6 * DEADLINE))  # type: ignore[arg-type]
 
 
 # ------------------------------------------------- the simulator, normally
@@ -243,28 +244,33 @@ def test_vendor_put_sample_against_simulator(sample: dict) -> None:
 
 
 def test_late_reply_times_out_and_is_never_taken_for_the_next_answer() -> None:
-    async def handler(conn: Conn) -> None:
-        while True:
-            line = await conn.line()
-            if len(conn.server.lines) == 1:
-                await asyncio.sleep(0.4)  # well past the client's timeout
-            await conn.send(echo_reply(line))
+    """The first reply is held until the test lets it go, after the client gave up on
+    it: the request can only end in its timeout, and the late reply, written once the
+    next request was answered, is never taken for a later answer."""
 
     async def main() -> None:
+        late = asyncio.Event()  # set by the test once the first request timed out
+
+        async def handler(conn: Conn) -> None:
+            while True:
+                line = await conn.line()
+                if len(conn.server.lines) == 1:
+                    await late.wait()  # well past the client's timeout, whatever the load
+                await conn.send(echo_reply(line))
+
         async with FaultServer(handler) as server:
             session = server.session(timeout=0.15)
             frames = frames_of(session)
-            started = time.perf_counter()
             with pytest.raises(RequestTimeout):
                 await session.get(KINDS["I"], 1)
-            assert time.perf_counter() - started < 1.0
             assert session.state == "closed"
 
             second = await session.get(KINDS["I"], 2)
             assert second.response.variant == Variant(VT.I4, 2)
             assert server.connections == 2
 
-            # Even once the late reply would have been written, nothing stale shows up.
+            # Once the late reply was written, nothing stale shows up.
+            late.set()
             await until(lambda: 1 in server.ended)
             third = await session.get(KINDS["I"], 3)
             assert third.response.variant == Variant(VT.I4, 3)
@@ -287,10 +293,8 @@ def test_no_reply_times_out_then_session_works_again() -> None:
     async def main() -> None:
         async with FaultServer(handler) as server:
             session = server.session(timeout=0.2)
-            started = time.perf_counter()
-            with pytest.raises(RequestTimeout):
-                await asyncio.wait_for(session.get(KINDS["I"], 1), 1.5)
-            assert time.perf_counter() - started < 1.0
+            with pytest.raises(RequestTimeout):  # the session's own timeout, not the deadline's
+                await asyncio.wait_for(session.get(KINDS["I"], 1), DEADLINE)
 
             reply = await asyncio.wait_for(session.get(KINDS["I"], 2), DEADLINE)
             assert reply.response.variant == Variant(VT.I4, 2)
@@ -309,9 +313,9 @@ def test_timed_out_put_on_a_silent_server() -> None:
         async with FaultServer(handler) as server:
             session = server.session(timeout=0.1)
             with pytest.raises(RequestTimeout):
-                await asyncio.wait_for(session.put(KINDS["I"], 1, Variant(VT.I4, 5)), 1.5)
+                await asyncio.wait_for(session.put(KINDS["I"], 1, Variant(VT.I4, 5)), DEADLINE)
             with pytest.raises(RequestTimeout):
-                await asyncio.wait_for(session.send_raw("GET:RC8:1:I:"), 1.5)
+                await asyncio.wait_for(session.send_raw("GET:RC8:1:I:"), DEADLINE)
             assert server.lines == [b"PUT:RC8:1:I:3,5", b"GET:RC8:1:I:"]
             await session.close()
 
@@ -390,11 +394,9 @@ def test_a_byte_waiting_on_a_fresh_connection_keeps_the_request_timeout(
     async def main() -> None:
         async with FaultServer(handler) as server:
             session = server.session(timeout=0.2)
-            started = time.perf_counter()
             try:
-                with pytest.raises(RequestTimeout):
+                with pytest.raises(RequestTimeout):  # its own timeout, not the deadline's
                     await asyncio.wait_for(session.get(KINDS["I"], 1), DEADLINE)
-                assert time.perf_counter() - started < 1.5
                 assert server.lines == [b"GET:RC8:1:I:"]
             finally:
                 session.session.interrupt()  # wake a request left waiting forever
@@ -435,10 +437,8 @@ def test_endless_line_is_a_bad_reply_within_the_bound(max_line: int | None) -> N
             session = server.session(**kwargs)
             bound = max_line or 64 * 1024
             frames = frames_of(session)
-            started = time.perf_counter()
-            with pytest.raises(BadReply) as caught:
+            with pytest.raises(BadReply) as caught:  # not a RequestTimeout: the bound, not 2 s
                 await asyncio.wait_for(session.get(KINDS["I"], 1), DEADLINE)
-            assert time.perf_counter() - started < 1.5  # not the 2 s timeout
             assert f"no CR within {bound} bytes" in str(caught.value)  # the bound it was given
             assert caught.value.raw is None or len(caught.value.raw) <= bound
             assert sum(len(f.data) for f in frames if f.direction == "rx") <= bound
@@ -846,7 +846,7 @@ def test_each_exchange_publishes_a_tx_and_an_rx_frame() -> None:
                     assert frame.response is None and frame.problem is None
                 else:
                     assert frame.rtt is not None
-                    assert 0 <= frame.rtt < 1.0
+                    assert 0 <= frame.rtt < DEADLINE  # a round trip, not a clock reading
                     # The reply as the session parsed it, once, and no problem with it.
                     assert frame.response is not None and frame.problem is None
             assert [f.response.variant for f in frames[1::2]] == [  # type: ignore[union-attr]

@@ -2,9 +2,18 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import pytest
 
-from rac_console.commands.completion import Candidate, common_prefix, complete, hint
+from rac_console.commands.completion import (
+    WHOLE_LIST,
+    Candidate,
+    common_prefix,
+    complete,
+    hint,
+    shown_candidates,
+)
 
 COMMAND_NAMES = [
     "get",
@@ -23,6 +32,8 @@ COMMAND_NAMES = [
     "latency",
     "wait",
     "log",
+    "record",
+    "transcript",
     "clear",
     "help",
     "quit",
@@ -249,3 +260,42 @@ def test_common_prefix_of_candidates() -> None:
     assert common_prefix(complete("unwatch ")) == ""
     mixed = [Candidate("Pause", "", 0), Candidate("put", "", 0)]
     assert common_prefix(mixed) == "P"  # case-insensitive, spelled as the first
+
+
+# ------------------------------------------------------------------ how much is listed
+
+
+def test_a_short_list_is_shown_whole() -> None:
+    """The 9 types were listed as 6 and "… and 3 more" (issue 20)."""
+    types = complete("get ")
+    assert shown_candidates(types) == (types, 0)
+    waits = complete("wait I 1 ")
+    assert len(waits) == 7 and shown_candidates(waits) == (waits, 0)
+    exactly = [Candidate(str(n), "", 0) for n in range(WHOLE_LIST)]
+    assert shown_candidates(exactly) == (exactly, 0)
+    assert WHOLE_LIST >= 12
+
+
+def test_a_long_list_is_cut_leaving_a_line_to_say_how_many_more() -> None:
+    commands = complete("")
+    shown, more = shown_candidates(commands)
+    assert shown == commands[: WHOLE_LIST - 1]
+    assert len(commands) > WHOLE_LIST and len(shown) + more == len(commands)
+
+
+async def test_the_console_lists_the_nine_types_whole(tmp_path: Path) -> None:
+    from textual.widgets import Static
+    from tui_helpers import make_app, until
+
+    app = make_app(tmp_path)
+    async with app.run_test(size=(100, 30)) as pilot:
+        await pilot.press(*"get ")
+        await pilot.press("tab")
+        panel = app.query_one("#completions", Static)
+        await until(pilot, lambda: panel.has_class("-visible"), "the list")
+        await pilot.pause()
+        listed = str(panel.render())
+        assert "more" not in listed
+        for code in TYPE_CODES:
+            assert any(line.split()[:1] == [code] for line in listed.splitlines()), code
+        assert panel.size.height == len(TYPE_CODES)  # no line cut off by the panel

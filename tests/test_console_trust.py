@@ -303,11 +303,15 @@ async def test_a_cut_candidate_list_says_how_many_more(tmp_path: Path) -> None:
     async with app.run_test(size=(120, 40)) as pilot:
         from textual.widgets import Static
 
-        await type_line(pilot, "get ", enter=False, keys=True)
+        from rac_console.commands.completion import WHOLE_LIST
+        from rac_console.commands.registry import COMMANDS
+
+        await type_line(pilot, "help ", enter=False, keys=True)  # 19 commands: cut
         await pilot.press("tab")
         panel = app.query_one("#completions", Static)
         await until(pilot, lambda: panel.has_class("-visible"), "the candidates")
         listed = str(panel.render())
         shown = [line for line in listed.splitlines() if line.strip()]
-        assert "… and 3 more" in listed
+        more = len(COMMANDS) - (WHOLE_LIST - 1)  # the 9 types would be listed whole
+        assert f"… and {more} more" in listed
         assert len(shown) <= panel.region.height

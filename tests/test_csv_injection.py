@@ -170,8 +170,8 @@ def test_each_text_cell_reads_back_as_shown_one_row_per_line(
     path = tmp_path / "cells.csv"
     s1, i1 = VarRef(kind_of("S"), 1), VarRef(kind_of("I"), 1)
     log = CsvLog(str(path), [s1, i1])
-    log.write(0.0, {s1: Variant(VT.BSTR, text), i1: Variant(VT.I4, -5)})
-    log.write(1.0, {s1: Variant(VT.BSTR, text), i1: Variant(VT.I4, -5)})
+    log.write(1_700_000_000.0, {s1: Variant(VT.BSTR, text), i1: Variant(VT.I4, -5)})
+    log.write(1_700_000_001.0, {s1: Variant(VT.BSTR, text), i1: Variant(VT.I4, -5)})
     log.close()
     data = path.read_bytes()
     rows = assert_one_row_per_line(data, 3)

@@ -53,13 +53,33 @@ def _namespaces_unavailable() -> str | None:
     return None
 
 
+def _own_addresses() -> tuple[str, str]:
+    """This end and the namespace's end of a /30 of this process's own in 198.18.0.0/15
+    (set aside for network tests): two pytest-xdist workers, or two runs of the suite at
+    once, never put one subnet on two links (the root namespace would route one test's
+    packets into the other's namespace). Picked from the PID, passing over a block whose
+    address some other process has already put on a link here."""
+    used = subprocess.run(
+        ["ip", "-o", "-4", "addr", "show"], capture_output=True, text=True, timeout=20
+    ).stdout
+    for step in range(32768):
+        block = (os.getpid() + step) % 32768 * 4
+        here, there = (
+            f"198.{18 + block // 65536}.{block // 256 % 256}.{block % 256 + end}" for end in (1, 2)
+        )
+        if f" {here}/" not in used:
+            return here, there
+    raise AssertionError("no free /30 in 198.18.0.0/15")
+
+
 @pytest.fixture
 def link() -> Iterator[Link]:
     why = _namespaces_unavailable()
     if why:
         pytest.skip(f"network namespaces: {why}")
-    tag = f"{os.getpid() % 100000}"
+    tag = str(os.getpid())  # unique among running processes: names no worker shares
     namespace, here, there = f"rka{tag}", f"rkh{tag}", f"rkt{tag}"
+    here_address, there_address = _own_addresses()
     made = subprocess.run(["ip", "netns", "add", namespace], capture_output=True, timeout=20)
     if made.returncode:
         pytest.skip(f"network namespaces: ip netns add failed: {made.stderr.decode().strip()}")
@@ -68,11 +88,11 @@ def link() -> Iterator[Link]:
         for words in (
             ["ip", "link", "add", here, "type", "veth", "peer", "name", there],
             ["ip", "link", "set", there, "netns", namespace],
-            ["ip", "addr", "add", "10.78.0.1/24", "dev", here],
+            ["ip", "addr", "add", f"{here_address}/30", "dev", here],
             ["ip", "link", "set", here, "up"],
         ):
             subprocess.run(words, check=True, timeout=20)
-        _ip_netns("ip", "addr", "add", "10.78.0.2/24", "dev", there, namespace=namespace)
+        _ip_netns("ip", "addr", "add", f"{there_address}/30", "dev", there, namespace=namespace)
         _ip_netns("ip", "link", "set", there, "up", namespace=namespace)
         _ip_netns("ip", "link", "set", "lo", "up", namespace=namespace)
         simulator = subprocess.Popen(
@@ -86,15 +106,15 @@ def link() -> Iterator[Link]:
                 "rac_console",
                 "sim",
                 "--bind",
-                "10.78.0.2",
+                there_address,
                 "--port",
                 "5006",
             ],
             stdout=subprocess.DEVNULL,
             stderr=subprocess.PIPE,
         )
-        _wait_listening(namespace, simulator)
-        yield Link(namespace, "10.78.0.2", 5006)
+        _wait_listening(namespace, simulator, there_address)
+        yield Link(namespace, there_address, 5006)
     finally:
         if simulator is not None:
             simulator.kill()
@@ -103,14 +123,14 @@ def link() -> Iterator[Link]:
         subprocess.run(["ip", "link", "del", here], capture_output=True, timeout=20)
 
 
-def _wait_listening(namespace: str, simulator: subprocess.Popen[bytes]) -> None:
+def _wait_listening(namespace: str, simulator: subprocess.Popen[bytes], address: str) -> None:
     deadline = time.monotonic() + 20
     while time.monotonic() < deadline:
         assert simulator.poll() is None, simulator.stderr.read() if simulator.stderr else ""
         listening = subprocess.run(
             ["ip", "netns", "exec", namespace, "ss", "-ltn"], capture_output=True, timeout=20
         )
-        if b"10.78.0.2:5006" in listening.stdout:
+        if f"{address}:5006".encode() in listening.stdout:
             return
         time.sleep(0.05)
     raise AssertionError("the simulator did not listen within 20 s")

@@ -283,7 +283,7 @@ async def test_save_and_load_keep_labels_and_every(tmp_path: Path) -> None:
         }
 
 
-@pytest.mark.parametrize("content", ["watch = 5", "\xff\xfe", "[watch]\ntype = 'P'\n"])
+@pytest.mark.parametrize("content", ["watch = 5", "\x81\xfe\xff", "[watch]\ntype = 'P'\n"])
 def test_bad_watch_list_files_give_a_message(tmp_path: Path, content: str) -> None:
     path = tmp_path / "cell.toml"
     path.write_bytes(content.encode("latin-1"))

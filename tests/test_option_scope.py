@@ -5,6 +5,7 @@ saying which commands take it. The real CLI, as a subprocess."""
 from __future__ import annotations
 
 import json
+import sys
 from datetime import datetime
 from pathlib import Path
 
@@ -55,8 +56,6 @@ def test_interval_before_watch_is_its_period(env: dict[str, str]) -> None:  # no
         (["--interval", "0.5", "send", "GET:RC8:1:I:"], "--interval is the time between"),
         (["--watch", "w.toml", "get", "I", "1"], "--watch loads a watch list"),
         (["--history", "h", "get", "I", "1"], "--history names the console's"),
-        (["--yes", "get", "I", "1"], "--yes says yes ahead"),
-        (["--no-verify", "latency"], "--no-verify sends a PUT"),
         (["-H", "127.0.0.1", "sim"], "sim takes its own options"),
         (["--interval", "0.5", "get", "I", "0", "-r", "2", "-i", "0.1"], "given twice"),
     ],
@@ -73,10 +72,23 @@ def test_an_option_that_means_nothing_there_is_refused(
     assert result.stdout == ""  # nothing was done: no read, no write
 
 
-def test_json_is_refused_for_the_console(env: dict[str, str]) -> None:  # noqa: F811
-    result = cli(env, "--json")
-    assert result.returncode == 2
-    assert "--json prints results for scripts" in one_error_line(result)
+def test_json_and_yes_are_refused_for_the_console_at_a_terminal(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    from rac_console.cli.main import parse_args
+    from rac_console.cli.option_scope import refusal
+
+    for stream in (sys.stdin, sys.stdout):
+        monkeypatch.setattr(stream, "isatty", lambda: True)
+    assert "--json prints results for scripts" in (refusal(parse_args(["--json"])) or "")
+    assert "ask before every write" in (refusal(parse_args(["--yes", "repl"])) or "")
+    assert refusal(parse_args(["--no-verify", "repl"])) is None  # the REPL's writes
+
+
+def test_write_options_on_a_read_keep_an_alias_working(env: dict[str, str]) -> None:  # noqa: F811
+    """``rac='rac-console --yes --no-verify'``: they change nothing for a get, as they say."""
+    result = cli(env, "--yes", "--no-verify", "get", "I", "1")
+    assert result.returncode == 0, result.stderr
 
 
 def test_latency_takes_the_consoles_words_and_the_options(env: dict[str, str]) -> None:  # noqa: F811

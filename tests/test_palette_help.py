@@ -13,7 +13,7 @@ from pathlib import Path
 import pytest
 from textual.command import CommandList, CommandPalette
 from textual.widgets import Input
-from tui_helpers import make_app, results_text, until
+from tui_helpers import make_app, results_text, type_line, until
 
 from rac_console.commands.registry import COMMANDS, RAW_HELP
 from rac_console.present.help_text import (
@@ -109,12 +109,13 @@ def test_the_key_groups_are_read_from_the_bindings() -> None:
     groups = dict(console_key_groups(RacConsoleApp))
     anywhere = dict(groups["anywhere"])
     assert anywhere["F1"] == "Help"
-    assert anywhere["F2"] == "Pause polls"
+    assert anywhere["F2"] == "Pause or resume polling"  # one line for both of its words
     assert anywhere["Ctrl+P"] == "Command palette"
+    assert "cancel" in anywhere["Ctrl+C"].lower() and "Ctrl+Q" in anywhere["Ctrl+C"]
     assert dict(groups["watch table (F6)"])["Space"] == "Toggle"
     assert "Toggle bit" in dict(groups["I/O grid (F5, then F6)"]).values()
     assert "Esc" in dict(groups["frame log (F6)"])
-    assert dict(groups["command line"])["Tab"] == "Complete"
+    assert dict(groups["command line"])["Tab"].startswith("Complete the command")
 
 
 @pytest.mark.slow
@@ -190,6 +191,8 @@ async def test_palette_lists_the_consoles_commands_with_their_keys(tmp_path: Pat
             "load FILE",
             "save FILE",
             "log FILE.csv",
+            "record stop",  # the console of the tests records to wire.jsonl
+            "transcript FILE",
             "Theme",
             "Keys",
             "Screenshot",
@@ -225,6 +228,36 @@ async def test_palette_load_puts_the_command_on_the_line_to_finish(tmp_path: Pat
         await until(pilot, lambda: app.focused is app.command_line, "the command line's focus")
         assert app.command_line.cursor_position == len("load ")
         assert not app.lines_pending  # nothing runs before the user's own Enter
+
+
+@pytest.mark.slow
+async def test_palette_record_starts_and_stops_recording(tmp_path: Path) -> None:
+    app = make_app(tmp_path)
+    path = tmp_path / "moment.jsonl"
+    async with app.run_test(size=(100, 30)) as pilot:
+        await type_line(pilot, "record stop")  # the tests' own recording first
+        await until(
+            pilot, lambda: app.status is not None and app.status.recording is None, "stopped"
+        )
+        await open_palette(pilot, "record")
+        assert palette_prompts(app)[0].startswith("record FILE")
+        await pilot.press("enter")
+        await until(pilot, lambda: app.command_line.value == "record ", "the line")
+        for key in str(path):
+            await pilot.press(key)
+        await pilot.press("enter")
+        await until(
+            pilot,
+            lambda: app.status is not None and app.status.recording == str(path),
+            "recording",
+        )
+        await open_palette(pilot, "record stop")
+        assert palette_prompts(app)[0].startswith("record stop")
+        await pilot.press("enter")
+        await until(
+            pilot, lambda: app.status is not None and app.status.recording is None, "stopped"
+        )
+    assert path.exists()
 
 
 # ------------------------------------------------------------------ the help screen

@@ -3,17 +3,25 @@
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import io
 import json
+import re
 import subprocess
 import sys
+import threading
 import time
 from collections.abc import Callable
 from pathlib import Path
 
+import pytest
+from prompt_toolkit.buffer import Buffer
+from prompt_toolkit.data_structures import Size
 from prompt_toolkit.document import Document
 from prompt_toolkit.input import create_pipe_input
 from prompt_toolkit.output import DummyOutput
+from prompt_toolkit.output.vt100 import Vt100_Output
+from terminal_screen import Screen
 from tui_helpers import WIRE_RECORD, FrameTap
 
 from rac_console.engine import Engine
@@ -43,11 +51,31 @@ def test_completer_offers_candidates_with_help() -> None:
     assert completions("GET:RC8:1") == []
 
 
-class Driver:
-    """A REPL on a pipe: type lines, read what it printed, wait on conditions."""
+#: A control sequence of the kind prompt-toolkit draws with (CSI ... letter).
+CONTROL_SEQUENCE = re.compile(r"\x1b\[[0-9;?]*[A-Za-z]")
 
-    def __init__(self, tmp_path: Path, host: str | None = None, **engine_options: object) -> None:
+
+def visible(text: str) -> str:
+    """What a screen shows of ``text``, roughly: the control sequences taken out."""
+    return CONTROL_SEQUENCE.sub("", text)
+
+
+class Driver:
+    """A REPL on a pipe: type lines, read what it printed, wait on conditions.
+
+    With ``screen``, prompt-toolkit draws its prompt, menus and toolbar into the same
+    stream the results are printed to (a 40 x 140 terminal), as on a real terminal."""
+
+    def __init__(
+        self,
+        tmp_path: Path,
+        host: str | None = None,
+        *,
+        screen: bool = False,
+        **engine_options: object,
+    ) -> None:
         self.out = io.StringIO()
+        self.screen = screen
         self.console = make_console(
             file=self.out, force_terminal=True, width=140, color_system=None
         )
@@ -63,9 +91,14 @@ class Driver:
     async def run(self, steps: Callable[[Driver], object]) -> str:
         with create_pipe_input() as pipe:
             self.pipe = pipe
-            self.repl = Repl(
-                self.engine, self.history, self.console, input=pipe, output=DummyOutput()
+            output = (
+                Vt100_Output(
+                    self.out, lambda: Size(rows=40, columns=140), term="xterm", enable_cpr=False
+                )
+                if self.screen
+                else DummyOutput()
             )
+            self.repl = Repl(self.engine, self.history, self.console, input=pipe, output=output)
             task = asyncio.create_task(self.repl.run())
             await steps(self)  # type: ignore[misc]
             pipe.send_text("quit\r")
@@ -115,7 +148,7 @@ async def test_bad_input_is_answered_and_nothing_is_sent(tmp_path: Path) -> None
     async def steps(d: Driver) -> None:
         for line in ("put P 10 1 2 3", "get X 1", "put IO 3 maybe", "put I 1 5"):
             d.type(line + "\r")
-        await d.until(lambda out: "PUT refused" in out, "the read-only refusal")
+        await d.until(lambda out: "PUT I1 refused" in out, "the read-only refusal")
 
     out = await driver.run(steps)
     assert "P needs 7 values: X Y Z Rx Ry Rz Fig, got 3" in out
@@ -127,14 +160,14 @@ async def test_bad_input_is_answered_and_nothing_is_sent(tmp_path: Path) -> None
 async def test_history_is_recalled_in_a_second_session(tmp_path: Path) -> None:
     async def first_steps(d: Driver) -> None:
         d.type("get S 1\r")
-        await d.until(lambda out: "S1 = RC8 simulator" in out, "the first get")
+        await d.until(lambda out: 'S1 = "RC8 simulator"' in out, "the first get")
 
     await Driver(tmp_path).run(first_steps)
     second = Driver(tmp_path)
 
     async def second_steps(d: Driver) -> None:
         d.type(UP + UP + "\r")  # past "quit", to the previous session's get, run again
-        await d.until(lambda out: "S1 = RC8 simulator" in out, "the recalled get")
+        await d.until(lambda out: 'S1 = "RC8 simulator"' in out, "the recalled get")
 
     await second.run(second_steps)
     lines = (tmp_path / "history").read_text().splitlines()
@@ -170,7 +203,7 @@ async def test_watch_updates_in_place_until_enter(tmp_path: Path) -> None:
         d.type("\r")
         await d.until(lambda out: not d.repl.rows, "the watch to end")
         d.type("get S 1\r")
-        await d.until(lambda out: "S1 = RC8 simulator" in out, "the prompt to come back")
+        await d.until(lambda out: 'S1 = "RC8 simulator"' in out, "the prompt to come back")
 
     out = await driver.run(steps)
     assert "cycle" in out and "Enter, q or Ctrl-C returns to the prompt" in out
@@ -234,3 +267,271 @@ async def test_latency_inside_the_repl(tmp_path: Path) -> None:
     out = await driver.run(steps)
     assert "p95" in out and "0 errors" in out
     assert len(driver.tap.sent) == 50
+
+
+# ------------------------------------------------------------------ issue 20
+
+
+async def test_tab_lists_the_nine_types_whole(tmp_path: Path) -> None:
+    """The menu had room for 7 lines: T and IO were behind a scrollbar."""
+    driver = Driver(tmp_path, screen=True)
+    helps = ["integer", "single float", "double", "string", "vector", "position", "joints"]
+    helps += ["transform", "I/O bit"]
+
+    async def steps(d: Driver) -> None:
+        d.type("get \t")
+        await d.until(lambda out: "integer" in visible(out), "the menu")
+        await d.until(
+            lambda _: d.repl.prompt.default_buffer.complete_state is not None, "the menu state"
+        )
+        d.type("\x15")  # Ctrl-U: the line goes, quit comes next
+
+    out = visible(await driver.run(steps))
+    assert [help for help in helps if help not in out] == []
+
+
+def says(text: str) -> Callable[[str], bool]:
+    return lambda out: text in out
+
+
+async def test_a_refused_line_is_never_suggested_and_never_kept(tmp_path: Path) -> None:
+    """A mistyped command (answered with the closest one) and a write refused by
+    read-only: Up recalls them in this session, to be fixed; neither is suggested, and
+    neither reaches the history file."""
+    driver = Driver(tmp_path, read_only=True)
+
+    def buffer_of(d: Driver) -> Buffer:
+        return d.repl.prompt.default_buffer
+
+    async def suggested(d: Driver, typed: str) -> str:
+        d.type("\x15" + typed)  # Ctrl-U first: each on an empty line
+        await d.until(lambda _: buffer_of(d).text == typed, f"{typed!r} typed")
+        await d.until(lambda _: buffer_of(d).suggestion is not None, f"a suggestion for {typed}")
+        suggestion = buffer_of(d).suggestion
+        assert suggestion is not None
+        return typed + suggestion.text
+
+    async def steps(d: Driver) -> None:
+        for line, answer in (
+            ("get S 1", "S1 = "),
+            ("pause", "polling paused"),
+            ("gte S 1", "unknown command 'gte': did you mean get?"),
+            ("put I 1 5", "refused"),
+        ):
+            d.type(line + "\r")
+            await d.until(says(answer), answer)
+        assert await suggested(d, "g") == "get S 1"
+        assert await suggested(d, "p") == "pause"
+        d.type("\x15" + UP)
+        await d.until(lambda _: buffer_of(d).text == "put I 1 5", "the refused line recalled")
+        d.type("\x15")
+        await d.until(lambda _: buffer_of(d).text == "", "the line cleared")
+
+    await driver.run(steps)
+    assert (tmp_path / "history").read_text().splitlines() == ["get S 1", "pause", "quit"]
+
+
+def toolbar_text(driver: Driver) -> str:
+    return "".join(text for _, text, *_ in driver.repl.toolbar())
+
+
+async def test_after_pause_the_toolbar_and_a_watch_say_polling_is_paused(tmp_path: Path) -> None:
+    """``watch I 0`` after ``pause`` showed a row that never filled, and nothing said why."""
+    driver = Driver(tmp_path)
+
+    def row_line(out: str) -> str:
+        rows = [line for line in out.splitlines() if line.strip().startswith("I0 ")]
+        return rows[-1] if rows else ""
+
+    async def steps(d: Driver) -> None:
+        d.type("pause\r")
+        await d.until(lambda out: "polling paused" in out, "the pause")
+        assert "POLLING PAUSED" in toolbar_text(d)
+        d.type("watch I 0\r")
+        await d.until(lambda out: "wait for resume" in out, "the watch saying why")
+        await d.until(lambda out: "not polled" in row_line(out), "the row marked not polled")
+        assert "paused" in row_line(out=d.out.getvalue())
+        d.type("\r")
+        await d.until(lambda _: not d.repl.rows, "the watch to end")
+        d.type("resume\r")
+        await d.until(lambda out: "polling resumed" in out, "the resume")
+        assert "POLLING PAUSED" not in toolbar_text(d)
+
+    await driver.run(steps)
+
+
+async def test_on_a_live_controller_the_banner_says_live_with_the_profile(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Only the simulator had a first line; a live target started with a bare prompt."""
+    from rac_console.engine.config import CONFIG_ENV, load_config
+    from rac_console.sim.thread import SimulatorThread
+
+    with SimulatorThread() as cell:
+        config = tmp_path / "config.toml"
+        config.write_text(
+            f'[target.cell3]\nhost = "{cell.host}"\nport = {cell.port}\n'
+            'label = "Cell 3 — welding"\nwrites = "confirm"\n',
+            encoding="utf-8",
+        )
+        monkeypatch.setenv(CONFIG_ENV, str(config))
+        profiles = load_config().profiles
+        profile = profiles["cell3"]
+        driver = Driver(
+            tmp_path, profile.host, port=profile.port, policy=profile.policy, profile=profile
+        )
+
+        async def steps(d: Driver) -> None:
+            await d.until(lambda out: "LIVE" in out, "the banner")
+
+        out = await driver.run(steps)
+    first = out.splitlines()[0]
+    assert first.startswith(f"LIVE controller {cell.host}:{cell.port}"), first
+    assert "profile cell3 (Cell 3 — welding): writes confirm" in first
+    assert "sim" not in first.split(":")[0]
+
+
+async def test_on_a_plain_live_host_the_banner_names_it(tmp_path: Path) -> None:
+    from rac_console.sim.thread import SimulatorThread
+
+    with SimulatorThread() as cell:
+        driver = Driver(tmp_path, cell.host, port=cell.port)
+
+        async def steps(d: Driver) -> None:
+            await d.until(lambda out: "LIVE" in out, "the banner")
+
+        out = await driver.run(steps)
+    assert out.splitlines()[0].startswith(f"LIVE controller {cell.host}:{cell.port}.")
+
+
+async def test_a_line_printed_while_the_prompt_is_up_goes_above_it(tmp_path: Path) -> None:
+    """An alert (or a frame, or the first connection's failure) drained while the user
+    types was written into the prompt's line: ``sim> get Irecording stopped``."""
+    from rac_console.engine import Alert
+
+    driver = Driver(tmp_path, screen=True)
+
+    def screen_lines(out: str) -> list[str]:
+        return Screen(140).feed(out).lines()
+
+    async def steps(d: Driver) -> None:
+        await d.until(lambda out: "sim>" in screen_lines(out)[-1], "the prompt")
+        d.type("get I")
+        await d.until(lambda out: screen_lines(out)[-1] == "sim> get I", "the typed text")
+        d.engine.outbox.put_many([Alert("recording stopped: disk full")])
+        await d.until(lambda out: "disk full" in out, "the alert")
+        await d.until(lambda out: screen_lines(out)[-1] == "sim> get I", "the prompt again")
+        d.type(" 1\r")
+        await d.until(lambda out: "I1 = 1" in out, "the get")
+
+    lines = screen_lines(await driver.run(steps))
+    assert "recording stopped: disk full" in lines, lines  # a line of its own
+    assert "sim> get I 1" in lines, lines  # the prompt whole, below it
+    assert lines.index("recording stopped: disk full") < lines.index("sim> get I 1")
+
+
+class HeldReply:
+    """The server's answers: ``GET I 1`` is held until the test releases it."""
+
+    def __init__(self) -> None:
+        self.release = threading.Event()
+
+    def __call__(self, line: bytes) -> bytes:
+        if line == b"GET:RC8:1:I:":
+            assert self.release.wait(10), "the test never released the reply"
+            return b"0,3,1\r"
+        return b"0,3,250\r"
+
+
+@pytest.mark.skipif(sys.platform == "win32", reason="a pseudo-terminal is POSIX")
+async def test_keys_typed_ahead_while_a_command_waits_stay_out_of_its_result(
+    tmp_path: Path,
+) -> None:
+    """Issue 20, item 11: under load a result came out as ``get I 2I1 = 1``.
+
+    Between two prompts the terminal was back in cooked mode, so it echoed the keys
+    typed ahead where the result was about to be printed. Here on a real
+    pseudo-terminal: the controller holds its reply until the next line is typed ahead,
+    and what the terminal shows is played onto a model screen.
+    """
+    import fcntl
+    import os
+    import pty
+    import struct
+    import termios
+
+    from prompt_toolkit.input.vt100 import Vt100Input
+    from servers import RecordingServer
+
+    reply = HeldReply()
+    server = RecordingServer(reply)
+    master, slave = pty.openpty()
+    fcntl.ioctl(slave, termios.TIOCSWINSZ, struct.pack("HHHH", 30, 100, 0, 0))
+    keys = os.fdopen(slave, "r", closefd=False)
+    screen_file = os.fdopen(os.dup(slave), "w", encoding="utf-8")
+    shown = bytearray()
+    loop = asyncio.get_running_loop()
+    os.set_blocking(master, False)
+
+    def read_screen() -> None:
+        with contextlib.suppress(OSError):
+            shown.extend(os.read(master, 65536))
+
+    async def until(predicate: Callable[[], bool], what: str) -> None:
+        deadline = time.monotonic() + 10
+        while not predicate():
+            assert time.monotonic() < deadline, f"no {what} in {bytes(shown)!r}"
+            await asyncio.sleep(0.02)
+
+    def waiting_keys() -> int:
+        """Keys the terminal holds for the next read (whole lines only, in cooked mode)."""
+        return int(struct.unpack("i", fcntl.ioctl(slave, termios.FIONREAD, b"\0" * 4))[0])
+
+    modes = termios.tcgetattr(slave)
+    engine = Engine("127.0.0.1", port=server.port, timeout=15)
+    task: asyncio.Task[int] | None = None
+    loop.add_reader(master, read_screen)
+    try:
+        repl = Repl(
+            engine,
+            History(tmp_path / "history"),
+            make_console(file=screen_file, force_terminal=True, width=100, color_system=None),
+            input=Vt100Input(keys),
+            output=Vt100_Output(
+                screen_file, lambda: Size(rows=30, columns=100), term="xterm", enable_cpr=False
+            ),
+        )
+        task = asyncio.create_task(repl.run())
+        await until(lambda: b"LIVE" in shown, "banner")
+        os.write(master, b"get I 1\r")
+        await until(lambda: b"GET:RC8:1:I:\r" in server.received, "GET on the wire")
+        echoed_from = len(shown)
+        os.write(master, b"get I 2")  # typed ahead, no Enter yet
+        await until(
+            lambda: b"get I 2" in shown[echoed_from:] or waiting_keys() >= len("get I 2"),
+            "the typed keys taken by the terminal (echoed, or held for the next prompt)",
+        )
+        reply.release.set()
+        await until(lambda: b"I1 = 1" in shown, "the first result")
+        os.write(master, b"\r")
+        await until(lambda: b"I2 = 250" in shown, "the typed-ahead line run")
+        os.write(master, b"quit\r")
+        await asyncio.wait_for(task, 10)
+        assert termios.tcgetattr(slave) == modes  # echo and line editing back as they were
+    finally:
+        reply.release.set()
+        if task is not None and not task.done():  # a failed step: end the REPL here
+            task.cancel()
+            await asyncio.gather(task, return_exceptions=True)
+            engine.stop()
+        loop.remove_reader(master)
+        server.close()
+        keys.close()
+        screen_file.close()
+        os.close(slave)
+        os.close(master)
+    lines = Screen(100).feed(shown.decode("utf-8", "replace")).lines()
+    results = [line for line in lines if "I1 = 1" in line]
+    assert results and all(line.startswith("I1 = 1 ") for line in results), lines
+    prompt = lines[lines.index(results[0]) + 1]
+    assert prompt.endswith("> get I 2"), lines  # the keys typed ahead, on the next prompt

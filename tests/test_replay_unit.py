@@ -10,6 +10,7 @@ from __future__ import annotations
 import asyncio
 import json
 import os
+import sys
 import threading
 from pathlib import Path
 
@@ -39,7 +40,7 @@ from rac_console.sim.replay import (
 )
 from rac_console.sim.server import SimulatorServer
 
-DEADLINE = 3.0
+DEADLINE = 10.0  # a wait this long means hung: never a figure a test checks
 
 
 def frames(*pairs: tuple[str, str], **flags: bool) -> list[dict[str, object]]:
@@ -168,6 +169,7 @@ def test_a_missing_file_is_one_line(tmp_path: Path) -> None:
         ('{"dir": "rx"}', r"line 3: 'text' must be a string"),
         ('{"dir": "rx", "text": "\\\\q"}', r"line 3: 'text' is not as --record writes it"),
     ],
+    ids=["text", "deep", "list", "dir", "no-text", "escape"],  # never the 100 KB line
 )
 def test_a_malformed_line_is_named_by_its_number(tmp_path: Path, line: str, message: str) -> None:
     path = tmp_path / "rec.jsonl"
@@ -185,7 +187,9 @@ def test_bytes_that_are_not_utf8_are_not_json(tmp_path: Path) -> None:
 
 
 def test_what_the_file_says_is_quoted_terminal_safe(tmp_path: Path) -> None:
-    path = write(tmp_path / "rec\x1b[2J.jsonl", [{"dir": "\x1b]0;owned\x07", "text": ""}])
+    # Windows forbids control characters in file names: there only the file's text has them.
+    name = "rec.jsonl" if sys.platform == "win32" else "rec\x1b[2J.jsonl"
+    path = write(tmp_path / name, [{"dir": "\x1b]0;owned\x07", "text": ""}])
     with pytest.raises(ReplayError) as error:
         load_recording(str(path))
     text = str(error.value)
@@ -222,13 +226,13 @@ def test_a_line_of_the_limit_is_read_and_one_byte_more_is_refused(tmp_path: Path
     for size, refused in ((MAX_LINE_BYTES, False), (MAX_LINE_BYTES + 1, True)):
         line = head + "y" * (size - len(head) - len(tail)) + tail
         assert len(line) == size
-        path.write_text(good + line + "\n" + good, encoding="ascii")
+        path.write_bytes((good + line + "\n" + good).encode("ascii"))  # LF, on Windows too
         if refused:
             with pytest.raises(ReplayError, match=r"line 3 is longer than 512 KiB"):
                 load_recording(str(path))
         else:
             assert load_recording(str(path)).count == 2
-    path.write_text(good + line, encoding="ascii")  # the last line, with no newline
+    path.write_bytes((good + line).encode("ascii"))  # the last line, with no newline
     with pytest.raises(ReplayError, match=r"line 3 is longer than"):
         load_recording(str(path))
 
@@ -238,11 +242,11 @@ def test_a_file_of_the_limit_is_read_and_one_byte_more_is_refused(
 ) -> None:
     pair = "".join(json.dumps(r) + "\n" for r in frames(I10[0]))
     path = tmp_path / "rec.jsonl"
-    path.write_text(pair * 10, encoding="ascii")
+    path.write_bytes((pair * 10).encode("ascii"))  # LF, on Windows too
     monkeypatch.setattr(replay, "MAX_FILE_BYTES", len(pair) * 10)
     assert load_recording(str(path)).count == 10
-    with path.open("a", encoding="ascii") as file:
-        file.write("\n")  # a blank line: one byte more
+    with path.open("ab") as file:
+        file.write(b"\n")  # a blank line: one byte more
     with pytest.raises(ReplayError, match=r"rec\.jsonl is larger than .*split"):
         load_recording(str(path))
 

@@ -20,6 +20,12 @@ def mode(path: Path) -> int:
     return stat.S_IMODE(path.stat().st_mode)
 
 
+POSIX_MODES = pytest.mark.skipif(
+    sys.platform == "win32",
+    reason="POSIX file modes: Windows has none; the README says what owner-only means there",
+)
+
+
 def test_record_file_is_owner_only_and_holds_every_frame(tmp_path: Path) -> None:
     record = tmp_path / "frames.jsonl"
     old_umask = os.umask(0o022)
@@ -34,8 +40,9 @@ def test_record_file_is_owner_only_and_holds_every_frame(tmp_path: Path) -> None
     finally:
         os.umask(old_umask)
     assert result.returncode == 1
-    assert mode(record) == 0o600
-    frames = [json.loads(line) for line in record.read_text().splitlines()]
+    if sys.platform != "win32":  # POSIX modes; Windows has none (see the README)
+        assert mode(record) == 0o600
+    frames = [json.loads(line) for line in record.read_text(encoding="utf-8").splitlines()]
     assert [(f["dir"], f["text"]) for f in frames] == [
         ("tx", "GET:RC8:1:I:"),
         ("rx", "0,3,1"),
@@ -46,10 +53,18 @@ def test_record_file_is_owner_only_and_holds_every_frame(tmp_path: Path) -> None
     assert "rtt_ms" in frames[1] and "rtt_ms" not in frames[0]
 
 
+@POSIX_MODES
 def test_history_file_is_owner_only(tmp_path: Path) -> None:
     path = tmp_path / "state" / "history"
     History(path).append("put I 1 5")
     assert mode(path) == 0o600
+
+
+def test_history_file_is_made_in_a_new_folder_on_every_system(tmp_path: Path) -> None:
+    """The counterpart where modes mean nothing: the file and its folder are made."""
+    path = tmp_path / "state" / "deeper" / "history"
+    History(path).append("put I 1 5")
+    assert path.read_text(encoding="utf-8").splitlines() == ["put I 1 5"]
 
 
 @pytest.mark.parametrize(

@@ -11,7 +11,7 @@ from rac_console.protocol.hresult import E_INVALIDARG
 from rac_console.sim.controller import SimulatedController
 from rac_console.sim.server import SimulatorServer
 
-DEADLINE = 3.0
+DEADLINE = 10.0  # a wait this long means hung: never a figure a test checks
 
 
 class Line:

@@ -9,10 +9,13 @@ from __future__ import annotations
 import time
 from dataclasses import replace
 from pathlib import Path
+from typing import Any
 
 import pytest
 from tui_helpers import make_app, type_line, until
 
+import rac_console.tui.app as app_module
+from rac_console.commands.completion import hint
 from rac_console.engine import Cycle
 from rac_console.protocol import kind_of
 from rac_console.session import Frame
@@ -53,8 +56,9 @@ async def watch_then_pause(pilot, lines: tuple[str, ...], rows: int) -> None:
     await until(pilot, lambda: app.status is not None and app.status.paused, "the pause")
 
 
-def stage(app: RacConsoleApp) -> None:
-    """Fix what moves with the clock: ages, the round trip, one row timed out."""
+def stage(app: RacConsoleApp) -> float:
+    """Fix what moves with the clock: ages, the round trip, one row timed out. Returns
+    the moment the ages count from (see :func:`hold_still`)."""
     now = time.monotonic()
     for n, (var, view) in enumerate(list(app.rows.items())):
         view = replace(view, changed_at=now - 5.5)
@@ -74,36 +78,67 @@ def stage(app: RacConsoleApp) -> None:
     target = app.status.target_id  # the cycles of the target on screen
     for n in range(20):
         app.take_cycle(Cycle(1_700_000_000 + n / 2, 1000 + n / 2, samples, target))
+    return now
 
 
-def test_main_screen(snap_compare, tmp_path: Path, utc: None) -> None:
+class HeldClock:
+    """``time`` as the console's app module sees it, with ``monotonic()`` held at one
+    moment (the rest is the real module)."""
+
+    def __init__(self, now: float) -> None:
+        self.now = now
+
+    def monotonic(self) -> float:
+        return self.now
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(time, name)
+
+
+def hold_still(
+    app: RacConsoleApp, monkeypatch: pytest.MonkeyPatch, now: float, frames_per_second: float
+) -> None:
+    """After :func:`stage`, until the screenshot: the table's clock held at ``now`` (the
+    ages stay what stage() made them, "5s", however long the screenshot takes to come),
+    and the log's rate staged (it counts the staged frames over however many refresh
+    ticks the machine managed meanwhile: 3 or 4 frames/s as the load has it)."""
+    monkeypatch.setattr(app_module, "time", HeldClock(now))
+    monkeypatch.setattr(app, "frames_per_second", lambda: frames_per_second)
+
+
+def test_main_screen(
+    snap_compare, tmp_path: Path, utc: None, monkeypatch: pytest.MonkeyPatch
+) -> None:
     app = make_app(tmp_path)
 
     async def run_before(pilot) -> None:
         lines = ("watch P 1 pick", "watch J 1 home", "watch I 4 parts", "watch IO 128-131")
         await watch_then_pause(pilot, (*lines, "watch S 1"), rows=8)
-        # No frames/s figure (it depends on timing): wait for the rate to fall to 0.
+        # No polled frames still to come into the log before it is staged.
         await until(pilot, lambda: app.frames_per_second() == 0, "no frames flowing")
-        stage(app)
+        hold_still(app, monkeypatch, stage(app), frames_per_second=4)
         app.flush_log()
         app.refresh_table()
-        await pilot.pause(0.1)
+        await pilot.pause()
 
     assert snap_compare(app, terminal_size=(120, 34), run_before=run_before)
 
 
-def test_main_screen_small_terminal(snap_compare, tmp_path: Path, utc: None) -> None:
+def test_main_screen_small_terminal(
+    snap_compare, tmp_path: Path, utc: None, monkeypatch: pytest.MonkeyPatch
+) -> None:
     app = make_app(tmp_path, read_only=True)
 
     async def run_before(pilot) -> None:
         await watch_then_pause(pilot, ("watch IO 128-131",), rows=4)
         await type_line(pilot, "put I 1 5")
         await until(pilot, lambda: app.frames_per_second() == 0, "no frames flowing")
-        stage(app)
+        hold_still(app, monkeypatch, stage(app), frames_per_second=0)
         app.flush_log()
         app.refresh_table()
         await type_line(pilot, "put P 10 ", enter=False)
-        await pilot.pause(0.2)
+        shown = "put P 10 " + hint("put P 10 ")  # the grey argument hint
+        await until(pilot, lambda: app.command_line._suggestion == shown, "the argument hint")
 
     assert snap_compare(app, terminal_size=(80, 24), run_before=run_before)
 

@@ -87,3 +87,18 @@ def test_trend_view_small_terminal(snap_compare, tmp_path: Path) -> None:
         await pilot.pause(0.1)
 
     assert snap_compare(app, terminal_size=(80, 24), run_before=run_before)
+
+
+@pytest.mark.usefixtures("utc")
+def test_row_detail_small_terminal(snap_compare, tmp_path: Path) -> None:
+    """``d`` on P1 at 80x24: the row the table cuts after Y, a field a line."""
+    app = make_app(tmp_path)
+
+    async def run_before(pilot) -> None:
+        await staged(pilot)
+        await pilot.press("f6", "d")
+        await until(pilot, lambda: "Fig" in app.row_detail.shown_text, "the detail")
+        hold_ages(app)
+        await pilot.pause(0.1)
+
+    assert snap_compare(app, terminal_size=(80, 24), run_before=run_before)

@@ -31,6 +31,13 @@ pytestmark = pytest.mark.slow
 
 SECONDS = float(os.environ.get("RAC_SOAK_SECONDS", "15"))
 VARIABLES = 100
+#: At least this many polls make a soak: it runs SECONDS, and on past them (up to
+#: DEADLINE more) until it has them, so a busy machine makes it longer, not a failure.
+ENOUGH_POLLS = 4 * VARIABLES + 1
+#: With no poll for this long polling has stopped (the backoff between tries is at most
+#: MAX_DELAY, its bound checked in test_reconnect_backoff; the rest is a busy machine).
+STOPPED = MAX_DELAY + 15
+DEADLINE = 120.0
 FAULTS = FaultSettings(
     jitter_ms=1,
     drop_every=97,
@@ -88,17 +95,17 @@ async def soak(record: Path) -> dict:
             polls += drain()
         early = own_memory(tracemalloc.take_snapshot())
         last_poll = time.monotonic()
-        while time.monotonic() - started < SECONDS:
+        while time.monotonic() - started < SECONDS or polls < ENOUGH_POLLS:
+            assert time.monotonic() - started < SECONDS + DEADLINE, f"only {polls} polls"
             await asyncio.sleep(0.25)
             new_polls = drain()
             if new_polls:
                 last_poll = time.monotonic()
-            # The longest quiet stretch is a backoff (5 s at most) after a timeout.
-            assert time.monotonic() - last_poll < MAX_DELAY + 2, "polling stopped"
+            assert time.monotonic() - last_poll < STOPPED, "polling stopped"
             polls += new_polls
         late = own_memory(tracemalloc.take_snapshot())
         engine.submit("pause")
-        deadline = time.monotonic() + 5
+        deadline = time.monotonic() + 20
         while "pause" not in answered:
             assert time.monotonic() < deadline, "the pause was not answered"
             await asyncio.sleep(0.05)
@@ -126,7 +133,6 @@ def test_soak(tmp_path: Path) -> None:
     frames = [json.loads(line) for line in record.read_text().splitlines()]
     transcript = [entry for entry in result["transcript"] if not entry[1].startswith(b"SIM:")]
 
-    assert result["polls"] > 4 * VARIABLES
     assert result["alerts"] == []  # the engine never stopped on an internal error
     growth = result["late"] - result["early"]
     assert growth < max(2_000_000, 0.2 * result["early"]), f"memory grew by {growth} bytes"

@@ -170,23 +170,27 @@ def run(coro: Awaitable[Any]) -> Any:
 
 def test_many_gets_with_a_stray_after_every_reply_never_return_the_stray() -> None:
     """300 GETs; after each reply the peer sends a stray line in its own sendall: right
-    away after odd requests (it may come with the reply or wait), only once the session
-    has its reply after even ones (so it surely waits). The test waits until the stray
-    was sent and, unless the session already read it, waits in the receive buffer. No
-    answer may be the stray."""
+    away after odd requests (it may come with the reply or wait: whichever the scheduler
+    makes of it, no assertion counts it), only once the session has its reply after even
+    ones (so it surely waits). The test waits until the stray was sent and, unless the
+    session already read it, waits in the receive buffer. No answer may be the stray.
+
+    How often an ungated stray comes with its reply is a figure of the machine, not a
+    behaviour: ``benchmarks/stray_lines.py`` prints it (the ``gap 0`` mode)."""
     count = 300
 
     with HostilePeer(STRAY, gate_every=2) as peer:
         session = Session(HOST, peer.port, timeout=DEADLINE)
         frames = frames_of(session)
         wrong: list[tuple[int, object]] = []
-        waiting = refused = 0
+        refused: list[int] = []  # requests whose stray came in the reply's own read
+        waited: list[int] = []  # requests whose stray waited in the buffer for the next get
         for n in range(1, count + 1):
             index = n % 100
             try:
                 reply = session.get(INT, index)
             except BadReply:  # the stray came in the reply's read: neither line is taken
-                refused += 1
+                refused.append(n)
             else:
                 value = reply.response.variant.value if reply.response.variant else None
                 if not reply.response.ok or value != value_of(index):
@@ -196,12 +200,17 @@ def test_many_gets_with_a_stray_after_every_reply_never_return_the_stray() -> No
             peer.wait_done(n)  # the stray is sent, or came with the reply
             if session.state == "connected":  # not read yet: it must wait in the buffer
                 assert session.has_unread(DEADLINE)
-                waiting += 1
+                waited.append(n)
         session.close()
         unsolicited = sum(f.unsolicited for f in frames)
     assert wrong == [], f"{len(wrong)} answers were not the reply to their request: {wrong[:5]}"
-    assert refused < count // 2  # most strays come on their own, after the reply was taken
-    assert waiting >= count // 2  # at least every gated stray waited when a get was made
+    gated = range(2, count + 1, 2)
+    # A stray sent only once the reply was read can never come with it ...
+    assert not [n for n in refused if n in gated], refused
+    # ... so every gated stray waited in the buffer when the next get was made.
+    assert [n for n in gated if n not in waited] == []
+    # Each ungated one went one way or the other, never both, never neither.
+    assert sorted(refused + [n for n in waited if n not in gated]) == list(range(1, count, 2))
     assert unsolicited >= count - 1  # every stray but the last is logged
     assert peer.connections >= count
 
@@ -494,68 +503,61 @@ def test_extra_gap_command_line_option(capsys: pytest.CaptureFixture[str]) -> No
         assert "extra_gap_ms" in err and "Traceback" not in err
 
 
-class LateStrayPeer:
-    """Answers each GET with its index at once, and 1 ms later sends a stray line in a
-    write of its own (a timer: it goes on answering meanwhile)."""
-
-    def __init__(self) -> None:
-        self._server = socket.create_server(("127.0.0.1", 0))
-        self.port = self._server.getsockname()[1]
-        self._thread = threading.Thread(target=self._serve, daemon=True)
-        self._thread.start()
-
-    def _serve(self) -> None:
-        while True:
-            try:
-                conn, _ = self._server.accept()
-            except OSError:
-                return
-            threading.Thread(target=self._answer, args=(conn,), daemon=True).start()
-
-    def _answer(self, conn: socket.socket) -> None:
-        buffer = b""
-        with conn:
-            try:
-                while data := conn.recv(4096):
-                    buffer += data
-                    while b"\r" in buffer:
-                        line, _, buffer = buffer.partition(b"\r")
-                        conn.sendall(b"0,3," + line.split(b":")[2] + b"\r")
-                        threading.Timer(0.001, self._stray, (conn,)).start()
-            except OSError:
-                return
-
-    @staticmethod
-    def _stray(conn: socket.socket) -> None:
-        with contextlib.suppress(OSError):
-            conn.sendall(b"0,3,999999\r")
-
-    def close(self) -> None:
-        self._server.close()
-
-
-def test_a_peer_that_sends_late_strays_is_given_time_to_finish() -> None:
+def test_a_peer_that_sends_late_strays_is_given_time_to_finish(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
     """Once a peer has sent a line nobody asked for, the session waits after each reply
-    for it to finish (longer each time it does it again): a stray 1 ms after each reply
-    is caught before the next request instead of being taken for its answer."""
-    peer = LateStrayPeer()
-    session = Session(HOST, peer.port, timeout=DEADLINE)
-    frames = frames_of(session)
-    wrong = []
-    try:
-        for n in range(200):
-            try:
-                reply = session.get(INT, n % 100)
-            except BadReply:  # a stray in the reply's own read: neither line taken
-                continue
-            assert reply.response.variant is not None
-            if reply.response.variant.value != n % 100:
-                wrong.append(n)
-    finally:
+    for it to finish (longer each time it does it again, up to MAX_SETTLE) before the
+    next request goes out: a stray that comes during that wait is caught before the
+    next request instead of being taken for its answer.
+
+    The test decides when the peer writes: each stray goes out only once the session has
+    begun that wait (the peer is gated, and the wait releases it), never at a time the
+    scheduler picks. SETTLE is stretched to the test's deadline, so the stray's arrival,
+    not a 2 ms clock, ends each wait; the doubling is checked on the session's own
+    figure. (How late a stray may come and still be caught at the real 2..50 ms is a
+    figure of the machine: ``benchmarks/stray_lines.py``, the ``5 ms later`` mode.)"""
+    settle, most = DEADLINE, 4 * DEADLINE
+    monkeypatch.setattr(blocking, "SETTLE", settle)
+    monkeypatch.setattr(blocking, "MAX_SETTLE", most)
+    count = 12
+    with HostilePeer(STRAY, gate_every=1) as peer:
+        session = Session(HOST, peer.port, timeout=DEADLINE)
+        frames = frames_of(session)
+        real_wait = session.has_unread
+        strays_sent = 0
+        waits: list[tuple[float, float, bool]] = []  # (settle in force, asked, landed)
+
+        def settling(timeout: float = 0.0) -> bool:
+            """The session's wait before a request: now the peer sends its stray."""
+            nonlocal strays_sent
+            in_force = session._settle
+            strays_sent += 1
+            peer.release()
+            peer.wait_done(strays_sent)  # the stray of the last reply was sent, just now
+            landed = real_wait(timeout)
+            waits.append((in_force, timeout, landed))
+            return landed
+
+        answers = [session.get(INT, 1)]
+        # The first stray: the session has no reason to wait yet; it waits in the buffer
+        # and the next request's check finds it (as in the tests above).
+        strays_sent += 1
+        peer.release()
+        peer.wait_done(strays_sent)
+        assert session.has_unread(DEADLINE)
+        session.has_unread = settling  # type: ignore[method-assign]
+        answers += [session.get(INT, index) for index in range(2, count + 1)]
         session.close()
-        peer.close()
-    # The first stray can shift a few answers by one before it shows (no request ids);
-    # from then on each stray lands in the wait, not in an answer (before: 70-80 of 200).
-    assert len(wrong) <= 10, wrong
-    assert not [n for n in wrong if n >= 50], wrong
-    assert sum(1 for f in frames if f.unsolicited) >= 150  # the strays, logged as such
+    values = [a.response.variant.value if a.response.variant else None for a in answers]
+    assert values == [value_of(index) for index in range(1, count + 1)]
+    # Every request after the first stray waited, and each stray came within its wait.
+    assert [landed for _, _, landed in waits] == [True] * (count - 2)
+    assert all(0 < asked <= in_force for in_force, asked, _ in waits), waits
+    # Longer each time the peer does it again, up to MAX_SETTLE.
+    assert [in_force for in_force, _, _ in waits] == [
+        min(settle * 2**n, most) for n in range(count - 2)
+    ]
+    unsolicited = [f for f in frames if f.unsolicited]
+    assert [f.data for f in unsolicited] == [STRAY] * (count - 1)  # all but the last
+    assert peer.connections == count  # each stray cost its connection, and only that

@@ -126,12 +126,16 @@ def test_ctrl_c_while_a_command_waits_cancels_it_and_keeps_the_repl() -> None:
     pty = pytest.importorskip("pty")  # a real terminal, so Ctrl-C is a signal
     import os
     import select
+    import signal
     import sys
     import time
 
     silent = RecordingServer(lambda line: None)
     pid, fd = pty.fork()
     if pid == 0:  # the child: the REPL on a terminal, talking to a silent controller
+        # Ctrl-C back to its default: run with SIGINT ignored (a background job, nohup),
+        # the REPL would inherit that and never see the Ctrl-C below.
+        signal.signal(signal.SIGINT, signal.SIG_DFL)
         os.execvp(
             sys.executable,
             [

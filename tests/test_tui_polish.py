@@ -183,7 +183,7 @@ async def footer_fits(pilot: Pilot, where: str) -> None:
         return bool(keys) and re.fullmatch(expected, line) is not None
 
     try:
-        await until(pilot, drawn, f"the footer fitting ({where})", timeout=2.0)
+        await until(pilot, drawn, f"the footer fitting ({where})")
     except AssertionError:
         raise AssertionError(f"{where}: {footer_line(app)!r} vs {shown_keys(app)}") from None
 

@@ -139,7 +139,7 @@ async def test_space_in_a_read_only_console_is_refused_and_nothing_is_sent(
         tap = FrameTap(tmp_path)
         await watch(pilot, "watch IO 128", 1)
         await pilot.press("f6", "space")
-        await until(pilot, lambda: "PUT refused" in results_text(app), "the refusal")
+        await until(pilot, lambda: "PUT IO128 refused" in results_text(app), "the refusal")
         assert puts(tap) == []
         assert not app.toggles.busy(next(iter(app.rows)))  # free again: it never went out
 

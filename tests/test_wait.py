@@ -257,36 +257,85 @@ def test_a_condition_reaches_the_terminal_escaped() -> None:
     assert "\\x1b[31mRED\\x07" in shown
 
 
-def test_no_poll_that_could_outlast_the_deadline_starts_during_a_wait() -> None:
+def test_no_poll_that_could_outlast_the_deadline_starts_during_a_wait(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
     """A slow watched row can take up to a timeout per poll: a wait must not start one
-    that could end after its deadline (it would end late, saying "not met within ...")."""
+    that could end after its deadline (it would end late, saying "not met within ...").
+
+    Checked on the engine's own choice, not on frame stamps against a margin: each poll
+    step begun during the wait is noted with the engine's clock reading it was chosen on
+    (the last ``perf_counter()`` the engine's thread read) and the wait's deadline."""
+    import threading
     import time
 
     from servers import RecordingServer
+
+    import rac_console.engine.engine as engine_module
+
+    class Clock:
+        """``time`` for the engine module: the real one, noting each thread's last
+        ``perf_counter()``."""
+
+        def __init__(self) -> None:
+            self.last: dict[int, float] = {}
+
+        def perf_counter(self) -> float:
+            now = time.perf_counter()
+            self.last[threading.get_ident()] = now
+            return now
+
+        def __getattr__(self, name: str) -> object:
+            return getattr(time, name)
 
     def reply(line: bytes) -> bytes | None:
         if line.startswith(b"GET:RC8:5:I:"):
             time.sleep(0.3)  # the controller's slow answer, within the timeout
         return b"0,3,1\r"
 
+    clock = Clock()
     server = RecordingServer(reply)
     timeout, within = 0.4, 2.0
     engine = Engine("127.0.0.1", server.port, interval=0.05, timeout=timeout)
+    deadlines: list[float] = []  # the deadline of the wait in progress, while it polls
+    steps: list[tuple[float, float]] = []  # (the clock a poll step was chosen on, deadline)
+    real_poll_until, real_poll_once = engine.poll_until, engine._poll_once
+
+    def poll_until(until: float, deadline: float) -> None:
+        deadlines.append(deadline)
+        try:
+            real_poll_until(until, deadline)
+        finally:
+            deadlines.pop()
+
+    def poll_once() -> None:
+        if deadlines:
+            steps.append((clock.last[threading.get_ident()], deadlines[-1]))
+        real_poll_once()
+
+    engine.poll_until = poll_until  # type: ignore[method-assign]
+    engine._poll_once = poll_once  # type: ignore[method-assign]
+    monkeypatch.setattr(engine_module, "time", clock)
     engine.start()
     front = Front(engine)
     try:
         front.run("watch I 5")
         front.until(lambda: b"GET:RC8:5:I:\r" in front.sent(), "the silent row's first poll")
+        asked = time.perf_counter()
         outcome = run_outcome(front, f"wait I 1 >= 100 within {within}")
+        answered = time.perf_counter()
         assert outcome.waited is not None and not outcome.waited.met
         tx = [f for f in front.frames if f.direction == "tx"]
         reads = [f for f in tx if f.data == b"GET:RC8:1:I:\r"]
         assert len(reads) == outcome.waited.reads
-        deadline = reads[0].time + within
         polls = [f for f in tx if f.poll and reads[0].time < f.time < reads[-1].time]
         assert polls, "the watched row is polled during the wait"
-        assert all(f.time + timeout <= deadline + 0.05 for f in polls), [
-            round(deadline - f.time, 3) for f in polls
+        assert steps, "the engine took poll steps during the wait"
+        # The deadline the engine kept is the wait's: set while the wait was handled.
+        assert all(asked + within <= deadline <= answered + within for _, deadline in steps)
+        # No step began that a whole timeout could carry past that deadline.
+        assert all(deadline - chosen > timeout for chosen, deadline in steps), [
+            round(deadline - chosen, 3) for chosen, deadline in steps
         ]
     finally:
         engine.stop()

@@ -21,8 +21,9 @@ if TYPE_CHECKING:
 DESCRIPTION = "A console for DENSO RC8 controllers speaking RAC (TCP port 5006)."
 EPILOG = """\
 Without -H every command talks to a built-in RC8 simulator. -H NAME uses the
-[target.NAME] profile of config.toml in your config directory (RAC_CONSOLE_CONFIG
-names another file): its address, label, colour and write rules.
+[target.NAME] profile of config.toml in your config directory (rac-console paths
+says where; RAC_CONSOLE_CONFIG names another file): its address, label, colour
+and write rules.
 Options may also come after the command, even after a value. A value that starts
 with - and is not a number goes after --, where every word is the value:
   rac-console put S 10 -- -text
@@ -402,6 +403,11 @@ def build_cli() -> CliParser:
         "the round trip, a second session (GETs only; exit 3 at a connection failure)",
         epilog=CHECK_EPILOG,
     )
+    commands.add_parser(
+        "paths",
+        help="where the config file and the history are on this machine",
+        description="Where the config file and the history are on this machine.",
+    )
     watch, _ = command("watch", WATCH_HELP, usage="%(prog)s [options] VAR...")
     _watch_options(watch)
     repl, _ = command("repl", "a line-oriented console for plain terminals, ssh and serial")
@@ -578,6 +584,10 @@ def _dispatch(args: argparse.Namespace) -> int:
     if (why := refusal(args)) is not None:  # an option given where it means nothing
         print(f"rac-console: {why}", file=sys.stderr)
         return 2
+    if args.command == "paths":
+        from .paths import paths
+
+        return paths()
     if args.command != "sim":
         from .target import settle_target
 
@@ -707,6 +717,9 @@ def parse_args(words: Sequence[str]) -> argparse.Namespace:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
+    from ..present.glyphs import make_streams_safe
+
+    make_streams_safe()  # a Windows pipe (cp1252) must never fail after a PUT went out
     args = parse_args(sys.argv[1:] if argv is None else list(argv))
     try:
         return int(_dispatch(args))

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import io
 import itertools
 import json
 import sys
@@ -85,9 +86,17 @@ def _script_lines(source: str) -> Iterator[str]:
     """Lines of FILE, or of stdin read as they come (``run`` is sequential, so a
     blocking read holds nothing up, and Ctrl-C ends it at once)."""
     if source == "-":
-        yield from iter(sys.stdin.readline, "")
+        # UTF-8 (a BOM allowed) from a pipe too, as from a file: not the console's code
+        # page, which garbles a UTF-8 script on Windows (cp1252).
+        buffer = getattr(sys.stdin, "buffer", None)
+        stream = (
+            io.TextIOWrapper(buffer, encoding="utf-8-sig", errors="surrogateescape")
+            if buffer is not None
+            else sys.stdin
+        )
+        yield from iter(stream.readline, "")
         return
-    with open(source, encoding="utf-8", errors="surrogateescape") as handle:
+    with open(source, encoding="utf-8-sig", errors="surrogateescape") as handle:
         yield from handle
 
 

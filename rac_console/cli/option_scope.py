@@ -8,11 +8,6 @@ from __future__ import annotations
 import argparse
 import sys
 
-#: The one-shot commands that print JSON with --json.
-_JSON = ("get", "put", "send", "run", "watch", "latency", "check")
-#: The commands that write, where --yes and --no-verify mean something.
-_WRITERS = ("put", "send", "run", None, "repl")
-
 #: Interval words: the top-level --interval, taken over by each command's own option.
 _INTERVAL_OF = {"get": "repeat_interval", "latency": "latency_interval", "watch": "every"}
 
@@ -25,8 +20,8 @@ def refusal(args: argparse.Namespace) -> str | None:
     """Why an option given cannot be used with ``args.command``; None when every option
     given means something there. Moves a top-level ``--interval`` to the command's own."""
     command: str | None = args.command
-    if command == "sim":
-        return _before_sim(args)
+    if command in ("sim", "paths"):
+        return _before_own(args, command)
     if getattr(args, "watch", None) is not None and command not in (None, "repl"):
         return (
             f"--watch loads a watch list at start: the console and the REPL take it, not "
@@ -48,25 +43,19 @@ def refusal(args: argparse.Namespace) -> str | None:
         if getattr(args, own, None) is not None:
             return f"the interval is given twice (--interval before {command}, and after it)"
         setattr(args, own, interval)
-    if args.json and (command is None or (command == "repl" and sys.stdin.isatty())):
+    interactive = sys.stdin.isatty() and sys.stdout.isatty()  # else: "needs a terminal"
+    if args.json and command in (None, "repl") and interactive:
         return (
             "--json prints results for scripts: get, put, send, run, watch, latency and "
             f"check take it (or rac-console repl fed from a pipe), not {_name(command)}"
         )
-    if args.yes and command not in ("put", "send", "run"):
+    if args.yes and command in (None, "repl") and interactive:
         return (
-            "--yes says yes ahead to a confirm target's question: put, send and run take it; "
-            + (
-                "the console and the REPL ask"
-                if command in (None, "repl")
-                else f"{command} writes nothing"
-            )
+            "--yes says yes ahead for scripts (put, send and run); the console and the REPL "
+            "ask before every write to a confirm target"
         )
-    if not args.verify and command not in _WRITERS:
-        return (
-            "--no-verify sends a PUT without reading it before and after: put, send, run, "
-            f"the console and the REPL take it; {command} writes nothing"
-        )
+    # --yes and --no-verify on a command that writes nothing change nothing, as they say:
+    # kept, so an alias of global options (rac='rac-console -H cell3 --yes') works for all.
     return None
 
 
@@ -88,11 +77,14 @@ _TOP_DEFAULTS = {
 }
 
 
-def _before_sim(args: argparse.Namespace) -> str | None:
+def _before_own(args: argparse.Namespace, command: str) -> str | None:
     given = [
         name for name, default in _TOP_DEFAULTS.items() if getattr(args, name, default) != default
     ]
     if not given:
         return None
     shown = ", ".join("--" + name.replace("_", "-") for name in given)
-    return f"sim takes its own options ({shown} given before it): see rac-console sim --help"
+    return (
+        f"{command} takes its own options ({shown} given before it): "
+        f"see rac-console {command} --help"
+    )

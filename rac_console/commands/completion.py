@@ -100,6 +100,22 @@ def complete(
     return []
 
 
+#: A candidate list this long or shorter is listed whole (the 9 types, the 7 conditions
+#: of a ``wait`` on a number): a cut short list hides the very choice asked for. A longer
+#: one (the 19 commands) is cut: it would push the rest of the screen away.
+WHOLE_LIST = 12
+
+
+def shown_candidates(candidates: list[Candidate]) -> tuple[list[Candidate], int]:
+    """The candidates to list, and how many are left out: a list of up to
+    :data:`WHOLE_LIST` whole; a longer one its first ``WHOLE_LIST - 1``, so the list
+    with its "… and N more" line still takes ``WHOLE_LIST`` lines."""
+    if len(candidates) <= WHOLE_LIST:
+        return candidates, 0
+    shown = candidates[: WHOLE_LIST - 1]
+    return shown, len(candidates) - len(shown)
+
+
 def hint(text: str) -> str:
     """Grey text showing what the command still needs, redis-cli style; '' if nothing."""
     if not text or is_raw_line(text):

@@ -14,11 +14,13 @@ from dataclasses import dataclass
 from enum import Enum
 
 from ..protocol import InputError
+from ..protocol.text import close_match
 from .conditions import parse_log, parse_wait
 from .language import (
     Command,
     Simple,
     Step,
+    frame_file_parser,
     is_raw_line,
     parse_connect,
     parse_exchange,
@@ -192,6 +194,25 @@ COMMANDS: dict[str, CommandSpec] = {
                 "says where the log goes",
             ),
         ),
+        CommandSpec(
+            "record",
+            "FILE | stop",
+            "append every frame to FILE as JSON lines from now on (as --record)",
+            frame_file_parser("record"),
+            "record cell3.jsonl",
+            notes=(
+                "record stop ends it; record alone says where frames go; "
+                "rac-console sim --replay FILE serves what was recorded",
+            ),
+        ),
+        CommandSpec(
+            "transcript",
+            "FILE | stop",
+            "append every frame to FILE as a plain timestamped transcript (as --log)",
+            frame_file_parser("transcript"),
+            "transcript cell3.log",
+            notes=("transcript stop ends it; transcript alone says where it goes",),
+        ),
         CommandSpec("clear", "", "clear the frame log", _no_argument(Step.CLEAR)),
         CommandSpec(
             "help",
@@ -218,8 +239,10 @@ def parse_command(line: str) -> Command | None:
     word, rest = split_word(line.rstrip("\r\n"))
     spec = COMMANDS.get(word)
     if spec is None:
+        meant = close_match(word, COMMANDS)
+        guess = f"did you mean {meant}? " if meant is not None else ""
         raise InputError(
-            f"unknown command {word!r}: type help for the list, "
+            f"unknown command {word!r}: {guess}type help for the list, "
             "or start a raw line with GET: or PUT:"
         )
     return spec.parse(rest)

@@ -107,6 +107,7 @@ class Engine:
         self.host: str | None = None
         self.port = port
         self.connection: str = "closed"
+        self.ever_connected = False  # on this target: "not connected yet" until it has
         self.retry_at: float | None = None
         self.cycle_seconds: float | None = None
         self.polls_per_second: float | None = None
@@ -121,7 +122,6 @@ class Engine:
             self.csv.wait_for_rows(log_csv)
         self._lost = False
         self._early_drop = False
-        self.ever_connected = False  # on this target: "not connected yet" until it has
         self._cycle: deque[WatchRow] = deque()  # rows still to poll in this cycle
         self._cycle_started = 0.0  # perf_counter()
         self._cycle_count = 0

@@ -61,7 +61,7 @@ def handle(engine: Engine, seq: int, what: str | Command) -> None:
         command = parse_command(what) if isinstance(what, str) else what
         feedback: list[Feedback]
         if seq <= engine.skip_through:
-            feedback = [Message("not run: cancelled (Esc) before it started", "error")]
+            feedback = [Message("not run: cancelled (Esc, Ctrl+C) before it started", "error")]
         else:
             feedback = run(engine, command, line) if command is not None else []
     except InputError as exc:

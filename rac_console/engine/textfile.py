@@ -29,9 +29,33 @@ def read_text_file(
             data = handle.read(MAX_FILE_BYTES + 1)
         if len(data) > MAX_FILE_BYTES:
             raise InputError(f"{shown} is larger than {MAX_FILE_BYTES // 1024} KiB: not {what}")
-        text = data.decode("utf-8")
+        text = _decoded(data)
         return text if keep_bom else text.removeprefix(BOM)
     except (OSError, RuntimeError) as exc:
         raise InputError(f"cannot read {shown}: {getattr(exc, 'strerror', None) or exc}") from None
     except UnicodeDecodeError:
-        raise InputError(f"{shown} is not a UTF-8 text file") from None
+        raise InputError(f"{shown} {_looks_like(data)}") from None
+
+
+#: How to save a file as UTF-8, said with a refusal.
+SAVE_AS_UTF8 = (
+    "save it as UTF-8 (Notepad: Save as, Encoding UTF-8; PowerShell: Set-Content -Encoding utf8)"
+)
+
+
+def _decoded(data: bytes) -> str:
+    """UTF-8, or UTF-16 with its byte order mark (what PowerShell 5's ``>`` writes); the
+    text keeps a leading BOM either way (a writer puts it back, as UTF-8)."""
+    if data.startswith((b"\xff\xfe", b"\xfe\xff")):
+        return BOM + data.decode("utf-16")  # the codec takes the mark: put back as one
+    return data.decode("utf-8")
+
+
+def _looks_like(data: bytes) -> str:
+    """Why a file is not UTF-8, in words: what it looks like, and how to fix it."""
+    if b"\x00" in data[:256]:
+        return (
+            "is not a UTF-8 text file: it looks like UTF-16 without a byte order mark; "
+            + SAVE_AS_UTF8
+        )
+    return f"is not a UTF-8 text file: it looks like ANSI (Windows-1252) text; {SAVE_AS_UTF8}"

@@ -37,6 +37,9 @@ class HelpSection:
 
 KeyGroup = tuple[str, Sequence[tuple[str, str]]]  # ("watch table", [("Space", "Toggle"), ...])
 
+#: The help's line for Tab and Shift+Tab in a pane (one line for both: the same text).
+PANE_KEYS = "Next or previous pane"
+
 #: Key names as printed on the keyboard.
 _KEY_NAMES = {
     "escape": "Esc",

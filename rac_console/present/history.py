@@ -7,6 +7,11 @@ first. Consecutive duplicates are not stored; the file is trimmed to the newest
 Several consoles may share the file: each appends, and a trim keeps the newest
 lines *of the file* (not of one console's memory), under a lock that appends take
 too, so no console's entries are lost and none is written to a file being replaced.
+
+A front end enters a line when it is typed (Up recalls it at once) and settles it
+when its result comes: a line refused before anything was sent (a mistyped command,
+bad syntax, a write the target's rules refuse) stays for Up in this session, to be
+fixed, but is never suggested and never written, so no later session offers it.
 """
 
 from __future__ import annotations
@@ -17,6 +22,8 @@ import time
 from collections.abc import Iterator
 from pathlib import Path
 
+from ..commands.outcome import ExitStatus, Outcome
+from ..engine.events import Message, Result
 from ..engine.recorder import open_private
 
 DEFAULT_LIMIT = 1000
@@ -34,6 +41,9 @@ class History:
         self.limit = limit
         lines = self._read()
         self.entries: list[str] = lines[-limit:]
+        self._pending: list[str] = []  # entered, result not known yet: not on file yet
+        self._refused: set[str] = set()  # refused in this session: never suggested
+        self._written = lines[-1] if lines else None  # no line is written twice in a row
         # A file left long by an earlier run is trimmed at this run's first append.
         self._appends = limit if len(lines) >= 2 * limit else 0
         with contextlib.suppress(OSError):  # an older file may be readable by others
@@ -48,12 +58,49 @@ class History:
         return [line for line in text.split("\n") if line.strip()]
 
     def append(self, line: str) -> None:
-        """Remember a command; blank lines and repeats of the last one are skipped."""
-        line = line.replace("\r", " ").replace("\n", " ")
-        if not line.strip() or (self.entries and self.entries[-1] == line):
+        """Remember a command now, recalled, suggested and written; blank lines and
+        repeats of the last one are skipped."""
+        self.enter(line)
+        self.settle(line, refused=False)
+
+    def enter(self, line: str) -> None:
+        """A line typed, its result not known yet: Up recalls it at once; it is
+        written (and suggested) when :meth:`settle` says it was not refused."""
+        line = _one_line(line)
+        if not line.strip():
             return
-        self.entries.append(line)
-        del self.entries[: -self.limit]
+        if not (self.entries and self.entries[-1] == line):
+            self.entries.append(line)
+            del self.entries[: -self.limit]
+        self._pending.append(line)
+
+    def settle(self, line: str, *, refused: bool) -> None:
+        """The result of an entered line came (lines settle in the order entered): a
+        refused one is kept from suggestions and from the file; any other is written.
+        A line never entered (made by a key on a row) settles nothing."""
+        line = _one_line(line)
+        if line not in self._pending:
+            return
+        self._pending.remove(line)
+        if refused:
+            self._refused.add(line)
+            return
+        self._refused.discard(line)  # refused on one target, run on the next
+        if line != self._written:
+            self._written = line
+            self._write(line)
+
+    def suggest(self, text: str) -> str | None:
+        """The newest line that starts with ``text`` and is longer (the grey text of
+        both front ends), never a line refused in this session."""
+        if not text.strip():
+            return None
+        for entry in reversed(self.entries):
+            if entry.startswith(text) and entry != text and entry not in self._refused:
+                return entry
+        return None
+
+    def _write(self, line: str) -> None:
         try:
             self.path.parent.mkdir(parents=True, exist_ok=True)
             with _locked(self.path):
@@ -75,6 +122,23 @@ class History:
         with open_private(str(temporary), "w") as handle:
             handle.write("".join(entry + "\n" for entry in lines[-self.limit :]))
         os.replace(temporary, self.path)
+
+
+def _one_line(line: str) -> str:
+    """A history entry is one line of the file."""
+    return line.replace("\r", " ").replace("\n", " ")
+
+
+def is_refused(result: Result) -> bool:
+    """Whether a line was answered with an error before anything was sent: it did not
+    parse (a word no command has, bad syntax), or a write the target's rules (or the
+    user, at a confirm question) refused. A line that failed for the state it met
+    (not connected, a timeout) is right, and kept."""
+    if any(isinstance(f, Outcome) and f.status == ExitStatus.REFUSED for f in result.feedback):
+        return True
+    return result.command is None and any(
+        isinstance(f, Message) and f.level == "error" for f in result.feedback
+    )
 
 
 @contextlib.contextmanager

@@ -232,6 +232,23 @@ def choose_layout(width: int, indices: Iterable[int], labels: Iterable[str] = ()
     return layout
 
 
+def widths_wanted(rows: Mapping[VarRef, RowView]) -> tuple[int, int]:
+    """The columns the grid of these rows needs for 16 bits a line (bare digits, as at
+    80 columns), and the most it can use (the symbols, the gap between bytes, its labels
+    at their longest): what a panel beside the table needs and can use (0, 0: no IO)."""
+    bits = bits_from_rows(rows, 0.0)
+    if not bits:
+        return 0, 0
+    index_width = max(3, *(len(str(index)) for index in bits))
+    least = Layout(16, index_width, sep=1, glyph=False).width
+    most = choose_layout(UNBOUNDED, bits, (bit.label for bit in bits.values())).width
+    return least, most
+
+
+#: A width no terminal has: the layout a grid takes when nothing limits it.
+UNBOUNDED = 100_000
+
+
 def bit_style(
     bit: Bit, cursor: bool = False, pending: bool = False, change: ChangeStyle = CHANGED_DARK
 ) -> str:

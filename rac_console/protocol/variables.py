@@ -11,7 +11,7 @@ import re
 from dataclasses import dataclass
 
 from .errors import EncodeError, InputError
-from .text import scalar_text
+from .text import close_match, scalar_text
 from .variant import Variant, format_variant, r4_from_text
 from .vartypes import INTEGER_RANGES, NUMERIC_TYPES, VT, VT_ARRAY, element_type, is_array
 
@@ -137,7 +137,9 @@ TYPE_CHOICES = " ".join(KINDS)
 def kind_of(code: str) -> VarKind:
     kind = KINDS.get(code.upper())
     if kind is None:
-        raise InputError(f"unknown variable type {code!r}: use one of {TYPE_CHOICES}")
+        meant = close_match(code, KINDS)
+        guess = f"did you mean {meant}? " if meant is not None else ""
+        raise InputError(f"unknown variable type {code!r}: {guess}use one of {TYPE_CHOICES}")
     return kind
 
 

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 from collections.abc import Callable, Iterable, Iterator
 
+from prompt_toolkit.auto_suggest import AutoSuggest, Suggestion
+from prompt_toolkit.buffer import Buffer
 from prompt_toolkit.completion import CompleteEvent, Completer, Completion
 from prompt_toolkit.document import Document
 from prompt_toolkit.formatted_text import FormattedText, StyleAndTextTuples
@@ -37,6 +39,7 @@ STYLE = Style.from_dict(
         "toolbar.readonly": "bold bg:ansiblue ansiwhite",
         "toolbar.confirm": "bold bg:ansimagenta ansiwhite",
         "toolbar.open": "",
+        "toolbar.paused": "bold bg:ansiyellow ansiblack",
         "confirm": "bold",
         "confirm.value": "bold ansiyellow",
         "toolbar.hint": "italic bg:#303030 #ffffaf",
@@ -72,8 +75,9 @@ def prompt_fragments(status: Status | None, lost: bool) -> FormattedText:
 
 
 def toolbar_fragments(status: Status) -> FormattedText:
-    """The toolbar's target: the profile's label in its colour, the target, and what
-    it lets be written (``READ-ONLY``, ``CONFIRM WRITES``, ``writes open``)."""
+    """The toolbar's target: the profile's label in its colour, the target, what it
+    lets be written (``READ-ONLY``, ``CONFIRM WRITES``, ``writes open``), and
+    ``POLLING PAUSED`` after ``pause``, as the console's status line says it."""
     parts: StyleAndTextTuples = []
     label = target_label(status)
     if label is not None:
@@ -85,6 +89,8 @@ def toolbar_fragments(status: Status) -> FormattedText:
         parts.append(("class:toolbar.confirm", " CONFIRM WRITES "))
     elif status.writes == "open":
         parts.append(("class:toolbar.open", " writes open "))
+    if status.paused:
+        parts.append(("class:toolbar.paused", " POLLING PAUSED "))
     return FormattedText(parts)
 
 
@@ -160,7 +166,8 @@ class HintProcessor(Processor):
 
 
 class SharedHistory(PromptHistory):
-    """prompt-toolkit's view of the history file the console uses too."""
+    """prompt-toolkit's view of the history file the console uses too: the file's
+    lines, then what was entered here (Up recalls a refused line too, to be fixed)."""
 
     def __init__(self, history: History) -> None:
         self._shared = history
@@ -170,4 +177,18 @@ class SharedHistory(PromptHistory):
         return reversed(self._shared.entries)
 
     def store_string(self, string: str) -> None:
-        self._shared.append(string)
+        """Nothing goes to the file here: the REPL enters each line it runs and settles
+        it by its result (:meth:`History.settle`), so a refused one is never kept."""
+
+
+class SharedSuggest(AutoSuggest):
+    """The grey suggestion from the shared history, as the console makes it: never a
+    line refused in this session."""
+
+    def __init__(self, history: History) -> None:
+        self._shared = history
+
+    def get_suggestion(self, buffer: Buffer, document: Document) -> Suggestion | None:
+        text = document.text.rsplit("\n", 1)[-1]
+        line = self._shared.suggest(text)
+        return Suggestion(line[len(text) :]) if line is not None else None

@@ -4,23 +4,26 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
+import os
 import signal
+import sys
 import time
+from collections.abc import Callable, Iterator
 
 from prompt_toolkit import PromptSession
-from prompt_toolkit.auto_suggest import AutoSuggestFromHistory
+from prompt_toolkit.application import get_app_or_none, run_in_terminal
 from prompt_toolkit.formatted_text import FormattedText
 from prompt_toolkit.input import Input
 from prompt_toolkit.input.typeahead import clear_typeahead
 from prompt_toolkit.key_binding import KeyBindings, KeyPressEvent
 from prompt_toolkit.keys import Keys
 from prompt_toolkit.output import Output
-from rich.console import Console
+from rich.console import Console, RenderableType
 from rich.live import Live
 from rich.table import Table
 from rich.text import Text
 
-from ..commands.completion import hint
+from ..commands.completion import WHOLE_LIST, hint
 from ..commands.language import Unwatch, VarRef, Watch
 from ..commands.outcome import ExitStatus, Outcome
 from ..engine import (
@@ -38,9 +41,10 @@ from ..engine import (
     UiStep,
 )
 from ..engine.events import Event
+from ..present.banner import live_banner
 from ..present.cells import age_text, status_cell, value_cell
 from ..present.frames import frame_line
-from ..present.history import History
+from ..present.history import History, is_refused
 from ..present.render import error_text, make_console, notice_text, outcome_text
 from ..present.status import connect_targets
 from ..protocol.text import terminal_safe
@@ -51,10 +55,14 @@ from .prompt_parts import (
     RacCompleter,
     RacLexer,
     SharedHistory,
+    SharedSuggest,
     confirm_message,
     prompt_fragments,
     toolbar_fragments,
 )
+
+if sys.platform != "win32":
+    import termios
 
 
 def _no_mouse() -> KeyBindings:
@@ -90,6 +98,7 @@ class Repl:
         output: Output | None = None,
     ) -> None:
         self.engine = engine
+        self.history = history
         self.console = console
         self.frames = False
         self.lost = False
@@ -101,12 +110,16 @@ class Repl:
         self.asking: ConfirmWrite | None = None  # the confirm question on screen
         self._confirm_prompt: PromptSession[str] | None = None
         self._questions: set[asyncio.Task[None]] = set()
+        self._printing: set[asyncio.Future[None]] = set()  # lines waiting to go above a prompt
         self.prompt: PromptSession[str] = PromptSession(
             message=self.prompt_message,
             history=SharedHistory(history),
-            auto_suggest=AutoSuggestFromHistory(),
+            auto_suggest=SharedSuggest(history),
             completer=RacCompleter(self._seen, connect_targets(engine.profiles)),
             complete_while_typing=False,
+            # The menu's room: a short list (the 9 types) whole, as the console lists it;
+            # a longer one scrolls.
+            reserve_space_for_menu=WHOLE_LIST + 1,
             lexer=RacLexer(),
             input_processors=[HintProcessor()],
             bottom_toolbar=self.toolbar,
@@ -138,6 +151,24 @@ class Repl:
         if needs:  # the history suggestion holds the grey text: the hint shows here
             parts.append(("class:toolbar.hint", f" needs: {needs} "))
         return FormattedText(parts)
+
+    # ------------------------------------------------------------- output
+
+    def _print(self, *objects: RenderableType, soft_wrap: bool | None = None) -> None:
+        """Print on lines of their own. While a prompt is on screen (the drain runs
+        beside it: an alert, a frame, the first connection's failure) prompt-toolkit
+        takes the prompt away, the lines are printed, and the prompt is drawn again
+        below them; written straight out they landed inside the prompt's line."""
+        self._run_printing(lambda: self.console.print(*objects, soft_wrap=soft_wrap))
+
+    def _run_printing(self, write: Callable[[], None]) -> None:
+        app = get_app_or_none()
+        if app is None or not app.is_running:
+            write()
+            return
+        task = asyncio.ensure_future(run_in_terminal(write))
+        self._printing.add(task)
+        task.add_done_callback(self._printing.discard)
 
     # ------------------------------------------------------------- outbox
 
@@ -179,7 +210,7 @@ class Repl:
                 yes = answer.strip().lower() in ("y", "yes")
                 if not yes or time.monotonic() - asked_at >= CONFIRM_GUARD_SECONDS:
                     break
-                self.console.print(
+                self._print(
                     notice_text(
                         f"answered within {CONFIRM_GUARD_SECONDS:g} s of the question, as keys "
                         "typed ahead would be: answer again",
@@ -233,13 +264,9 @@ class Repl:
         self.engine.outbox.notify = lambda: self._notify(loop)
         await asyncio.to_thread(self.engine.start)
         self.drain()
-        if self.status is not None and self.status.is_simulator:
-            self.console.print(
-                Text.assemble(
-                    ("sim", "bold yellow"),
-                    f": {SIMULATOR_NOTICE}. help lists the commands; Ctrl-D leaves.",
-                )
-            )
+        banner = self.banner()
+        if banner is not None:
+            self._print(banner, soft_wrap=True)
         drainer = loop.create_task(self._drain_forever())
         try:
             while True:
@@ -249,15 +276,29 @@ class Repl:
                     continue  # Ctrl-C clears the line
                 except EOFError:
                     break
-                if not await self.handle(line):
-                    break
+                with keys_held(self.prompt.input):
+                    if not await self.handle(line):
+                        break
         finally:
             self._closing = True
             drainer.cancel()
-            await asyncio.gather(drainer, return_exceptions=True)
+            await asyncio.gather(drainer, *self._printing, return_exceptions=True)
             await asyncio.to_thread(self.engine.stop)
             self.drain()
         return 0
+
+    def banner(self) -> Text | None:
+        """The first line: the simulator, or the live controller with its profile and
+        write rules (as the console's welcome says it), then how to get help and out."""
+        status = self.status
+        if status is None or not status.has_session:
+            return None
+        if status.is_simulator:
+            return Text.assemble(
+                ("sim", "bold yellow"),
+                f": {SIMULATOR_NOTICE}. help lists the commands; Ctrl-D leaves.",
+            )
+        return Text.assemble(live_banner(status), " help lists the commands; Ctrl-D leaves.")
 
     def exit_status(self, status: int) -> int:
         return self.status.exit_status(status) if self.status is not None else status
@@ -271,9 +312,12 @@ class Repl:
         return True
 
     async def _handle_line(self, line: str) -> bool:
-        """Run one line; False when it asks to leave."""
+        """Run one line; False when it asks to leave. The history keeps it once its
+        result says it was not refused."""
         watched_before = set(self.rows)
+        self.history.enter(line)
         result = await self.submit(line)
+        self.history.settle(line, refused=is_refused(result))
         if isinstance(result.command, Watch) and not _failed(result):
             if self.status is not None and self.status.csv_log is not None:
                 self._show_result(result)  # whether the CSV log has these columns
@@ -287,14 +331,14 @@ class Repl:
             if isinstance(feedback, Outcome):
                 self._show_outcome(feedback)
             elif isinstance(feedback, Message):
-                self.console.print(notice_text(feedback.text, error=feedback.level == "error"))
+                self._print(notice_text(feedback.text, error=feedback.level == "error"))
             elif feedback is UiStep.QUIT:
                 return False
             elif feedback is UiStep.CLEAR:
-                self.console.clear()
+                self._run_printing(self.console.clear)
             elif feedback in (UiStep.FRAMES_ON, UiStep.FRAMES_OFF):
                 self.frames = feedback is UiStep.FRAMES_ON
-                self.console.print(f"frames {'on' if self.frames else 'off'}")
+                self._print(f"frames {'on' if self.frames else 'off'}")
         return True
 
     def _show_outcome(self, outcome: Outcome) -> None:
@@ -302,26 +346,26 @@ class Repl:
         if outcome.status == ExitStatus.TRANSPORT and status is not None and status.has_session:
             self.lost = status.connection != "connected"
             if self.lost:
-                self.console.print(
+                self._print(
                     notice_text(f"{error_text(outcome)}: the next command reconnects", error=True)
                 )
                 return
         elif outcome.response is not None:
             self.lost = False
         if outcome.ok:
-            self.console.print(outcome_text(outcome), soft_wrap=True)
+            self._print(outcome_text(outcome), soft_wrap=True)
         else:
-            self.console.print(notice_text(error_text(outcome), error=True), soft_wrap=True)
+            self._print(notice_text(error_text(outcome), error=True), soft_wrap=True)
 
     def _echo(self, event: Event) -> None:
         """``frames on``: every frame, dimmed, as it crosses the wire (not during a watch);
         an alert (a recording stopped) always."""
         if isinstance(event, Alert):
-            self.console.print(notice_text(event.text, error=True))
+            self._print(notice_text(event.text, error=True))
         elif self.frames and isinstance(event, Note):  # a gap or a failed request, marked
-            self.console.print(notice_text(f"── {event.text} ──", style="dim"), soft_wrap=True)
+            self._print(notice_text(f"── {event.text} ──", style="dim"), soft_wrap=True)
         elif self.frames and isinstance(event, Frame) and not event.poll:
-            self.console.print(Text(frame_line(event), style="dim"), soft_wrap=True)
+            self._print(Text(frame_line(event), style="dim"), soft_wrap=True)
 
     # ------------------------------------------------------------- watch
 
@@ -337,12 +381,21 @@ class Repl:
                 stop.set()
 
         period = self.status.period if self.status is not None else 0.0
-        self.console.print(
-            Text(
-                f"watching every {period:g} s: Enter, q or Ctrl-C returns to the prompt",
-                style="dim",
+        if self._paused():
+            self._print(
+                notice_text(
+                    "polling is paused: these rows wait for resume (Enter, q or Ctrl-C "
+                    "returns to the prompt, then type resume)",
+                    style="bold yellow",
+                )
             )
-        )
+        else:
+            self._print(
+                Text(
+                    f"watching every {period:g} s: Enter, q or Ctrl-C returns to the prompt",
+                    style="dim",
+                )
+            )
         try:
             with (
                 keys.raw_mode(),
@@ -364,22 +417,65 @@ class Repl:
             if added:
                 await self.submit(Unwatch(tuple(added)))
 
+    def _paused(self) -> bool:
+        return self.status is not None and self.status.paused
+
     def _watch_table(self, command: Watch) -> Table:
+        """The watched rows; while polling is paused each says so (a row never read
+        says "not polled", not a blank that never fills)."""
         table = Table(box=None, pad_edge=False, header_style="bold")
         for title in ("Variable", "Label", "Status", "Changed", "Value"):
             table.add_column(title)
         now = time.monotonic()
+        paused = self._paused()
         for var in command.vars:
             row = self.rows.get(var)
             if row is not None:
+                value = value_cell(row, now)
+                if paused and row.variant is None:
+                    value = Text("not polled", style="dim italic")
                 table.add_row(
                     str(var),
                     Text(terminal_safe(row.label)),
-                    status_cell(row),
+                    Text("paused", style="bold yellow") if paused else status_cell(row),
                     age_text(row, now),
-                    value_cell(row, now),
+                    value,
                 )
         return table
+
+
+@contextlib.contextmanager
+def keys_held(keys: Input) -> Iterator[None]:
+    """While a typed line runs, the keys typed ahead wait unseen for the next prompt.
+
+    Between two prompts the terminal was back in its cooked mode: it echoed the keys
+    typed ahead at the cursor, where the result was about to be printed (``get I 2I1 =
+    1``). Here echo and line editing are off, so the terminal holds every key (a
+    half-typed line too) until the next prompt reads it and shows it after the result;
+    signals stay on, so Ctrl-C still cancels the command. Nothing on a pipe, a file or
+    Windows, where no terminal echoes."""
+    fd = _terminal_fd(keys)
+    if fd is None or sys.platform == "win32":
+        yield
+        return
+    before = termios.tcgetattr(fd)
+    held = termios.tcgetattr(fd)
+    held[3] &= ~(termios.ECHO | termios.ICANON)
+    held[6][termios.VMIN], held[6][termios.VTIME] = 1, 0
+    termios.tcsetattr(fd, termios.TCSANOW, held)  # TCSANOW: the keys typed stay
+    try:
+        yield
+    finally:
+        with contextlib.suppress(termios.error):
+            termios.tcsetattr(fd, termios.TCSANOW, before)
+
+
+def _terminal_fd(keys: Input) -> int | None:
+    try:
+        fd = keys.fileno()
+    except (NotImplementedError, OSError, ValueError):
+        return None
+    return fd if os.isatty(fd) else None
 
 
 def _failed(result: Result) -> bool:

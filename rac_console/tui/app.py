@@ -12,10 +12,11 @@ from rich.text import Text
 from textual import on
 from textual.app import App, ComposeResult
 from textual.binding import Binding, BindingType
-from textual.widgets import RichLog, Static
+from textual.widgets import Input, Static
 from textual.worker import Worker, WorkerState
 
 from .. import __version__
+from ..commands.completion import shown_candidates
 from ..commands.language import Simple, Step, VarRef, WatchFile
 from ..commands.outcome import Outcome
 from ..engine import (
@@ -33,30 +34,40 @@ from ..engine import (
 )
 from ..engine.config import config_path
 from ..engine.settings import SettingsFile
-from ..present.history import History
+from ..present.banner import live_banner
+from ..present.glyphs import ascii_wanted
+from ..present.history import History, is_refused
 from ..present.render import error_text, notice_text, outcome_text
 from ..present.row_actions import PendingToggles
-from ..present.status import connect_targets, label_text, target_label
+from ..present.status import connect_targets, target_label
 from ..present.trends import TrendStore
+from ..present.type_ahead import may_ask
 from ..protocol.text import counted, terminal_safe
+from .ascii_screen import ascii_driver
 from .command_line import CommandLine
 from .confirm_screen import ConfirmWriteScreen, border_colour
 from .footer import FittingFooter
 from .frame_log import FrameLog, LogActions, log_filter_line
+from .help_screen import key_of
 from .io_panel import IoPanel, WatchArea
 from .palette import ConsoleCommands, PaletteActions, Providers
+from .results import ResultsLog
+from .row_detail import RowDetail
 from .settings import SettingsKeeper
 from .status_bar import StatusBar
 from .table_actions import TableActions, TableFilter
 from .trend_view import TrendView
-from .watch_table import WatchTable
+from .watch_table import WatchTable, writes_refused
 
 #: The engine's outbox is drained this often: results, frames, rows, status.
 DRAIN_HZ = 20
 LOG_FLUSH_HZ = 10
-#: Candidates listed at most; the list says how many more there are.
-MAX_CANDIDATE_LINES = 7
 TABLE_REFRESH_HZ = 5
+
+
+PAUSE_HELP = "Pause or resume polling"
+PANES_HELP = "Next or previous pane: command line, table, I/O grid, frame log"
+FREEZE_HELP = "Freeze the log's scrolling, or follow new frames again"
 
 
 class RacConsoleApp(PaletteActions, TableActions, LogActions, App[int]):
@@ -65,27 +76,79 @@ class RacConsoleApp(PaletteActions, TableActions, LogActions, App[int]):
     TITLE = "rac-console"
     BINDINGS: ClassVar[list[BindingType]] = [
         # In the footer in this order, after the focused pane's keys, as many as fit.
-        Binding("escape", "cancel_command", "Cancel command", id="cancel-command"),
+        Binding(
+            "escape",
+            "cancel_command",
+            "Cancel command",
+            tooltip="Cancel the running line, and the lines typed behind it",
+            id="cancel-command",
+        ),
         Binding("f1", "help", "Help", id="help"),
         # Priority: taken as the key arrives, so the keys typed right after it go to the
         # new pane (without it they were already on their way to the old one).
-        Binding("f6", "focus_pane(1)", "Next pane", id="next-pane", priority=True),
+        Binding(
+            "f6",
+            "focus_pane(1)",
+            "Next pane",
+            tooltip=PANES_HELP,
+            id="next-pane",
+            priority=True,
+        ),
         # F2 and F4 say what they will do: check_action shows one of each pair.
-        Binding("f2", "toggle_polling", "Pause polls", id="toggle-polling"),
-        Binding("f2", "toggle_polling('resume')", "Resume polls", id="resume-polling"),
-        Binding("f4", "toggle_scroll", "Freeze log", id="toggle-scroll"),
-        Binding("f4", "toggle_scroll('follow')", "Follow log", id="follow-log"),
+        # The tooltip is the help screen's line (one for both keys of a pair).
+        Binding("f2", "toggle_polling", "Pause polls", tooltip=PAUSE_HELP, id="toggle-polling"),
+        Binding(
+            "f2",
+            "toggle_polling('resume')",
+            "Resume polls",
+            tooltip=PAUSE_HELP,
+            id="resume-polling",
+        ),
+        Binding("f4", "toggle_scroll", "Freeze log", tooltip=FREEZE_HELP, id="toggle-scroll"),
+        Binding(
+            "f4", "toggle_scroll('follow')", "Follow log", tooltip=FREEZE_HELP, id="follow-log"
+        ),
         Binding("ctrl+q", "quit", "Quit", id="quit", priority=True),
-        Binding("f5", "toggle_io_grid", "I/O grid", id="toggle-io-grid"),
-        Binding("f3", "toggle_poll_frames", "Poll frames", id="toggle-poll-frames"),
-        Binding("f7", "toggle_hex", "Hex view", id="toggle-hex"),
+        Binding(
+            "f5",
+            "toggle_io_grid",
+            "I/O grid",
+            tooltip="Show or hide the I/O grid: watched IO bits as words",
+            id="toggle-io-grid",
+        ),
+        Binding(
+            "f3",
+            "toggle_poll_frames",
+            "Poll frames",
+            tooltip="Show or hide poll frames in the log",
+            id="toggle-poll-frames",
+        ),
+        Binding(
+            "f7",
+            "toggle_hex",
+            "Hex view",
+            tooltip="Show or hide each frame's bytes in hex in the log",
+            id="toggle-hex",
+        ),
         Binding("ctrl+l", "clear_log", "Clear log", id="clear-log"),
         Binding(
             "shift+f6",
             "focus_pane(-1)",
             "Previous pane",
+            tooltip=PANES_HELP,
             show=False,
             id="previous-pane",
+            priority=True,
+        ),
+        # Priority: before the command line's copy, which took it and did nothing. It
+        # cancels as Esc does, from any pane, as in the REPL and the CLI.
+        Binding(
+            "ctrl+c",
+            "interrupt",
+            "Cancel command",
+            tooltip="Cancel the running line, as Esc does (nothing running: it says Ctrl+Q quits)",
+            show=False,
+            id="interrupt",
             priority=True,
         ),
     ]
@@ -103,6 +166,7 @@ class RacConsoleApp(PaletteActions, TableActions, LogActions, App[int]):
         self.history = history
         self.watch_file = watch_file
         self.profile_names = tuple(profile_names)  # the palette offers connect NAME
+        self.profiles = dict(engine.profiles)  # read before the engine starts: its words
         self.kept = SettingsKeeper(self, settings)  # theme, I/O grid, log toggles
         self.status: Status | None = None
         self.rows: dict[VarRef, RowView] = {}
@@ -115,17 +179,17 @@ class RacConsoleApp(PaletteActions, TableActions, LogActions, App[int]):
         self.status_bar = StatusBar(id="status")
         self.trends = TrendStore()
         self.toggles = PendingToggles()
-        self.table = WatchTable(self.trends, self.type_on_command_line, id="watch")
+        self.table = WatchTable(self.trends, self.type_on_command_line, self.toggle_row, id="watch")
         self.table_filter = TableFilter(self.table, id="table-filter")
         self.trend_view = TrendView(self.trends, id="trend")
+        self.row_detail = RowDetail(id="detail")
         self.frame_log = FrameLog(id="log")
         self.log_filter = log_filter_line(self.frame_log)
         self.io_panel = IoPanel(self.toggles.busy, id="io")
+        self.watch_area = WatchArea(self.table, self.io_panel, id="watch-area")
         self.completions = Static(id="completions")
         self.hint = Static(id="hint")
-        self.results = RichLog(
-            id="results", max_lines=500, wrap=True, markup=False, highlight=False
-        )
+        self.results = ResultsLog(id="results")
         self.command_line = CommandLine(
             self.history,
             self._completion_indices,
@@ -133,16 +197,18 @@ class RacConsoleApp(PaletteActions, TableActions, LogActions, App[int]):
             placeholder="get P 1 · put IO 20 on · watch IO 0-7 · help",
         )
         self.command_line.targets = tuple(connect_targets(engine.profiles))
+        self.command_line.may_ask = self._may_ask
+        #: The line whose question keys typed ahead must not answer (see CommandLine).
+        self._held_seq: int | None = None
 
     def compose(self) -> ComposeResult:
         yield self.status_bar
-        with WatchArea(id="watch-area"):
-            yield self.table
-            yield self.io_panel
+        yield self.watch_area  # the table and the I/O grid
         yield self.table_filter
         yield self.frame_log
         yield self.log_filter
         yield self.trend_view
+        yield self.row_detail
         yield self.completions
         yield self.results
         yield self.hint
@@ -183,14 +249,7 @@ class RacConsoleApp(PaletteActions, TableActions, LogActions, App[int]):
                 )
             )
         elif status is not None:
-            results.write(
-                Text.assemble(
-                    ("LIVE", "bold white on red"),
-                    f" controller {terminal_safe(f'{status.host}:{status.port}')}",
-                    _profile_words(status),
-                    ".",
-                )
-            )
+            results.write(live_banner(status))
         results.write(
             Text(
                 f"rac-console {__version__}: type help, or try watch P 0, watch IO 0-7, get S 1",
@@ -223,7 +282,11 @@ class RacConsoleApp(PaletteActions, TableActions, LogActions, App[int]):
         self._removed -= batch.rows.keys()
         for event in batch.events:
             if isinstance(event, Result):
+                if event.line is not None:  # a typed line: kept by the history unless refused
+                    self.history.settle(event.line, refused=is_refused(event))
                 self._close_question(event.seq)
+                if event.seq == self._held_seq:
+                    self._release_keys()
                 if self.lines_pending.pop(event.seq, None) is not None and not self.lines_pending:
                     self.refresh_bindings()  # Esc has nothing to cancel any more
                 self.take_result(event)
@@ -262,7 +325,9 @@ class RacConsoleApp(PaletteActions, TableActions, LogActions, App[int]):
         removed, self._removed = self._removed, set()
         self.table.refresh_rows(self.rows, removed, time.monotonic())
         self.redraw_trend()
+        self.show_detail()
         self.io_panel.refresh_rows(self.rows, time.monotonic())
+        self.watch_area.share_width()  # the grid beside the table only while both fit
         if self.status is None:
             return
         self._status_line = self.status_bar.show(  # for its width; repainted if changed
@@ -279,9 +344,48 @@ class RacConsoleApp(PaletteActions, TableActions, LogActions, App[int]):
         """Hand the line to the engine: lines run one at a time, each once, in order."""
         self.completions.remove_class("-visible")
         if not event.line.strip():
+            if event.held:
+                self.command_line.post_message(CommandLine.Release())
             return
         self.command_line.remember(event.line)
-        self.submit_line(event.line)
+        queued = bool(self.lines_pending)
+        seq = self.submit_line(event.line)
+        if event.held:
+            self._hold_keys(seq, queued)
+
+    def _may_ask(self, line: str) -> bool:
+        """Whether this line, run now, may stop to ask before it writes: a write on a
+        ``confirm`` target with nothing running before it (a write queued behind a
+        long wait must not hold the keys typed meanwhile)."""
+        status = self.status
+        return (
+            status is not None
+            and status.writes == "confirm"
+            and not writes_refused(status)
+            and not self.lines_pending
+            and may_ask(line)
+        )
+
+    def _hold_keys(self, seq: int, queued: bool) -> None:
+        """The keys typed after line ``seq`` are held until it asked or ended; a line that
+        turned out to be queued behind another holds none."""
+        if queued or self._held_seq is not None:
+            self.command_line.post_message(CommandLine.Release())
+        else:
+            self._held_seq = seq
+
+    def _release_keys(self) -> None:
+        self._held_seq = None
+        self.command_line.post_message(CommandLine.Release())
+
+    @on(CommandLine.Dropped)
+    def keys_dropped(self, event: CommandLine.Dropped) -> None:
+        keys = (
+            "1 key typed ahead of the question was"
+            if event.count == 1
+            else f"{event.count} keys typed ahead of the question were"
+        )
+        self.show(Message(f"{keys} ignored: nothing typed before a question answers it"))
 
     def submit_line(self, line: str) -> int:
         """Every line the console hands the engine (typed, or made by a key on a row):
@@ -318,6 +422,28 @@ class RacConsoleApp(PaletteActions, TableActions, LogActions, App[int]):
         if self.lines_pending:
             self.engine.cancel(queued=True)
 
+    def action_interrupt(self) -> None:
+        """Ctrl+C: cancel as Esc does. With nothing running, text selected in the
+        command line (or on screen) is copied, as Textual does; else it says how to
+        quit, for the hand that reached for Ctrl+C to leave."""
+        if self.lines_pending:
+            self.engine.cancel(queued=True)
+            return
+        focused = self.focused
+        if isinstance(focused, Input) and focused.selected_text:
+            focused.action_copy()
+            return
+        selected = self.screen.get_selected_text()
+        if selected:
+            self.copy_to_clipboard(selected)
+            return
+        quit_key = key_of(type(self), "quit") or "Ctrl+Q"
+        self.notify(
+            f"Nothing is running to cancel. {quit_key} quits.",
+            title="Ctrl+C",
+            markup=False,
+        )
+
     def _show_result(self, result: Result) -> None:
         if result.line is not None:
             self.results.write(Text(f"› {terminal_safe(result.line)}", style="bold cyan"))
@@ -326,12 +452,7 @@ class RacConsoleApp(PaletteActions, TableActions, LogActions, App[int]):
 
     @on(CommandLine.Completions)
     def list_completions(self, event: CommandLine.Completions) -> None:
-        candidates = event.candidates
-        shown = (
-            candidates
-            if len(candidates) <= MAX_CANDIDATE_LINES
-            else candidates[: MAX_CANDIDATE_LINES - 1]
-        )
+        shown, more = shown_candidates(event.candidates)
         width = max(len(c.text) for c in shown)
         text = Text()
         for n, candidate in enumerate(shown):
@@ -339,8 +460,7 @@ class RacConsoleApp(PaletteActions, TableActions, LogActions, App[int]):
                 text.append("\n")
             text.append(f"{candidate.text:<{width}}", style="bold")
             text.append(f"  {candidate.help}", style="dim")
-        if len(shown) < len(candidates):
-            more = len(candidates) - len(shown)
+        if more:
             text.append(f"\n… and {more} more: type a letter or two to narrow", style="italic")
         self.completions.update(text)
         self.completions.add_class("-visible")
@@ -434,9 +554,14 @@ class RacConsoleApp(PaletteActions, TableActions, LogActions, App[int]):
         the engine polls on until the answer, then the focus is back where it was (a
         table row or a grid bit: the next Space toggles the next one)."""
         colour = self.status.colour if self.status is not None else None
+        held = question.seq == self._held_seq
+        if held:  # what was typed after the write's Enter was typed ahead of this
+            self.command_line.post_message(CommandLine.Asked())
 
         def answered(yes: bool | None) -> None:
             self.engine.answer_confirm(question.seq, bool(yes))
+            if held and self._held_seq == question.seq:
+                self.command_line.post_message(CommandLine.Answered())
 
         self.push_screen(ConfirmWriteScreen(question, colour), answered)
 
@@ -458,14 +583,6 @@ class RacConsoleApp(PaletteActions, TableActions, LogActions, App[int]):
         self.frame_log.clear()
 
 
-def _profile_words(status: Status) -> str:
-    """``, profile cell3 (Cell 3 — welding): writes confirm`` for a profile, else ''."""
-    if status.profile is None:
-        return ""
-    label = f" ({label_text(status.label)})" if status.label else ""
-    return f", profile {terminal_safe(status.profile)}{label}: writes {status.writes}"
-
-
 def _shown_target(status: Status) -> tuple[str | None, str | None, str | None]:
     """What the border shows of a target: its profile, label and colour."""
     return status.profile, status.label, status.colour
@@ -479,4 +596,6 @@ def run_console(
     app = RacConsoleApp(
         engine, history, watch_file, profile_names, settings=SettingsFile(config_path())
     )
+    if ascii_wanted():  # RAC_CONSOLE_ASCII=1, or Windows' old console host
+        app.driver_class = ascii_driver(app.driver_class)
     return app.exit_status(app.run() or 0)

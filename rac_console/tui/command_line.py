@@ -30,29 +30,69 @@ class HintSuggester(Suggester):
 
     async def get_suggestion(self, value: str) -> str | None:
         needs = hint(value)
-        for entry in reversed(self._history.entries):
-            if entry.startswith(value) and entry != value:
-                self._show_hint(value, needs)
-                return entry
+        entry = self._history.suggest(value)  # never a line refused in this session
+        if entry is not None:
+            self._show_hint(value, needs)
+            return entry
         self._show_hint(value, "")
         return value + needs if needs else None
 
 
+HISTORY_HELP = "Walk the history (kept across restarts)"
+
+
 class CommandLine(Input):
+    """The line, its history, completion and hints; and the keys typed ahead of a
+    write's question.
+
+    On a ``confirm`` target a write stops to ask, and a ``y`` and an Enter typed right
+    after its Enter (muscle memory, a slow link) must neither answer the question nor run
+    as a command once it is answered. So the keys that follow the Enter of a line that
+    may ask are held here, in the order typed, until the app says how the line went
+    (messages, so they are handled in their place among the keys): it asked
+    (:class:`Asked`: the keys held are dropped, and the ones still coming until the
+    question is answered), the question was answered (:class:`Answered`: keys are held
+    again, for a question asked once more), or the line ended (:class:`Release`: the
+    keys held are typed in as if they came now). Esc and the app's keys pass.
+    """
+
     #: What ``connect`` completes to besides sim: (profile name, its label), set by the app.
     targets: tuple[tuple[str, str], ...] = ()
     BINDINGS: ClassVar[list[BindingType]] = [
-        Binding("tab", "complete", "Complete", id="complete"),
-        Binding("up", "history(-1)", "History back", show=False, id="history-back"),
-        Binding("down", "history(1)", "History forward", show=False, id="history-forward"),
+        # The tooltip is the help screen's line (Up and Down share one).
+        Binding(
+            "tab",
+            "complete",
+            "Complete",
+            tooltip="Complete the command, type, index or on/off; several: listed with help",
+            id="complete",
+        ),
+        Binding(
+            "up",
+            "history(-1)",
+            "History back",
+            tooltip=HISTORY_HELP,
+            show=False,
+            id="history-back",
+        ),
+        Binding(
+            "down",
+            "history(1)",
+            "History forward",
+            tooltip=HISTORY_HELP,
+            show=False,
+            id="history-forward",
+        ),
     ]
 
     class Entered(Message):
-        """A line the user entered, taken out of the line the moment Enter was read."""
+        """A line the user entered, taken out of the line the moment Enter was read;
+        ``held``: the keys typed after it are held until the app releases them."""
 
-        def __init__(self, line: str) -> None:
+        def __init__(self, line: str, held: bool = False) -> None:
             super().__init__()
             self.line = line
+            self.held = held
 
     class Hint(Message):
         """What the command still needs, when a history suggestion holds the grey text."""
@@ -72,6 +112,22 @@ class CommandLine(Input):
             super().__init__()
             self.candidates = candidates
 
+    class Asked(Message):
+        """(app → line) The held line asked: drop the keys typed ahead of its question."""
+
+    class Answered(Message):
+        """(app → line) Its question was answered: hold keys again until it ends."""
+
+    class Release(Message):
+        """(app → line) The held line ended: type in the keys held, stop holding."""
+
+    class Dropped(Message):
+        """(line → app) Keys typed ahead of a question were dropped: say how many."""
+
+        def __init__(self, count: int) -> None:
+            super().__init__()
+            self.count = count
+
     def __init__(
         self, history: History, seen: Callable[[], Iterable[tuple[str, int]]], **kwargs: object
     ) -> None:
@@ -83,6 +139,69 @@ class CommandLine(Input):
         self._seen = seen
         self._position: int | None = None
         self._draft = ""
+        #: Whether a line may stop to ask before it writes (set by the app): the keys
+        #: typed after its Enter are then held.
+        self.may_ask: Callable[[str], bool] = lambda line: False
+        self._held: list[events.Key | events.Paste] | None = None  # None: not holding
+        self._dropping = False  # a question is up: keys typed ahead of it are dropped
+        self._dropped = 0
+
+    def hold(self) -> None:
+        """Hold the keys that come from now (a write started by a key elsewhere)."""
+        if self._held is None:
+            self._held, self._dropping, self._dropped = [], False, 0
+
+    def _take(self, event: events.Key | events.Paste) -> bool:
+        """Hold (or drop) a key or a paste while a line that may ask runs: True if taken."""
+        held = self._held
+        if held is None:
+            return False
+        if isinstance(event, events.Key) and not (
+            event.is_printable or event.key in self._bindings.key_to_bindings
+        ):
+            return False  # Esc, F-keys: the app's, at once
+        if self._dropping:
+            self._dropped += 1
+        else:
+            held.append(event)
+        return True
+
+    def type_ahead(self, character: str) -> None:
+        """A character typed elsewhere that belongs here (the table hands them over):
+        held like a key typed here while a line that may ask runs."""
+        if not self._take(events.Key(character, character)):
+            self.insert_text_at_cursor(character)
+
+    def _on_command_line_asked(self, event: Asked) -> None:
+        event.stop()
+        if self._held is not None:
+            self._dropped += len(self._held)
+            self._held.clear()
+            self._dropping = True
+
+    def _on_command_line_answered(self, event: Answered) -> None:
+        event.stop()
+        if self._held is not None:
+            self._dropping = False
+            self._say_dropped()
+
+    async def _on_command_line_release(self, event: Release) -> None:
+        """Type the held keys in, in order, before any key that comes after them."""
+        event.stop()
+        held, self._held, self._dropping = self._held or [], None, False
+        self._say_dropped()
+        for key in held:
+            if self._take(key):
+                continue  # a line typed in just now may ask in turn: held again
+            if isinstance(key, events.Paste):
+                self._paste(key.text)
+            else:
+                await self._act(key)
+
+    def _say_dropped(self) -> None:
+        if self._dropped:
+            self.post_message(self.Dropped(self._dropped))
+            self._dropped = 0
 
     async def _on_key(self, event: events.Key) -> None:
         """Run this line's own key bindings here, in key order.
@@ -92,6 +211,10 @@ class CommandLine(Input):
         Backspace or Tab reach the line before those keys act: Enter then submitted a
         line merged with the next one. Handled here, every key acts in the order typed.
         """
+        if self._take(event):
+            event.stop()
+            event.prevent_default()
+            return
         if event.character == "?" and not self.value:
             event.stop()
             event.prevent_default()
@@ -105,13 +228,28 @@ class CommandLine(Input):
             await self.run_action(binding.action)
             return
 
+    async def _act(self, event: events.Key) -> None:
+        """A held key, typed in now: what it would have done when it came."""
+        if event.character == "?" and not self.value:
+            self.post_message(self.HelpRequested())
+        elif event.is_printable and event.character:
+            self.insert_text_at_cursor(event.character)
+        else:
+            for binding in self._bindings.key_to_bindings.get(event.key, ()):
+                await self.run_action(binding.action)
+                return
+
     def _on_paste(self, event: events.Paste) -> None:
         """A pasted block runs line by line, as if each line were typed and entered:
         every complete line is entered in order, the unfinished last one stays to edit
         (Textual's Input would keep the first line and drop the rest without a word)."""
         event.stop()
         event.prevent_default()
-        *complete, tail = event.text.replace("\r\n", "\n").replace("\r", "\n").split("\n")
+        if not self._take(event):
+            self._paste(event.text)
+
+    def _paste(self, text: str) -> None:
+        *complete, tail = text.replace("\r\n", "\n").replace("\r", "\n").split("\n")
         if complete:
             first = self.value[: self.cursor_position] + complete[0]
             self.value = ""
@@ -126,7 +264,10 @@ class CommandLine(Input):
         self.value = ""
         self._position = None
         self._draft = ""
-        self.post_message(self.Entered(line))
+        holds = self.may_ask(line)
+        if holds:
+            self.hold()  # the keys after this Enter, until the line asked or ended
+        self.post_message(self.Entered(line, held=holds))
 
     def action_cursor_right(self, select: bool = False) -> None:
         needs = hint(self.value)
@@ -167,4 +308,6 @@ class CommandLine(Input):
             self.post_message(self.Completions(candidates))  # after the Changed it caused
 
     def remember(self, line: str) -> None:
-        self.history.append(line)
+        """Up recalls the line at once; the app settles it by its result (a refused
+        line is never suggested nor written)."""
+        self.history.enter(line)

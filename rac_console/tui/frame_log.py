@@ -1,19 +1,23 @@
 """The raw frame log: one line per frame, written in batches, bounded in memory.
 
-Besides the lines drawn, the log keeps the last :data:`KEPT` frames it was given (the
-frames themselves: a frame's gap and the request a reply answers follow from the order),
-so the hex view (F7), the frame times, the filter (``/``) and the poll frames (F3) redraw
-what is on screen, not only what comes.
+Besides the lines drawn, the log keeps the last :data:`KEPT` poll frames it was given and,
+apart, the last :data:`KEPT` others (typed exchanges and notes), each with its gap and the
+request it answers, so the hex view (F7), the frame times, the filter (``/``) and the poll
+frames (F3) redraw what is on screen, not only what comes; a fast poll cannot push the
+typed exchanges out (with polls hidden they would vanish at the next redraw).
 Lines are plain strings (cheap to write at thousands a second); the few on screen are
 styled as they are drawn, by :class:`FrameHighlighter`.
 """
 
 from __future__ import annotations
 
+import heapq
+import itertools
 import math
 import re
 import time
 from collections import deque
+from operator import itemgetter
 from typing import ClassVar
 
 from rich.cells import cell_len
@@ -25,6 +29,7 @@ from textual.widgets import Log
 from ..engine import Alert, Feedback, Message, Note
 from ..present.filtering import FrameFilter, add_filter_title
 from ..present.frames import clock_text, frame_body, gap_text, hex_text
+from ..present.help_text import PANE_KEYS
 from ..protocol.text import counted, terminal_safe
 from ..session import Frame
 from .filter_line import FilterLine
@@ -34,8 +39,8 @@ MAX_PENDING = 50_000
 #: Lines drawn per flush (10 a second) at most: past it only the newest are drawn, and one
 #: line says how many were not (drawing them cost the poller its CPU, unread).
 MAX_LINES_PER_FLUSH = 500
-#: Frames (and notes) kept to be drawn again: by the hex view, the frame times, the
-#: filter and F3. The filter looks through these.
+#: Poll frames kept to be drawn again (by the hex view, the frame times, the filter and
+#: F3), and as many others (typed exchanges, notes). The filter looks through these.
 KEPT = 20_000
 #: Between a frame's text and its bytes in hex, when both fit the width.
 HEX_SEPARATOR = "  │ "
@@ -51,6 +56,8 @@ Event = Frame | tuple[float, str]
 #: An event as drawn: with its gap (seconds since the frame before it on the wire) and its
 #: request (a request's own bytes, a reply's request's, None for anything else).
 Drawn = tuple[Event, float | None, bytes | None]
+#: A kept event: its place in the order events came, and the event as drawn.
+Kept = tuple[int, Drawn]
 
 
 class FrameLog(Log):
@@ -63,18 +70,34 @@ class FrameLog(Log):
         # after it go there (the log takes no other printable key).
         Binding("slash", "app.filter_frames", "Filter", id="log-filter", priority=True),
         Binding("t", "app.toggle_frame_times", "Frame times", id="log-frame-times"),
-        Binding("tab", "app.focus_pane(1)", "Next pane", show=False, id="log-next-pane"),
-        Binding("shift+tab", "app.focus_pane(-1)", "Previous pane", show=False, id="log-prev"),
+        Binding(
+            "tab",
+            "app.focus_pane(1)",
+            "Next pane",
+            tooltip=PANE_KEYS,
+            show=False,
+            id="log-next-pane",
+        ),
+        Binding(
+            "shift+tab",
+            "app.focus_pane(-1)",
+            "Previous pane",
+            tooltip=PANE_KEYS,
+            show=False,
+            id="log-prev",
+        ),
     ]
 
     def __init__(self, **kwargs: object) -> None:
         super().__init__(highlight=True, max_lines=MAX_LINES, auto_scroll=True, **kwargs)  # type: ignore[arg-type]
         self.highlighter: FrameHighlighter = FrameHighlighter()
         self._pending: deque[Event] = deque(maxlen=MAX_PENDING)
-        self._kept: deque[Event] = deque()
-        # The wire before the oldest kept event (its frame's time, the request waiting),
-        # and after the newest: a gap and a reply's request follow from them.
-        self._base: tuple[float | None, bytes | None] = (None, None)
+        # Kept apart, so polls push out polls only; merged back in order when drawn.
+        self._kept_polls: deque[Kept] = deque()
+        self._kept_others: deque[Kept] = deque()
+        self._order = itertools.count()
+        # The wire after the newest event (its frame's time, the request waiting): the
+        # next frame's gap and a reply's request follow from them.
         self._last_time: float | None = None
         self._request: bytes | None = None
         self._bodies: dict[int, str] = {}  # kept frames' lines after their time, by id
@@ -86,9 +109,10 @@ class FrameLog(Log):
         self._filter = FrameFilter()
         self._narrowed = False  # a filter, or poll frames hidden: not every frame shows
         self._hex_width = 0  # the width the hex was laid out for
-        #: The column the hex starts at, for the frames drawn (their longest text that
-        #: leaves room for its bytes); a frame with no room has them under its text.
-        self._hex_column = 0
+        #: The column the hex starts at for the frames drawn: their longest text among the
+        #: frames whose bytes fit beside it; None: every frame has its bytes under its text
+        #: (a request and its reply are never laid out two ways).
+        self._hex_column: int | None = 0
         self._hex_placed = [0, 0]  # frames drawn since the last redraw: beside, under
         self._title: Text | None = None
 
@@ -215,9 +239,9 @@ class FrameLog(Log):
 
     def clear(self) -> FrameLog:
         """Ctrl+L: the lines and the frames kept go (a filter finds nothing older)."""
-        self._kept.clear()
+        self._kept_polls.clear()
+        self._kept_others.clear()
         self._bodies.clear()
-        self._base = (self._last_time, self._request)
         self._frames_kept = self._frames_shown = 0
         super().clear()
         self.update_title()
@@ -234,8 +258,8 @@ class FrameLog(Log):
             self.update_title()
         if not self.is_mounted:
             return len(events)  # drawn from what is kept once mounted
-        if self._hex_view and self._hex_grows(shown[-MAX_LINES_PER_FLUSH:]):
-            self._redraw()  # a longer line: the hex column moves right, for every line
+        if self._hex_view and self._hex_moves(shown[-MAX_LINES_PER_FLUSH:]):
+            self._redraw()  # the hex column moves (or goes under), for every line
             return len(events)
         lines = self._draw(shown[-MAX_LINES_PER_FLUSH:])
         if count > MAX_LINES_PER_FLUSH:
@@ -257,19 +281,15 @@ class FrameLog(Log):
         return len(events)
 
     def _keep(self, events: list[Event]) -> tuple[int, list[Drawn]]:
-        """Keep new events (the oldest go past KEPT); how many of them are shown, and
-        the newest of those with their gap and request (all the flush may draw).
-
-        On the path of every frame: while every frame shows, only the newest ones a
-        flush draws make a tuple."""
-        kept = self._kept
+        """Keep new events with their gap and request (the oldest of their kind go past
+        KEPT); how many of them are shown, and the newest of those (all a flush may draw)."""
+        polls, others, order = self._kept_polls, self._kept_others, self._order
         narrowed, passes = self._narrowed, self._passes
         last_time, waiting = self._last_time, self._request
         tail = 0 if narrowed else len(events) - MAX_LINES_PER_FLUSH - 1
         shown: list[Drawn] = []
         count = frames = 0
         for n, event in enumerate(events):
-            kept.append(event)
             if isinstance(event, Frame):
                 frames += 1
                 gap = None if last_time is None else event.time - last_time
@@ -280,62 +300,43 @@ class FrameLog(Log):
                     request = None
                 else:  # one request in flight: a reply answers the last one sent
                     request, waiting = waiting, None
+                drawn: Drawn = (event, gap, request)
+                (polls if event.poll else others).append((next(order), drawn))
                 if narrowed:
                     if not passes(event, request):
                         continue
                     self._frames_shown += 1
             else:
-                gap = request = None
+                drawn = (event, None, None)
+                others.append((next(order), drawn))
             count += 1
             if n >= tail:
-                shown.append((event, gap, request))
+                shown.append(drawn)
         self._last_time, self._request = last_time, waiting
         self._frames_kept += frames
-        if len(kept) > KEPT:
-            self._forget(len(kept) - KEPT)
+        for kept in (polls, others):
+            if len(kept) > KEPT:
+                self._forget(kept, len(kept) - KEPT)
         return count, shown
 
-    def _forget(self, count: int) -> None:
-        """The oldest events go; the wire state before the oldest kept one follows them."""
-        kept, bodies = self._kept, self._bodies
+    def _forget(self, kept: deque[Kept], count: int) -> None:
+        """The oldest ``count`` events of one kind go, and their share of the counts."""
+        bodies = self._bodies
         narrowed = self._narrowed
-        base_time, waiting = self._base
         for _ in range(count):
-            event = kept.popleft()
+            _, (event, _, request) = kept.popleft()
             if not isinstance(event, Frame):
                 continue
             self._frames_kept -= 1
-            base_time = event.time
-            if event.direction == "tx":
-                request = waiting = event.data
-            elif event.unsolicited:
-                request = None
-            else:
-                request, waiting = waiting, None
             if narrowed and self._passes(event, request):
                 self._frames_shown -= 1
             if bodies:
                 bodies.pop(id(event), None)
-        self._base = (base_time, waiting)
 
     def _walk(self) -> list[Drawn]:
-        """Every kept event with its gap and request."""
-        last_time, waiting = self._base
-        out: list[Drawn] = []
-        for event in self._kept:
-            if not isinstance(event, Frame):
-                out.append((event, None, None))
-                continue
-            gap = None if last_time is None else event.time - last_time
-            last_time = event.time
-            if event.direction == "tx":
-                request = waiting = event.data
-            elif event.unsolicited:
-                request = None
-            else:
-                request, waiting = waiting, None
-            out.append((event, gap, request))
-        return out
+        """Every kept event with its gap and request, in the order they came."""
+        merged = heapq.merge(self._kept_polls, self._kept_others, key=itemgetter(0))
+        return [drawn for _, drawn in merged]
 
     def _passes(self, frame: Frame, request: bytes | None) -> bool:
         if frame.poll and not self._show_polls:
@@ -363,9 +364,11 @@ class FrameLog(Log):
         self.update_title()
         if not self.is_mounted:
             return
-        self._hex_column = 0
+        shown = shown[-MAX_LINES:]
+        self._hex_width = self._width_now()
+        self._hex_column = self._hex_plan(shown, self._hex_width) if self._hex_view else 0
         self._hex_placed = [0, 0]
-        lines = self._draw(shown[-MAX_LINES:])
+        lines = self._draw(shown)
         super().clear()
         if lines:
             self.write_lines(lines, scroll_end=False)
@@ -395,27 +398,49 @@ class FrameLog(Log):
     def _hex_fits(self, width: int, line: str, hexed: str) -> bool:
         return not width or len(line) + len(HEX_SEPARATOR) + len(hexed) <= width
 
-    def _hex_column_of(self, shown: list[Drawn], width: int) -> int:
-        """The longest text among these frames that leaves room for its hex beside it."""
-        column = 0
+    def _hex_plan(self, shown: list[Drawn], width: int) -> int | None:
+        """Where these frames' bytes go at this width: the column beside their text (the
+        longest text of the frames whose bytes could fit beside it), when every such
+        frame fits at that column; else None: under every frame's text, so requests and
+        replies are never laid out two ways. A frame too long for its bytes beside it at
+        any column has them under it either way."""
+        if not width:
+            return 0  # not laid out yet: drawn again at the first size
+        fits: list[tuple[int, int]] = []  # (text, hex) lengths of the frames that could
         for event, gap, _ in shown:
             if isinstance(event, Frame):
                 line, _ = self._frame_line(event, gap)
-                if self._hex_fits(width, line, hex_text(event.data)):
-                    column = max(column, len(line))
-        return column
+                hexed = len(event.data) * 3 - 1
+                if len(line) + len(HEX_SEPARATOR) + hexed <= width:
+                    fits.append((len(line), hexed))
+        column = max((text for text, _ in fits), default=0)
+        if all(column + len(HEX_SEPARATOR) + hexed <= width for _, hexed in fits):
+            return column
+        return None
 
-    def _hex_grows(self, shown: list[Drawn]) -> bool:
-        """True when new frames move the hex column (or the width changed)."""
+    def _hex_moves(self, shown: list[Drawn]) -> bool:
+        """True when new frames change where the bytes go (or the width changed)."""
         width = self._width_now()
-        return width != self._hex_width or self._hex_column_of(shown, width) > self._hex_column
+        if width != self._hex_width:
+            return True
+        column = self._hex_column
+        if column is None:
+            return False  # every frame's bytes under it: more frames cannot change that
+        for event, gap, _ in shown:
+            if isinstance(event, Frame):
+                line, _ = self._frame_line(event, gap)
+                hexed = len(event.data) * 3 - 1
+                if len(line) + len(HEX_SEPARATOR) + hexed > width:
+                    continue  # under it, wherever the others are
+                if len(line) > column or column + len(HEX_SEPARATOR) + hexed > width:
+                    return True
+        return False
 
     def _draw(self, shown: list[Drawn]) -> list[str]:
         lines: list[str] = []
         hex_view = self._hex_view
-        width = self._hex_width = self._width_now() if hex_view else 0
-        if hex_view:
-            self._hex_column = column = max(self._hex_column, self._hex_column_of(shown, width))
+        width = self._hex_width
+        column = self._hex_column
         placed = self._hex_placed
         for event, gap, _ in shown:
             if not isinstance(event, Frame):
@@ -427,9 +452,8 @@ class FrameLog(Log):
                 lines.append(line)
                 continue
             hexed = hex_text(event.data)
-            padded = f"{line:<{column}}"
-            if self._hex_fits(width, padded, hexed):
-                lines.append(padded + HEX_SEPARATOR + hexed)
+            if column is not None and self._hex_fits(width, f"{line:<{column}}", hexed):
+                lines.append(f"{line:<{column}}" + HEX_SEPARATOR + hexed)
                 placed[0] += 1
             else:
                 lines.append(line)

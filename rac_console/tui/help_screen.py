@@ -55,33 +55,54 @@ def key_of(cls: type, action: str) -> str | None:
     return None
 
 
-def _pairs(cls: type) -> list[tuple[str, str]]:
+def _pairs(cls: type, only: Sequence[str] | None = None) -> list[tuple[str, str]]:
     """The keys of ``cls`` and of the console's classes it inherits from (not those of
-    Textual's), labelled, with their descriptions; a key given twice counts once."""
+    Textual's), labelled, with their descriptions; a key given twice counts once.
+    With ``only`` (binding ids), just those, in that order."""
     pairs: dict[str, str] = {}
+    found: dict[str, tuple[str, str]] = {}
     for klass in cls.__mro__:
         if klass.__module__.startswith("rac_console."):
             for binding in bindings_of(klass):
                 key = key_label(binding.key_display or binding.key)
-                pairs.setdefault(key, binding.tooltip or binding.description)
+                text = binding.tooltip or binding.description
+                if only is None:
+                    pairs.setdefault(key, text)
+                elif binding.id is not None and binding.id in only:
+                    found.setdefault(binding.id, (key, text))
+    if only is not None:
+        return [found[id_] for id_ in only if id_ in found]
     return list(pairs.items())
+
+
+#: The console's own keys in the help, in this order: help and palette, moving about,
+#: what is shown, then leaving (the footer has its own order: the most used first).
+APP_KEYS = (
+    "help",
+    "next-pane",
+    "previous-pane",
+    "toggle-polling",
+    "toggle-poll-frames",
+    "toggle-scroll",
+    "toggle-io-grid",
+    "toggle-hex",
+    "clear-log",
+    "interrupt",
+    "quit",
+)
 
 
 def console_key_groups(app_class: type[App[int]]) -> list[KeyGroup]:
     """The console's keys, read from the bindings of the app and its panes, labelled
-    as on the keyboard."""
+    as on the keyboard: the command line's first, then the table's, the other panes',
+    and last the keys that work anywhere."""
     pane = key_of(app_class, "focus_pane(1)") or "F6"
     grid = key_of(app_class, "toggle_io_grid") or "F5"
     trend = key_of(WatchTable, "row('trend')") or "t"
     row_filter = key_of(WatchTable, "row('filter')") or "/"
+    anywhere = _pairs(app_class, APP_KEYS)
+    palette = (key_label(app_class.COMMAND_PALETTE_BINDING), "Command palette")
     return [
-        (
-            "anywhere",
-            [
-                *_pairs(app_class),
-                (key_label(app_class.COMMAND_PALETTE_BINDING), "Command palette"),
-            ],
-        ),
         (
             "command line",
             [
@@ -89,13 +110,15 @@ def console_key_groups(app_class: type[App[int]]) -> list[KeyGroup]:
                 *_pairs(CommandLine),
                 ("Right", "Accept the grey suggestion from history (at the end of the line)"),
                 ("?", "Help (on an empty line)"),
+                *_pairs(app_class, ("cancel-command",)),
             ],
         ),
         (f"watch table ({pane})", _pairs(WatchTable)),
-        (f"filter line ({row_filter})", _pairs(FilterLine)),
+        (f"filter line ({row_filter} in the table or the frame log)", _pairs(FilterLine)),
         (f"I/O grid ({grid}, then {pane})", _pairs(IoPanel)),
         (f"frame log ({pane})", _pairs(FrameLog)),
         (f"trend view ({trend} on a row)", _pairs(TrendView)),
+        ("anywhere", [*anywhere[:1], palette, *anywhere[1:]]),
     ]
 
 

@@ -19,12 +19,13 @@ from textual.binding import Binding, BindingType
 from textual.containers import Container, VerticalScroll
 from textual.geometry import Region
 from textual.message import Message
-from textual.widgets import Static
+from textual.widget import Widget
+from textual.widgets import DataTable, Static
 
 from ..commands.language import VarRef
 from ..engine import RowView
 from ..present.cells import change_style
-from ..present.iogrid import Grid, build_grid
+from ..present.iogrid import Grid, build_grid, widths_wanted
 from ..protocol import kind_of
 from ..protocol.text import terminal_safe
 
@@ -44,11 +45,50 @@ def state_word(row: RowView) -> str:
 
 
 class WatchArea(Container):
-    """The watch table and the I/O panel; its own width decides how they share it
-    (it is always the screen's width, so the choice never feeds back on itself)."""
+    """The watch table and the I/O panel: the panel beside the table from
+    :data:`WIDE_COLUMNS` when both fit whole (every column of the table, a line of 16
+    bits), as wide as its grid can use (symbols, labels); under it otherwise.
+
+    Half the width for one line of bits cut the position rows at 80 columns. The table's
+    columns are as wide as their cells whatever room it has, and the grid's widths follow
+    from the bits watched, so the choice never feeds back on itself.
+    """
+
+    def __init__(self, table: DataTable[object], panel: IoPanel, **kwargs: str | None) -> None:
+        """The two it holds, as attributes: a timer never queries a DOM torn down."""
+        super().__init__(**kwargs)  # type: ignore[arg-type]
+        self.table = table
+        self.panel = panel
+
+    def compose(self) -> ComposeResult:
+        yield self.table
+        yield self.panel
 
     def on_resize(self, event: events.Resize) -> None:
-        self.set_class(event.size.width >= WIDE_COLUMNS, "-wide")
+        self.share_width()
+
+    def share_width(self) -> None:
+        """Beside or under, from the room there is; called as rows come and go."""
+        panel, table = self.panel, self.table
+        if not (self.is_mounted and table.is_mounted and panel.is_mounted):
+            return
+        width = self.size.width
+        beside = False
+        panel_width: int | None = None
+        if panel.display and width >= WIDE_COLUMNS:
+            least, most = panel.widths_wanted()
+            room = width - _chrome(table) - table.virtual_size.width
+            if room >= least:
+                beside, panel_width = True, min(most, room)
+        self.set_class(beside, "-wide")
+        if panel_width != panel.arranged_width:
+            panel.arranged_width = panel_width
+            panel.styles.width = panel_width  # None: the stylesheet's, under the table
+
+
+def _chrome(widget: Widget) -> int:
+    """The columns a pane takes besides its content: border, padding, scrollbar."""
+    return widget.styles.gutter.width + widget.styles.scrollbar_size_vertical
 
 
 class IoPanel(VerticalScroll, can_focus=True):
@@ -84,6 +124,15 @@ class IoPanel(VerticalScroll, can_focus=True):
         self._text: Text = EMPTY_TEXT
         self.grid: Grid | None = None
         self.cursor: int | None = None
+        self.arranged_width: int | None = None  # set by the watch area while beside
+
+    def widths_wanted(self) -> tuple[int, int]:
+        """The panel's width for its grid at its best without labels, and with them."""
+        plain, labelled = widths_wanted(self._rows)
+        if not plain:
+            plain = labelled = EMPTY_TEXT.cell_len
+        chrome = _chrome(self)
+        return plain + chrome, labelled + chrome
 
     def compose(self) -> ComposeResult:
         yield self._body

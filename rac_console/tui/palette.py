@@ -23,13 +23,17 @@ from typing import TYPE_CHECKING, cast
 from platformdirs import user_downloads_path
 from textual.command import DiscoveryHit, Hit, Hits, Provider
 from textual.content import Content
+from textual.markup import escape
 
+from ..commands.policy import TargetProfile
 from ..engine import Message
 from ..present.help_text import help_sections
+from ..present.status import label_text
 from ..protocol.text import terminal_safe
 from .command_line import CommandLine
 from .filter_line import focus_now
 from .help_screen import HelpScreen, console_key_groups, key_of
+from .watch_table import WatchTable
 
 if TYPE_CHECKING:
     from .app import RacConsoleApp
@@ -95,20 +99,34 @@ def console_commands(app: RacConsoleApp) -> Iterator[PaletteCommand]:
             "show or hide each frame's bytes in hex",
             key_of(cls, "toggle_hex"),
         )
+    detail = app.row_detail.is_open
+    yield PaletteCommand(
+        "Hide row details" if detail else "Show row details",
+        app.action_toggle_detail,
+        "the frame log again"
+        if detail
+        else "the row under the table's cursor in full, a field a line",
+        f"{key_of(WatchTable, 'app.toggle_detail')} in the table",
+    )
     yield PaletteCommand(
         "Help", app.action_help, "keys, commands, what the status line says", key_of(cls, "help")
     )
+    status = app.status
+    on_sim = status is not None and status.is_simulator
     yield PaletteCommand(
         "connect sim",
         lambda: app.submit_line("connect sim"),
-        "back to the built-in simulator",
+        "the built-in simulator · writes open" + (" · connected now" if on_sim else ""),
     )
     for name in app.profile_names:
         line = f"connect {name}"
+        profile = app.profiles.get(name)
+        label = f"  ({label_text(profile.label)})" if profile and profile.label else ""
+        current = status is not None and status.profile == name
         yield PaletteCommand(
-            terminal_safe(line),
+            terminal_safe(line) + label,
             partial(app.submit_line, line),
-            "a target profile from the config file",
+            profile_help(profile, current),
         )
     yield PaletteCommand(
         "load FILE…",
@@ -130,6 +148,44 @@ def console_commands(app: RacConsoleApp) -> Iterator[PaletteCommand]:
             lambda: app.put_on_command_line("log "),
             "log the watched values to a CSV file: type its name",
         )
+    yield from frame_file_commands(app)
+
+
+def frame_file_commands(app: RacConsoleApp) -> Iterator[PaletteCommand]:
+    """``record`` and ``transcript`` from now on, or their stop: the moment worth keeping
+    is rarely foreseen when the console starts."""
+    status = app.status
+    for word, running, what in (
+        ("record", status.recording if status else None, "every frame as JSON lines"),
+        ("transcript", status.transcribing if status else None, "a plain transcript"),
+    ):
+        if running is not None:
+            yield PaletteCommand(
+                f"{word} stop",
+                partial(app.submit_line, f"{word} stop"),
+                f"stop writing {what} to {terminal_safe(running)}",
+            )
+        else:
+            yield PaletteCommand(
+                f"{word} FILE…",
+                partial(app.put_on_command_line, f"{word} "),
+                f"write {what} to a file from now on: type its name",
+            )
+
+
+def profile_help(profile: TargetProfile | None, current: bool = False) -> str:
+    """``LIVE 10.0.0.5:5006 · writes confirm · allow I 100-199``: where ``connect NAME``
+    goes and what it lets through, so no two targets are mixed up in the palette (as
+    markup-safe text: Textual reads a hit's help as markup)."""
+    if profile is None:
+        return "a target profile from the config file"
+    policy = profile.policy
+    parts = [f"LIVE {profile.host}:{profile.port}", f"writes {policy.writes.value}"]
+    if policy.allow is not None:
+        parts.append("allow " + (", ".join(str(rule) for rule in policy.allow) or "nothing"))
+    if current:
+        parts.append("connected now")
+    return escape(terminal_safe(" · ".join(parts)))
 
 
 def textual_commands(app: RacConsoleApp) -> Iterator[PaletteCommand]:

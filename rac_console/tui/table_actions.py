@@ -8,7 +8,10 @@ put on the command line is never sent without the user's own Enter.
 
 from __future__ import annotations
 
+import time
+
 from textual.widget import Widget
+from textual.widgets import DataTable
 
 from ..commands.language import VarRef
 from ..engine import Cycle, Engine, Feedback, Message, Result, RowView, Status
@@ -19,6 +22,7 @@ from .command_line import CommandLine
 from .filter_line import FilterLine, focus_now
 from .frame_log import FrameLog
 from .io_panel import IoPanel
+from .row_detail import RowDetail
 from .trend_view import TrendView
 from .watch_table import WatchTable, writes_refused
 
@@ -47,6 +51,7 @@ class TableActions:
     table_filter: TableFilter
     io_panel: IoPanel  # the I/O bit grid (F5), a pane while shown
     trend_view: TrendView
+    row_detail: RowDetail  # the row under the cursor in full (d), in the log's place
     trends: TrendStore
     toggles: PendingToggles
 
@@ -73,8 +78,8 @@ class TableActions:
             panes.append(self.io_panel)
         if self.trend_view.has_class("-open"):
             panes.append(self.trend_view)
-        else:
-            panes.append(self.frame_log)
+        elif not self.row_detail.is_open:  # the detail takes no focus: the arrows stay
+            panes.append(self.frame_log)  # the table's
         return panes
 
     def action_focus_pane(self, step: int) -> None:
@@ -99,7 +104,7 @@ class TableActions:
             return
         command_line = self.command_line
         focus_now(command_line)
-        command_line.insert_text_at_cursor(character)
+        command_line.type_ahead(character)  # held while a write may still ask
 
     # ------------------------------------------------------------ row keys
 
@@ -120,6 +125,13 @@ class TableActions:
             self.show(Message(f"{row.var} has no trend: t draws numbers, IO bits and positions"))
         elif event.action == "trend":
             self._trend(row)
+
+    def toggle_row(self, row: RowView | None) -> None:
+        """Space on the table, handed over as it is read (the keys after it wait)."""
+        if row is None:
+            self.show(Message("the table has no rows: watch TYPE INDEX adds one"))
+        else:
+            self._toggle(row)
 
     def _put_on_line(self, row: RowView) -> None:
         line = put_line(row.var, row.variant)
@@ -147,7 +159,11 @@ class TableActions:
             wait = " (polling is paused: F2 resumes it)" if paused else ""
             self.show(Message(f"{var}: the last toggle has not come back yet{wait}; nothing sent"))
             return
+        may_ask = self._may_ask(line)
         seq = self.submit_line(line)
+        if may_ask:  # the keys typed after this Space must not answer its question
+            self.command_line.hold()
+            self._hold_keys(seq, queued=False)
         self.toggles.start(var, seq, not bool(row.variant and row.variant.value))
 
     # --------------------------------------------------------------- trends
@@ -179,11 +195,51 @@ class TableActions:
     def submit_line(self, line: str) -> int:
         raise NotImplementedError  # the app's
 
+    def _may_ask(self, line: str) -> bool:
+        raise NotImplementedError  # the app's
+
+    def _hold_keys(self, seq: int, queued: bool) -> None:
+        raise NotImplementedError  # the app's
+
+    # ------------------------------------------------------------ the detail
+
+    def action_toggle_detail(self) -> None:
+        """``d`` on the table (or the palette): the row under the cursor in full, in the
+        frame log's place (the log keeps collecting), following the cursor; again: the
+        log is back. It closes the trend view, which has the same place."""
+        detail = self.row_detail
+        if detail.is_open:
+            self._close_detail()
+            return
+        if self.trend_view.has_class("-open"):
+            self._close_trend()
+        detail.add_class("-open")
+        self.frame_log.add_class("-under-detail")
+        self.show_detail()
+
+    def _close_detail(self) -> None:
+        self.row_detail.remove_class("-open")
+        self.frame_log.remove_class("-under-detail")
+
+    def show_detail(self) -> None:
+        """The open detail follows the table's cursor and the polls."""
+        if self.row_detail.is_open:
+            self.row_detail.show_row(self.table.cursor_view(), time.monotonic())
+
+    def on_data_table_row_highlighted(self, event: DataTable.RowHighlighted) -> None:
+        """The cursor moved: the detail shows its row at once, not at the next refresh."""
+        if event.data_table is self.table:
+            self.show_detail()
+
+    # --------------------------------------------------------------- trends
+
     def _trend(self, row: RowView) -> None:
         view = self.trend_view
         if view.has_class("-open") and view.var == row.var:
             self._close_trend()
             return
+        if self.row_detail.is_open:
+            self._close_detail()  # the same place: one at a time
         view.show_row(row.var, terminal_safe(row.label), self.table.field_of(row.var))
         view.add_class("-open")
         self.frame_log.add_class("-under-trend")

@@ -23,6 +23,7 @@ from textual.widget import Widget
 from textual.widgets import Static
 
 from ..commands.language import VarRef
+from ..present.help_text import PANE_KEYS
 from ..present.trends import (
     TrendStore,
     Window,
@@ -95,8 +96,15 @@ class TrendView(Vertical, can_focus=True):
         Binding("f", "cycle_field", "Trend field", id="trend-field"),
         Binding("t", "close", "Close trend", id="trend-close"),
         Binding("escape", "close", "Close trend", show=False, id="trend-escape"),
-        Binding("tab", "app.focus_pane(1)", "Next pane", show=False, id="trend-next-pane"),
-        Binding("shift+tab", "app.focus_pane(-1)", "Previous pane", show=False),
+        Binding(
+            "tab",
+            "app.focus_pane(1)",
+            "Next pane",
+            tooltip=PANE_KEYS,
+            show=False,
+            id="trend-next-pane",
+        ),
+        Binding("shift+tab", "app.focus_pane(-1)", "Previous pane", tooltip=PANE_KEYS, show=False),
     ]
 
     class Closed(Message):

@@ -22,6 +22,7 @@ from ..commands.language import VarRef
 from ..engine import RowView, Status
 from ..present.cells import age_text, change_style, status_cell, type_text, value_cell
 from ..present.filtering import add_filter_title, needle_of
+from ..present.help_text import PANE_KEYS
 from ..present.table_rows import SortMode, visible_keys
 from ..present.trends import TrendStore, field_labels, has_trend, sparkline_text
 from ..protocol.text import terminal_safe
@@ -38,6 +39,11 @@ COLUMNS = (
     ("value", "Value"),
     ("type", "VARTYPE"),
 )
+#: The bottom border while values are cut: how to read a row whole.
+CUT_HINT = "values cut: F6, then d shows a row in full"
+CUT_FOCUSED = "values cut: d shows the row in full"
+#: Refreshes to wait at most for new rows to be measured before they are scrolled to.
+REVEAL_TRIES = 5
 #: Bars in a trend cell; a field's label (``Rz``, ``Fig``) takes the first 4 cells.
 SPARK_WIDTH = 16
 FIELD_WIDTH = 4
@@ -55,6 +61,13 @@ class WatchTable(DataTable[object]):
             tooltip="Put the row's value on the command line, to edit and write",
             id="row-put",
         ),
+        Binding(
+            "d",
+            "app.toggle_detail",
+            "Details",
+            tooltip="The row under the cursor in full, a field a line (d again closes)",
+            id="row-detail",
+        ),
         Binding("space", "row('toggle')", "Toggle", id="row-toggle"),
         Binding("delete", "row('unwatch')", "Unwatch", id="row-unwatch"),
         Binding("slash", "row('filter')", "Filter", id="row-filter"),
@@ -68,8 +81,22 @@ class WatchTable(DataTable[object]):
             id="row-field",
         ),
         Binding("escape", "app.focus_command_line", "Command line", id="row-leave"),
-        Binding("tab", "app.focus_pane(1)", "Next pane", show=False, id="row-next-pane"),
-        Binding("shift+tab", "app.focus_pane(-1)", "Previous pane", show=False, id="row-prev-pane"),
+        Binding(
+            "tab",
+            "app.focus_pane(1)",
+            "Next pane",
+            tooltip=PANE_KEYS,
+            show=False,
+            id="row-next-pane",
+        ),
+        Binding(
+            "shift+tab",
+            "app.focus_pane(-1)",
+            "Previous pane",
+            tooltip=PANE_KEYS,
+            show=False,
+            id="row-prev-pane",
+        ),
     ]
 
     class RowAction(Message):
@@ -81,7 +108,7 @@ class WatchTable(DataTable[object]):
             self.row = row  # as shown when the key was pressed; None on an empty table
 
     #: The printable keys the table acts on; any other goes to the command line.
-    ACTION_CHARACTERS = frozenset(" /sft")
+    ACTION_CHARACTERS = frozenset(" /sftd")
 
     def on_key(self, event: events.Key) -> None:
         """Typing a command with the table focused must not fire row keys one by one
@@ -98,11 +125,14 @@ class WatchTable(DataTable[object]):
             event.prevent_default()
             self.filter_line.open()
             return
-        if character == " " and not elsewhere and self._writes_refused():
-            # Not offered, but still answered: the engine says why nothing is written.
+        if character == " " and not elsewhere:
+            # Here and now, not by the binding (which runs once the key has bubbled up
+            # to the app, by then on the pane the keys after it moved the focus to): a
+            # y typed after it must find the write started, and held if it may ask. On
+            # a read-only target it is still answered: the engine says why.
             event.stop()
             event.prevent_default()
-            self.action_row("toggle")
+            self._on_toggle(self.cursor_view())
             return
         if (
             event.is_printable
@@ -124,12 +154,18 @@ class WatchTable(DataTable[object]):
         return writes_refused(status if isinstance(status, Status) else None)
 
     def __init__(
-        self, trends: TrendStore, on_typed: Callable[[str], None], **kwargs: object
+        self,
+        trends: TrendStore,
+        on_typed: Callable[[str], None],
+        on_toggle: Callable[[RowView | None], None],
+        **kwargs: object,
     ) -> None:
-        """``on_typed(character)``: a key typed here that belongs on the command line."""
+        """``on_typed(character)``: a key typed here that belongs on the command line;
+        ``on_toggle(row)``: Space on a row, handed over at once (see :meth:`on_key`)."""
         super().__init__(cursor_type="row", zebra_stripes=True, **kwargs)  # type: ignore[arg-type]
         self.trends = trends
         self._on_typed = on_typed
+        self._on_toggle = on_toggle
         #: The filter line ``/`` opens (it sets itself here).
         self.filter_line: FilterLine | None = None
         #: The field each V P J T row's trend follows (index into its labels); `f` cycles it.
@@ -138,6 +174,7 @@ class WatchTable(DataTable[object]):
         self._views: dict[str, RowView] = {}  # every row held, as last refreshed
         self._order: list[str] = []  # the keys as the DataTable holds them
         self._added: dict[str, int] = {}
+        self._new: list[str] = []  # keys added since the last refresh, to bring into view
         self._count = itertools.count()
         self._widths: dict[str, int] = {}
         self._filter = ""  # as typed
@@ -157,9 +194,11 @@ class WatchTable(DataTable[object]):
         """The row cursor shows only while keys go to the table: elsewhere a highlighted
         row would read as selected, and it would hide that row's colours."""
         self.show_cursor = True
+        self._say_cut()
 
     def on_blur(self) -> None:
         self.show_cursor = False
+        self._say_cut()
 
     # ------------------------------------------------------------- choices
 
@@ -227,8 +266,43 @@ class WatchTable(DataTable[object]):
         for row in rows.values():
             if row.key not in self._added:
                 self._added[row.key] = next(self._count)
+                self._new.append(row.key)
             self._views[row.key] = row
         self._apply(now)
+        self._say_cut()
+        new, self._new = self._new, []
+        shown = [n for n, key in enumerate(self._order) if key in set(new)]
+        if shown:  # once laid out: the rows' room is known then
+            self.call_after_refresh(self.reveal_rows, shown[0], shown[-1])
+
+    def _say_cut(self) -> None:
+        """When the values are wider than the table (a P row at 120 columns), the
+        bottom border says how to read a row whole."""
+        cut = self.virtual_size.width > self.scrollable_content_region.width
+        subtitle = (CUT_FOCUSED if self.has_focus else CUT_HINT) if cut else ""
+        if subtitle != str(self.border_subtitle or ""):
+            self.border_subtitle = subtitle
+
+    def on_resize(self) -> None:
+        self._say_cut()
+
+    def reveal_rows(self, first: int, last: int, tries: int = REVEAL_TRIES) -> None:
+        """Bring rows just added into view (``watch I 0-99`` below the rows there): all
+        of them when they fit, else the first; the least scroll that does it. The
+        cursor stays where it is. Until the table has measured its new rows it cannot
+        scroll that far: then again after the next refresh, a few times at most."""
+        room = self.scrollable_content_region.height - (
+            self.header_height if self.show_header else 0
+        )
+        if room <= 0:
+            return
+        top = round(self.scroll_y)
+        # All of them with the least scroll when they fit; else the first at the top.
+        target = min(max(top, last - room + 1), first) if last - first < room else first
+        if target > self.max_scroll_y and tries > 0:
+            self.call_after_refresh(self.reveal_rows, first, last, tries - 1)
+        elif target != top:
+            self.scroll_to(y=target, animate=False, immediate=True)
 
     def _apply(self, now: float | None = None) -> None:
         """Show the rows that pass the filter, in order, keeping the cursor on its variable."""

@@ -1,0 +1,30 @@
+"""The first line on a live target, shared by the console's welcome and the REPL's
+banner: which controller this is, under which profile and write rules, before anything
+is typed, so a robot is never taken for the simulator."""
+
+from __future__ import annotations
+
+from rich.text import Text
+
+from ..engine.events import Status
+from ..protocol.text import terminal_safe
+from .status import label_text
+
+
+def live_banner(status: Status) -> Text:
+    """``LIVE controller 192.168.0.1:5006, profile cell3 (Cell 3 — welding): writes
+    confirm.`` (``LIVE controller HOST:PORT.`` without a profile)."""
+    return Text.assemble(
+        ("LIVE", "bold white on red"),
+        f" controller {terminal_safe(f'{status.host}:{status.port}')}",
+        profile_words(status),
+        ".",
+    )
+
+
+def profile_words(status: Status) -> str:
+    """``, profile cell3 (Cell 3 — welding): writes confirm`` for a profile, else ''."""
+    if status.profile is None:
+        return ""
+    label = f" ({label_text(status.label)})" if status.label else ""
+    return f", profile {terminal_safe(status.profile)}{label}: writes {status.writes}"
