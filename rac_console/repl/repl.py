@@ -244,13 +244,14 @@ class Repl:
         loop = asyncio.get_running_loop()
         future: asyncio.Future[Result] = loop.create_future()
         engine = self.engine
+        # Ctrl-C while a command runs cancels that command, not the REPL (where the loop
+        # can take signals: not on Windows, where Ctrl-C keeps its default meaning);
+        # taken before the line is submitted, so no Ctrl-C falls between the two.
+        with contextlib.suppress(NotImplementedError, RuntimeError, ValueError):
+            loop.add_signal_handler(signal.SIGINT, engine.cancel)
         seq = engine.submit(line) if isinstance(line, str) else engine.submit_command(line)
         self._waiting[seq] = future
         self._wake.set()
-        # Ctrl-C while a command runs cancels that command, not the REPL (where the loop
-        # can take signals: not on Windows, where Ctrl-C keeps its default meaning).
-        with contextlib.suppress(NotImplementedError, RuntimeError, ValueError):
-            loop.add_signal_handler(signal.SIGINT, engine.cancel)
         try:
             return await future
         finally:
