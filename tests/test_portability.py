@@ -36,3 +36,42 @@ def test_paths_says_where_the_config_is_as_the_readme_does(env: dict[str, str]) 
     else:
         assert config.endswith("rac-console/config.toml, not there yet"), config
         assert env["XDG_CONFIG_HOME"] in config or sys.platform == "darwin"
+
+
+def _as_a_user_would(*args: str, stdin: bytes = b"") -> tuple[int, str, str]:
+    """The CLI with no encoding setting at all: on Windows a pipe then gets the ANSI
+    code page (cp1252), as a user's ``> out.txt`` does. Not marked slow, so the Windows
+    lane runs it."""
+    import locale
+    import os
+    import subprocess
+
+    environment = {
+        key: value
+        for key, value in os.environ.items()
+        if key not in ("PYTHONIOENCODING", "PYTHONUTF8", "COLUMNS", "LINES")
+    }
+    result = subprocess.run(
+        [sys.executable, "-m", "rac_console", *args],
+        env=environment,
+        input=stdin,
+        capture_output=True,
+        timeout=60,
+    )
+    encoding = locale.getpreferredencoding(False)
+    out, err = result.stdout.decode(encoding), result.stderr.decode(encoding)
+    assert "Traceback" not in out + err, err
+    return result.returncode, out, err
+
+
+def test_a_piped_put_with_no_setting_says_what_happened() -> None:
+    status, out, err = _as_a_user_would("put", "I", "10", "15")
+    assert status == 0, err
+    assert out.startswith("I10: 0 ") and "read back 15" in out, out
+
+
+def test_a_piped_utf8_script_with_no_setting_is_read_as_utf8() -> None:
+    status, out, err = _as_a_user_would("run", "-", stdin="get I 1\nput S 1 café\n".encode())
+    assert status == 2, err  # the non-ASCII value is refused, the rest ran
+    assert "I1 = " in out, (out, err)
+    assert "'é' cannot be sent" in err, err
