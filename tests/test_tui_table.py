@@ -167,7 +167,9 @@ async def test_a_second_space_before_the_first_came_back_is_ignored(tmp_path: Pa
         await until(pilot, lambda: app.status is not None and app.status.paused, "the pause")
         await type_line(pilot, "send SIM:SET:delay_ms=300")  # slow: the write stays in flight
         await until(pilot, lambda: "SIM:SET:delay_ms=300" in results_text(app), "the delay")
-        await pilot.press("f6", "space", "space")  # the second before the first came back
+        await pilot.press("f6")
+        await until(pilot, lambda: app.focused is app.table, "the table's focus")
+        await pilot.press("space", "space")  # the second before the first came back
         done = "IO128: ON → OFF  S_OK  read back OFF ✓"
         await until(pilot, lambda: done in results_text(app), "the first one's reply")
         refusal = "IO128: the last toggle has not come back yet"

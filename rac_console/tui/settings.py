@@ -16,6 +16,7 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
+from textual.app import ScreenStackError
 from textual.command import CommandPalette
 
 from ..commands.settings import Value
@@ -90,8 +91,14 @@ class SettingsKeeper:
             self.app.show(Message(problem, "error"))
 
     def check(self) -> None:
-        """Save what changed since the last save (not while the palette is open)."""
-        if not isinstance(self.app.screen, CommandPalette):
+        """Save what changed since the last save (not while the palette is open, nor
+        while the console closes: its last timer may fire with no screen left, and the
+        exit saves anyway)."""
+        try:
+            screen = self.app.screen
+        except ScreenStackError:
+            return
+        if not isinstance(screen, CommandPalette):
             self.save()
 
     def save(self, *, at_exit: bool = False) -> None:
