@@ -29,10 +29,10 @@ from textual.widgets import Log
 from ..engine import Alert, Feedback, Message, Note
 from ..present.filtering import FrameFilter, add_filter_title
 from ..present.frames import clock_text, frame_body, gap_text, hex_text
-from ..present.help_text import PANE_KEYS
 from ..protocol.text import counted, terminal_safe
 from ..session import Frame
 from .filter_line import FilterLine
+from .pane_keys import pane_bindings
 
 MAX_LINES = 5000
 MAX_PENDING = 50_000
@@ -70,22 +70,7 @@ class FrameLog(Log):
         # after it go there (the log takes no other printable key).
         Binding("slash", "app.filter_frames", "Filter", id="log-filter", priority=True),
         Binding("t", "app.toggle_frame_times", "Frame times", id="log-frame-times"),
-        Binding(
-            "tab",
-            "app.focus_pane(1)",
-            "Next pane",
-            tooltip=PANE_KEYS,
-            show=False,
-            id="log-next-pane",
-        ),
-        Binding(
-            "shift+tab",
-            "app.focus_pane(-1)",
-            "Previous pane",
-            tooltip=PANE_KEYS,
-            show=False,
-            id="log-prev",
-        ),
+        *pane_bindings("log"),
     ]
 
     def __init__(self, **kwargs: object) -> None:

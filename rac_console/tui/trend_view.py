@@ -23,7 +23,6 @@ from textual.widget import Widget
 from textual.widgets import Static
 
 from ..commands.language import VarRef
-from ..present.help_text import PANE_KEYS
 from ..present.trends import (
     TrendStore,
     Window,
@@ -33,6 +32,7 @@ from ..present.trends import (
     number_text,
     span_text,
 )
+from .pane_keys import pane_bindings
 
 #: The windows `w` steps through, in seconds (the store reaches back 5 minutes).
 WINDOWS = (10.0, 60.0, 300.0)
@@ -96,15 +96,7 @@ class TrendView(Vertical, can_focus=True):
         Binding("f", "cycle_field", "Trend field", id="trend-field"),
         Binding("t", "close", "Close trend", id="trend-close"),
         Binding("escape", "close", "Close trend", show=False, id="trend-escape"),
-        Binding(
-            "tab",
-            "app.focus_pane(1)",
-            "Next pane",
-            tooltip=PANE_KEYS,
-            show=False,
-            id="trend-next-pane",
-        ),
-        Binding("shift+tab", "app.focus_pane(-1)", "Previous pane", tooltip=PANE_KEYS, show=False),
+        *pane_bindings("trend"),
     ]
 
     class Closed(Message):

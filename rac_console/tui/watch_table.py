@@ -22,11 +22,11 @@ from ..commands.language import VarRef
 from ..engine import RowView, Status
 from ..present.cells import age_text, change_style, status_cell, type_text, value_cell
 from ..present.filtering import add_filter_title, needle_of
-from ..present.help_text import PANE_KEYS
 from ..present.table_rows import SortMode, visible_keys
 from ..present.trends import TrendStore, field_labels, has_trend, sparkline_text
 from ..protocol.text import terminal_safe
 from .filter_line import FilterLine
+from .pane_keys import pane_bindings
 
 #: Status, age and trend before the value, so they stay in view when a long P or J
 #: value is cut off on a narrow terminal.
@@ -81,22 +81,7 @@ class WatchTable(DataTable[object]):
             id="row-field",
         ),
         Binding("escape", "app.focus_command_line", "Command line", id="row-leave"),
-        Binding(
-            "tab",
-            "app.focus_pane(1)",
-            "Next pane",
-            tooltip=PANE_KEYS,
-            show=False,
-            id="row-next-pane",
-        ),
-        Binding(
-            "shift+tab",
-            "app.focus_pane(-1)",
-            "Previous pane",
-            tooltip=PANE_KEYS,
-            show=False,
-            id="row-prev-pane",
-        ),
+        *pane_bindings("row"),
     ]
 
     class RowAction(Message):
