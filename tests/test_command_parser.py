@@ -26,7 +26,7 @@ from rac_console.commands.language import (
     parse_var,
     split_word,
 )
-from rac_console.commands.registry import parse_command
+from rac_console.engine.commands import parse_command
 from rac_console.protocol import InputError
 
 

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import pytest
 
-from rac_console.commands.completion import (
+from rac_console.present.completion import (
     WHOLE_LIST,
     Candidate,
     common_prefix,

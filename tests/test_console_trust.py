@@ -303,8 +303,8 @@ async def test_a_cut_candidate_list_says_how_many_more(tmp_path: Path) -> None:
     async with app.run_test(size=(120, 40)) as pilot:
         from textual.widgets import Static
 
-        from rac_console.commands.completion import WHOLE_LIST
-        from rac_console.commands.registry import COMMANDS
+        from rac_console.engine.commands import BUILTIN
+        from rac_console.present.completion import WHOLE_LIST
 
         await type_line(pilot, "help ", enter=False, keys=True)  # 19 commands: cut
         await pilot.press("tab")
@@ -312,6 +312,6 @@ async def test_a_cut_candidate_list_says_how_many_more(tmp_path: Path) -> None:
         await until(pilot, lambda: panel.has_class("-visible"), "the candidates")
         listed = str(panel.render())
         shown = [line for line in listed.splitlines() if line.strip()]
-        more = len(COMMANDS) - (WHOLE_LIST - 1)  # the 9 types would be listed whole
+        more = len(BUILTIN.names()) - (WHOLE_LIST - 1)  # the 9 types would be listed whole
         assert f"… and {more} more" in listed
         assert len(shown) <= panel.region.height

@@ -193,16 +193,13 @@ def test_a_cancel_between_the_get_before_and_the_put_sends_nothing_more(
     engine.start()
     sent: list[bytes] = []
     try:
-        session = engine.session
-        assert session is not None
-
         def cancel_after_the_read_before(frame: Frame) -> None:
             if frame.direction == "tx":
                 sent.append(bytes(frame.data))
             elif frame.direction == "rx" and sent == [b"GET:RC8:10:I:\r"]:
                 engine.cancel()  # Esc, right after the GET before was answered
 
-        session.add_frame_observer(cancel_after_the_read_before)
+        engine.add_frame_observer(cancel_after_the_read_before)
         front = Front(engine)
         said = "\n".join(front.run("put I 10 77"))
     finally:

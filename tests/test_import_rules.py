@@ -25,10 +25,8 @@ PURE_MODULES = [
     "rac_console.commands.check",
     "rac_console.commands.language",
     "rac_console.commands.outcome",
-    "rac_console.commands.completion",
-    "rac_console.commands.registry",
     "rac_console.commands.profiles",
-    "rac_console.commands.tokens",
+    "rac_console.commands.target",
     "rac_console.protocol.request",
     "rac_console.sim.controller",
 ]

@@ -15,7 +15,8 @@ from textual.command import CommandList, CommandPalette
 from textual.widgets import Input
 from tui_helpers import make_app, results_text, type_line, until
 
-from rac_console.commands.registry import COMMANDS, RAW_HELP
+from rac_console.engine.commands import BUILTIN
+from rac_console.engine.registry import RAW_HELP
 from rac_console.present.help_text import (
     HelpEntry,
     HelpSection,
@@ -61,7 +62,7 @@ def test_every_command_of_the_registry_is_in_the_help_with_its_example() -> None
     sections = help_sections([])
     commands = next(s for s in sections if s.title == "Commands")
     lines = plain_lines([commands])
-    for spec in COMMANDS.values():
+    for spec in BUILTIN:
         entry = next(e for e in commands.entries if e.term == spec.usage)
         assert entry.text == spec.summary
         if spec.example:

@@ -230,7 +230,7 @@ def test_a_file_problem_names_the_file(tmp_path: Path) -> None:
 
 
 def test_connect_completes_sim_and_the_profiles() -> None:
-    from rac_console.commands.completion import complete
+    from rac_console.present.completion import complete
 
     targets = [("cell3", "Cell 3 — welding"), ("cell4", "192.168.0.4")]
     found = [(c.text, c.help) for c in complete("connect ", (), targets)]

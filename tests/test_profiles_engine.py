@@ -14,8 +14,8 @@ from test_engine import Front
 
 from rac_console.commands.language import Connect
 from rac_console.commands.policy import TargetProfile, WritePolicy, Writes, parse_allow
-from rac_console.commands.registry import parse_command
 from rac_console.engine import Engine
+from rac_console.engine.commands import parse_command
 from rac_console.sim.thread import SimulatorThread
 
 
@@ -76,7 +76,6 @@ def test_connect_name_takes_the_profile_and_connect_sim_drops_it(cell: Simulator
         assert status is not None and not status.is_simulator
         assert (status.profile, status.label, status.colour) == ("cell3", "Cell 3 — welding", "red")
         assert (status.writes, status.connection) == ("confirm", "connected")
-        assert front.engine.policy.source == "profile cell3"
         assert "777" in text(front, "get I 1")  # reads go to the profile's controller
         said = text(front, "connect sim")
         assert "built-in simulator" in said and "writes open" in said
@@ -88,7 +87,6 @@ def test_connect_name_takes_the_profile_and_connect_sim_drops_it(cell: Simulator
             None,
             "open",
         )
-        assert front.engine.policy == WritePolicy()
 
 
 def test_a_read_only_profile_refuses_puts_and_connect_sim_drops_it(cell: SimulatorThread) -> None:
@@ -102,7 +100,7 @@ def test_a_read_only_profile_refuses_puts_and_connect_sim_drops_it(cell: Simulat
         text(front, "connect sim")
         status = front.status
         assert status is not None and (status.profile, status.writes) == (None, "open")
-        assert not front.engine.read_only
+        assert not status.read_only
 
 
 def test_read_only_from_the_command_line_stays_through_connect(cell: SimulatorThread) -> None:
@@ -111,7 +109,7 @@ def test_read_only_from_the_command_line_stays_through_connect(cell: SimulatorTh
         assert front.status is not None and front.status.writes == "read-only"
         text(front, "connect sim")
         assert front.status is not None and front.status.writes == "read-only"
-        assert front.engine.read_only
+        assert front.status.read_only
 
 
 def test_connect_to_a_profiles_address_keeps_its_rules(cell: SimulatorThread) -> None:
@@ -121,11 +119,12 @@ def test_connect_to_a_profiles_address_keeps_its_rules(cell: SimulatorThread) ->
     cell3 = found["cell3"]
     with started(profiles=found) as front:
         text(front, f"connect {cell.host}:{cell.port}")
-        assert front.engine.profile == found["cell4"]  # read-only beats confirm
-        assert front.engine.read_only
+        status = front.status
+        assert status is not None and status.profile == "cell4"  # read-only beats confirm
+        assert status.read_only
         text(front, "connect sim")
         text(front, "connect CELL3")
-        assert front.engine.profile == cell3
+        assert front.status is not None and front.status.profile == cell3.name
 
 
 def test_connect_a_bare_name_that_is_no_profile_says_which_there_are(

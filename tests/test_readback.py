@@ -362,9 +362,9 @@ class ChangingFront(AnsweringFront):
         for event in batch.events:
             if isinstance(event, ConfirmWrite):
                 self.asked.append(event)
-                simulator = self.engine.simulator
-                assert simulator is not None
-                other = Session(simulator.host, simulator.port, timeout=2)
+                status = self.status
+                assert status is not None and status.host is not None
+                other = Session(status.host, status.port, timeout=2)
                 try:
                     text = f"3,{self.value}"
                     put = Put.of(VarRef(kind_of("I"), 10), Variant(VT.I4, self.value), text)

@@ -15,8 +15,8 @@ import pytest
 from tui_helpers import make_app, type_line, until
 
 import rac_console.tui.app as app_module
-from rac_console.commands.completion import hint
 from rac_console.engine import Cycle
+from rac_console.present.completion import hint
 from rac_console.protocol import kind_of
 from rac_console.session import Frame
 from rac_console.tui.app import RacConsoleApp

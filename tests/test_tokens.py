@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from rac_console.commands.tokens import tokenize
+from rac_console.present.tokens import tokenize
 
 LINES = [
     "",

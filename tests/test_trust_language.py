@@ -8,7 +8,7 @@ import pytest
 from tui_helpers import FrameTap, make_app, results_text, type_line, until
 
 from rac_console.commands.language import Put, Unwatch, Watch
-from rac_console.commands.registry import parse_command
+from rac_console.engine.commands import parse_command
 from rac_console.protocol import InputError
 
 

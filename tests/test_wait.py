@@ -7,6 +7,7 @@ import json
 import subprocess
 import sys
 import threading
+from collections.abc import Callable
 from pathlib import Path
 
 import pytest
@@ -15,8 +16,8 @@ from test_engine import Front
 from rac_console.commands.conditions import holds, parse_wait
 from rac_console.commands.language import Op, Put
 from rac_console.commands.outcome import ExitStatus, Outcome
-from rac_console.commands.registry import parse_command
 from rac_console.engine import Engine
+from rac_console.engine.commands import parse_command
 from rac_console.protocol import InputError, Variant
 from rac_console.session import Session
 
@@ -220,13 +221,13 @@ async def test_the_repl_waits_and_logs(tmp_path: Path) -> None:
     ],
 )
 def test_the_hint_says_what_a_wait_still_needs(typed: str, needs: str) -> None:
-    from rac_console.commands.completion import hint
+    from rac_console.present.completion import hint
 
     assert hint(typed) == needs
 
 
 def test_a_wait_on_a_bit_completes_its_conditions() -> None:
-    from rac_console.commands.completion import complete
+    from rac_console.present.completion import complete
 
     assert [c.text for c in complete("wait IO 128 ")] == ["on", "off", "changes", "==", "!="]
     assert [c.text for c in complete("wait I 1 ")] == [
@@ -271,7 +272,8 @@ def test_no_poll_that_could_outlast_the_deadline_starts_during_a_wait(
 
     from servers import RecordingServer
 
-    import rac_console.engine.engine as engine_module
+    import rac_console.engine.poller as poller_module
+    from rac_console.engine.poller import Poller
 
     class Clock:
         """``time`` for the engine module: the real one, noting each thread's last
@@ -299,23 +301,25 @@ def test_no_poll_that_could_outlast_the_deadline_starts_during_a_wait(
     engine = Engine("127.0.0.1", server.port, interval=0.05, timeout=timeout)
     deadlines: list[float] = []  # the deadline of the wait in progress, while it polls
     steps: list[tuple[float, float]] = []  # (the clock a poll step was chosen on, deadline)
-    real_poll_until, real_poll_once = engine.poll_until, engine._poll_once
+    real_poll_until, real_poll_once = Poller.poll_until, Poller.poll_once
 
-    def poll_until(until: float, deadline: float) -> None:
+    def poll_until(
+        self: Poller, until: float, deadline: float, stopping: Callable[[], bool]
+    ) -> None:
         deadlines.append(deadline)
         try:
-            real_poll_until(until, deadline)
+            real_poll_until(self, until, deadline, stopping)
         finally:
             deadlines.pop()
 
-    def poll_once() -> None:
+    def poll_once(self: Poller) -> None:
         if deadlines:
             steps.append((clock.last[threading.get_ident()], deadlines[-1]))
-        real_poll_once()
+        real_poll_once(self)
 
-    engine.poll_until = poll_until  # type: ignore[method-assign]
-    engine._poll_once = poll_once  # type: ignore[method-assign]
-    monkeypatch.setattr(engine_module, "time", clock)
+    monkeypatch.setattr(Poller, "poll_until", poll_until)
+    monkeypatch.setattr(Poller, "poll_once", poll_once)
+    monkeypatch.setattr(poller_module, "time", clock)
     engine.start()
     front = Front(engine)
     try:

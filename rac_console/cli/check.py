@@ -14,6 +14,7 @@ from contextlib import ExitStack
 
 from ..commands.check import CheckReport, report_json
 from ..commands.outcome import ExitStatus
+from ..commands.target import Target
 from ..engine import SIMULATOR_NOTICE
 from ..engine.recorder import FrameRecorder
 from ..engine.transcript import FrameTranscript
@@ -21,7 +22,6 @@ from ..present.check import check_lines
 from ..present.render import make_console, print_error
 from ..protocol import InputError
 from ..session.diagnose import diagnose
-from .target import Target
 
 
 def check(args: argparse.Namespace) -> ExitStatus:

@@ -634,24 +634,24 @@ def _dispatch(args: argparse.Namespace) -> int:
 
 def _interactive(args: argparse.Namespace) -> int:
     """The full-screen console, or the REPL: one engine and history file for both."""
-    from ..engine import DEFAULT_INTERVAL, Engine
+    from ..engine import DEFAULT_INTERVAL, Engine, EngineOptions
+    from ..engine.registry import Where
     from ..present.history import History, default_history_path
     from ..protocol import InputError
     from ..protocol.text import terminal_safe
-    from .target import engine_target
 
+    options = EngineOptions(
+        timeout=args.timeout,
+        interval=DEFAULT_INTERVAL if args.interval is None else args.interval,
+        verify=args.verify,
+        cycles=args.command is None,  # the console draws trends; the REPL has none
+        record=args.record,
+        transcript=args.transcript,
+        log_csv=getattr(args, "log_csv", None),
+    )
+    where = Where.CONSOLE if args.command is None else Where.REPL
     try:
-        engine = Engine(
-            args.host,
-            args.port,
-            timeout=args.timeout,
-            record=args.record,
-            transcript=args.transcript,
-            interval=DEFAULT_INTERVAL if args.interval is None else args.interval,
-            log_csv=getattr(args, "log_csv", None),
-            cycles=args.command is None,  # the console draws trends; the REPL has none
-            **engine_target(args),
-        )
+        engine = Engine(target=args.target, options=options, where=where)
     except InputError as exc:
         print(f"rac-console: {terminal_safe(str(exc))}", file=sys.stderr)
         return 2

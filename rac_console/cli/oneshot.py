@@ -11,17 +11,19 @@ from collections.abc import Iterator
 from dataclasses import replace
 
 from ..commands.argv import exchange_from_words, input_line
-from ..commands.language import Exchange, Get, Latency, Put, Raw, Wait
+from ..commands.language import Command, Latency
 from ..commands.outcome import ExitStatus, Outcome, refused, worst
 from ..commands.policy import Writes
-from ..commands.registry import parse_command
-from ..engine.conditions import wait_for
-from ..engine.execute import measure_latency
-from ..engine.writes import exchange
+from ..commands.target import Target
+from ..engine import Feedback, Measured, Message
+from ..engine.commands import BUILTIN, parse_command
+from ..engine.jobs import run_job
+from ..engine.registry import Where
+from ..engine.session_context import SessionContext
 from ..present.render import error_text, make_console, notice_text, print_error, print_outcome
 from ..protocol import InputError
-from ..session import ConnectFailed, Disconnected, Session
-from .target import open_session, write_policy
+from ..session import Session
+from .target import open_session
 
 
 class Output:
@@ -75,7 +77,8 @@ def one_command(args: argparse.Namespace) -> ExitStatus:
             raise InputError(args.words_problem)
         command = exchange_from_words(args.command, args.words)
         with open_session(args, output.local_failure) as session:
-            outcome = _exchange(session, command, args, line)
+            outcome = _run(session, command, args, line, Where.COMMAND_LINE)
+        assert outcome is not None  # a command object always has an outcome
     except InputError as exc:
         outcome = refused(line, str(exc))
     output.show(outcome)
@@ -124,33 +127,36 @@ def run_script(args: argparse.Namespace) -> ExitStatus:
     return output.status(worst(statuses))
 
 
-def _exchange(session: Session, command: Exchange, args: argparse.Namespace, line: str) -> Outcome:
-    """One GET, PUT or raw line; a write by the target's rules, read back unless
-    ``--no-verify``, and on a ``confirm`` target only with ``--yes``."""
-    policy = write_policy(args)
-    if args.yes and policy.confirms:  # said yes ahead: nothing to ask, nothing to read
-        policy = replace(policy, writes=Writes.OPEN)
-    return exchange(
-        session, command, policy=policy, read_only=args.read_only, verify=args.verify, line=line
-    )
+def _context(session: Session, args: argparse.Namespace) -> SessionContext:
+    """The target's rules for a write: with ``--yes`` on a ``confirm`` target, said
+    yes ahead (nothing to ask); read back unless ``--no-verify``."""
+    rules: Target = args.target
+    if args.yes and rules.policy.confirms:
+        rules = replace(rules, policy=replace(rules.policy, writes=Writes.OPEN))
+    return SessionContext(session, rules, args.verify)
+
+
+def _run(
+    session: Session, what: str | Command, args: argparse.Namespace, line: str, where: Where
+) -> Outcome | None:
+    """One line or command through the registry's job runner, as the console runs it:
+    its outcome (a refusal for what only runs at a terminal); None for a blank line."""
+    command, feedback = run_job(BUILTIN, _context(session, args), what, where, line)
+    if command is None and not feedback:
+        return None
+    return _outcome_of(feedback, line)
+
+
+def _outcome_of(feedback: list[Feedback], line: str) -> Outcome:
+    for item in feedback:
+        if isinstance(item, Outcome):
+            return item
+    texts = [item.text for item in feedback if isinstance(item, Message)]
+    return refused(line, "; ".join(texts) or "nothing to run")
 
 
 def _run_line(session: Session, line: str, args: argparse.Namespace) -> Outcome | None:
-    try:
-        command = parse_command(line)
-    except InputError as exc:
-        return refused(line, str(exc))
-    if command is None:
-        return None
-    if isinstance(command, Wait):
-        return wait_for(session, command, line=line, read_only=args.read_only)
-    if not isinstance(command, Get | Put | Raw):
-        return refused(
-            line,
-            f"{line.split()[0]!r} works in the console and the REPL; "
-            "run takes get, put, send, wait and GET:/PUT: lines",
-        )
-    return _exchange(session, command, args, line)
+    return _run(session, line, args, line, Where.RUN)
 
 
 def _latency_command(args: argparse.Namespace) -> Latency:
@@ -175,18 +181,20 @@ def latency(args: argparse.Namespace) -> ExitStatus:
     """``latency``: one summary line (or JSON object); exit 3 when nothing answered."""
     output = Output(args.json)
     try:
-        command = _latency_command(args)
+        command = replace(_latency_command(args), interval=args.latency_interval or 0.0)
         with open_session(args, output.local_failure) as session:
-            pause = args.latency_interval or 0.0
-            summary = measure_latency(session, command.var, command.count, pause)
+            _, feedback = run_job(BUILTIN, _context(session, args), command, Where.COMMAND_LINE)
     except InputError as exc:
         print_error(output.err, str(exc))
         return ExitStatus.REFUSED
-    except (ConnectFailed, Disconnected) as exc:
-        print_error(output.err, str(exc))
+    measured = next((f for f in feedback if isinstance(f, Measured)), None)
+    if measured is None or measured.summary is None:
+        for item in feedback:
+            if isinstance(item, Message):
+                print_error(output.err, item.text)
         return ExitStatus.TRANSPORT
     if args.json:
-        sys.stdout.write(json.dumps(summary.to_json()) + "\n")
+        sys.stdout.write(json.dumps(measured.summary.to_json()) + "\n")
     else:
-        output.out.print(notice_text(summary.text(f"GET {command.var}")))
-    return output.status(ExitStatus.OK if summary.count else ExitStatus.TRANSPORT)
+        output.out.print(notice_text(measured.text))
+    return output.status(ExitStatus.OK if measured.summary.count else ExitStatus.TRANSPORT)

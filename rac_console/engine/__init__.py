@@ -15,13 +15,14 @@ Thread rules (the only ones; nothing else is shared):
   settings (switch interval, signal handlers) are left alone.
 """
 
-from .engine import DEFAULT_INTERVAL, SIMULATOR_NOTICE, Engine
+from .engine import DEFAULT_INTERVAL, SIMULATOR_NOTICE, Engine, EngineOptions
 from .events import (
     CONFIRM_GUARD_SECONDS,
     Alert,
     ConfirmWrite,
     Cycle,
     Feedback,
+    Measured,
     Message,
     Note,
     Result,
@@ -40,7 +41,9 @@ __all__ = [
     "ConfirmWrite",
     "Cycle",
     "Engine",
+    "EngineOptions",
     "Feedback",
+    "Measured",
     "Message",
     "Note",
     "Outbox",

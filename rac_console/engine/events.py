@@ -10,6 +10,7 @@ from dataclasses import dataclass
 from enum import Enum
 
 from ..commands.language import Command, VarRef
+from ..commands.latency import LatencySummary
 from ..commands.outcome import Outcome
 from ..protocol import Variant
 from ..protocol.text import terminal_safe
@@ -34,6 +35,17 @@ class Message:
 
     text: str
     level: str = "info"  # info, error
+
+
+@dataclass(frozen=True, slots=True)
+class Measured(Message):
+    """``latency``'s figures: shown as their line, kept whole for ``--json``."""
+
+    summary: LatencySummary | None = None
+
+    @classmethod
+    def of(cls, what: str, summary: LatencySummary) -> Measured:
+        return cls(summary.text(what), "info", summary)
 
 
 class UiStep(Enum):

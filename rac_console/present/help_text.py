@@ -13,7 +13,8 @@ from __future__ import annotations
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 
-from ..commands.registry import COMMANDS, RAW_HELP
+from ..engine.commands import BUILTIN
+from ..engine.registry import RAW_HELP
 
 
 @dataclass(frozen=True)
@@ -107,7 +108,7 @@ def command_entries() -> tuple[HelpEntry, ...]:
             spec.summary,
             ((f"e.g. {spec.example}",) if spec.example else ()) + spec.notes,
         )
-        for spec in COMMANDS.values()
+        for spec in BUILTIN
     ]
     entries.append(HelpEntry("GET:... PUT:...", RAW_HELP))
     return tuple(entries)

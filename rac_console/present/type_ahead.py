@@ -9,7 +9,7 @@ line is read with the command language, as the engine will read it.
 from __future__ import annotations
 
 from ..commands.language import Put, Raw
-from ..commands.registry import parse_command
+from ..engine.commands import BUILTIN
 from ..protocol.errors import InputError
 
 
@@ -18,7 +18,7 @@ def may_ask(line: str) -> bool:
     target's rules apply to (the engine may refuse them without asking; never the
     other way round). A line that does not parse is refused before anything is asked."""
     try:
-        command = parse_command(line)
+        command = BUILTIN.parse(line)
     except InputError:
         return False
     return isinstance(command, Put) or (

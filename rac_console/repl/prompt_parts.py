@@ -18,11 +18,11 @@ from prompt_toolkit.layout.processors import (
 from prompt_toolkit.lexers import Lexer
 from prompt_toolkit.styles import Style
 
-from ..commands.completion import complete, hint
-from ..commands.tokens import tokenize
 from ..engine import ConfirmWrite, Status
+from ..present.completion import complete, hint
 from ..present.history import History
 from ..present.status import ink_on, label_text, profile_colour, target_label
+from ..present.tokens import tokenize
 from ..protocol.text import terminal_safe
 
 STYLE = Style.from_dict(

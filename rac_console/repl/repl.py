@@ -23,7 +23,6 @@ from rich.live import Live
 from rich.table import Table
 from rich.text import Text
 
-from ..commands.completion import WHOLE_LIST, hint
 from ..commands.language import Unwatch, VarRef, Watch
 from ..commands.outcome import ExitStatus, Outcome
 from ..engine import (
@@ -43,6 +42,7 @@ from ..engine import (
 from ..engine.events import Event
 from ..present.banner import live_banner
 from ..present.cells import age_text, status_cell, value_cell
+from ..present.completion import WHOLE_LIST, hint
 from ..present.frames import frame_line
 from ..present.history import History, is_refused
 from ..present.render import error_text, make_console, notice_text, outcome_text

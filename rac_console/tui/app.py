@@ -16,7 +16,6 @@ from textual.widgets import Input, Static
 from textual.worker import Worker, WorkerState
 
 from .. import __version__
-from ..commands.completion import shown_candidates
 from ..commands.language import Simple, Step, VarRef, WatchFile
 from ..commands.outcome import Outcome
 from ..engine import (
@@ -35,6 +34,7 @@ from ..engine import (
 from ..engine.config import config_path
 from ..engine.settings import SettingsFile
 from ..present.banner import live_banner
+from ..present.completion import shown_candidates
 from ..present.glyphs import ascii_wanted
 from ..present.history import History, is_refused
 from ..present.render import error_text, notice_text, outcome_text

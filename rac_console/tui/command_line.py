@@ -11,7 +11,7 @@ from textual.message import Message
 from textual.suggester import Suggester
 from textual.widgets import Input
 
-from ..commands.completion import Candidate, common_prefix, complete, hint
+from ..present.completion import Candidate, common_prefix, complete, hint
 from ..present.history import History
 
 

@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import re
 
+from ..commands.language import is_raw_line
+from ..engine.commands import BUILTIN
 from ..protocol import KINDS
-from .language import is_raw_line
-from .registry import COMMANDS
 
 _WORD_RE = re.compile(r"\s+|\S+", re.ASCII)
 _VAR_RE = re.compile(r"([A-Za-z]+)(\[?)(\d+(?:-\d+)?)?(\]?)", re.ASCII)
@@ -30,9 +30,9 @@ def tokenize(line: str) -> list[tuple[str, str]]:
             continue
         if position == 0:
             command = piece.lower()
-            spec = COMMANDS.get(command)
+            spec = BUILTIN.get(command)
             variable = spec is not None and spec.takes_variable
-            out.append(("command" if command in COMMANDS else "error", piece))
+            out.append(("command" if spec is not None else "error", piece))
         elif variable and position == 1:
             match = _VAR_RE.fullmatch(piece)
             if match and match.group(1).upper() in KINDS:

@@ -1,0 +1,106 @@
+"""Which controller a session talks to and what it lets be written, resolved once.
+
+One pure function for every way a target is named: ``-H`` on the command line, the
+console's and the REPL's ``connect``, and the CLI's one-shot commands. It is told how
+to resolve a host (``resolve``), so it does no I/O of its own.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+
+from .policy import TargetProfile, WritePolicy, Writes
+from .profiles import Addresses, could_be_profile_name, match_profile
+
+DEFAULT_PORT = 5006
+OPEN = WritePolicy()
+
+
+@dataclass(frozen=True)
+class Target:
+    """A controller (or the built-in simulator) and its rules."""
+
+    host: str | None  # None: the built-in simulator
+    port: int
+    profile: TargetProfile | None = None  # the name typed was a profile, or its address
+    policy: WritePolicy = OPEN  # the profile's writes and allow (open without one)
+    read_only: bool = False  # --read-only, or the profile's writes = "read-only"
+    read_only_flag: bool = False  # --read-only itself: kept through connect
+    profiles: Mapping[str, TargetProfile] = field(default_factory=dict)  # connect NAME
+    #: Said when the host cannot be reached: it was a bare name and no profile.
+    unreachable_hint: str | None = None
+    #: Said once: profiles whose host could not be resolved, matched by text only.
+    notices: tuple[str, ...] = ()
+
+    @property
+    def writes(self) -> str:
+        """``open``, ``confirm`` or ``read-only``, as the status line says it."""
+        return "read-only" if self.read_only else self.policy.writes.value
+
+    @property
+    def label(self) -> str | None:
+        return self.profile.label if self.profile is not None else None
+
+
+def resolve_target(
+    host: str | None,
+    port: int | None,
+    *,
+    profiles: Mapping[str, TargetProfile],
+    read_only_flag: bool = False,
+    plain_policy: WritePolicy = OPEN,
+    resolve: Addresses | None = None,
+    config_where: str | None = None,
+) -> Target:
+    """The target ``host`` names: a profile by name or by address (``127.1`` is
+    ``127.0.0.1``), else a plain host with ``plain_policy``, else (None) the simulator,
+    whose writes are open. ``port`` None: the profile's, or 5006. ``--read-only`` wins
+    over any profile; of several profiles at one address the strictest applies.
+    ``config_where`` names the config file in the hint for a bare name that is no profile."""
+    if host is None:
+        return Target(
+            None,
+            DEFAULT_PORT if port is None else port,
+            read_only=read_only_flag,
+            read_only_flag=read_only_flag,
+            profiles=profiles,
+        )
+    match = match_profile(profiles, host, port, resolve)
+    profile = match.profile
+    notices = tuple(match.notices())
+    if profile is None:
+        return Target(
+            host,
+            DEFAULT_PORT if port is None else port,
+            policy=plain_policy,
+            read_only=read_only_flag or plain_policy.writes is Writes.READ_ONLY,
+            read_only_flag=read_only_flag,
+            profiles=profiles,
+            unreachable_hint=no_profile_hint(host, profiles, config_where),
+            notices=notices,
+        )
+    named = profile.name.casefold() == host.casefold()
+    return Target(
+        profile.host if named else host,  # at its address: the address typed
+        profile.port if port is None else port,  # a port given wins
+        profile,
+        profile.policy,
+        read_only=read_only_flag or profile.policy.writes is Writes.READ_ONLY,
+        read_only_flag=read_only_flag,
+        profiles=profiles,
+        notices=notices,
+    )
+
+
+def no_profile_hint(
+    host: str, profiles: Mapping[str, TargetProfile], config_where: str | None = None
+) -> str | None:
+    """``no profile named cel3 in FILE`` (or with the profiles there are), when ``host``
+    looks like a profile's name rather than an address; None when it does not."""
+    if not could_be_profile_name(host):
+        return None
+    if config_where is not None:
+        return f"no profile named {host} in {config_where}"
+    known = f"profiles: {', '.join(sorted(profiles))}" if profiles else "the config file names none"
+    return f"no profile named {host} ({known})"

@@ -1,0 +1,113 @@
+"""connect and disconnect: another target, with its rules, at a terminal."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+from ...commands.check import check_pointer
+from ...commands.language import Connect, Simple, Step, parse_connect
+from ...commands.target import Target, resolve_target
+from ...session import ConnectFailed, Disconnected
+from ...session.endpoints import addresses
+from ..context import CommandContext
+from ..events import Feedback, Message, shown_label
+from ..registry import CommandSpec, Option, Sources, no_argument
+
+
+def run_connect(context: CommandContext, command: Connect, line: str | None) -> list[Feedback]:
+    """``connect PROFILE``, ``connect sim`` or ``connect HOST[:PORT]``: the target changes,
+    and with it the profile (label, colour) and the write rules: a profile's, the
+    simulator's (open), or for a plain host the ones the engine started with. The
+    command line's ``--read-only`` stays whatever the target."""
+    rules = context.rules
+    given = command.port if command.port_given else None
+    target = resolve_target(
+        command.host,
+        given,
+        profiles=rules.profiles,
+        read_only_flag=rules.read_only_flag,
+        plain_policy=context.parts.plain_policy,
+        resolve=addresses,
+    )
+    for notice in target.notices:
+        context.parts.publisher.alert(notice)
+    context.parts.switch_target(target)
+    session = context.parts.link.session
+    assert session is not None
+    try:
+        session.connect()
+    except (ConnectFailed, Disconnected) as exc:
+        if isinstance(exc, ConnectFailed):
+            context.parts.link.connect_failed(exc)
+        text = f"{exc}; will keep retrying while variables are watched"
+        text += f" {check_pointer(command.host, given)}"
+        if target.unreachable_hint is not None:
+            text += f"; {target.unreachable_hint}"
+        return [Message(text, "error")]
+    return [Message(_connected(context, target))]
+
+
+def _connected(context: CommandContext, target: Target) -> str:
+    publisher = context.parts.publisher
+    writes = "read-only" if target.read_only else f"writes {target.policy.writes.value}"
+    if target.host is None:
+        publisher.note("connected to the built-in simulator")
+        return f"connected to the built-in simulator ({writes})"
+    host, port = target.host, target.port
+    publisher.note(f"connected to {host}:{port}")
+    profile = target.profile
+    if profile is None:
+        rules = f" ({writes})" if writes != "writes open" else ""
+        return f"connected to LIVE controller {host}:{port}{rules}"
+    label = shown_label(profile.label or profile.name)
+    allow = profile.policy.allow
+    rules = f", allow {', '.join(map(str, allow)) or 'nothing'}" if allow is not None else ""
+    return (
+        f"connected to {label} (profile {profile.name}): LIVE controller {host}:{port}, "
+        f"{writes}{rules}"
+    )
+
+
+def run_disconnect(context: CommandContext, command: Simple, line: str | None) -> list[Feedback]:
+    parts = context.parts
+    parts.switch_target(None)
+    for row in parts.poller.watch.mark_all("DISCONNECTED"):
+        parts.publisher.show_row(row)
+    parts.publisher.note("disconnected")
+    return [
+        Message(
+            "disconnected: connect HOST[:PORT] or connect PROFILE to talk to a "
+            "controller, connect sim for the built-in simulator"
+        )
+    ]
+
+
+def _targets(args: list[str], sources: Sources) -> Sequence[Option]:
+    return [("sim", "the built-in simulator"), *sources.targets] if not args else ()
+
+
+SPECS = (
+    CommandSpec(
+        "connect",
+        "HOST[:PORT]",
+        "talk to a controller (port 5006 by default), a profile, or sim",
+        parse_connect,
+        run_connect,
+        "connect 192.168.0.1",
+        (
+            "connect PROFILE: a [target.PROFILE] of the config file, with its label, "
+            "colour and write rules (writes, allow), e.g. connect cell3",
+            "connect sim: back to the built-in simulator (writes open)",
+            "connect HOST[:PORT]: no profile; --read-only stays whatever the target",
+        ),
+        complete=_targets,
+        types=(Connect,),
+    ),
+    CommandSpec(
+        "disconnect",
+        "",
+        "close the session and stop polling",
+        no_argument(Step.DISCONNECT),
+        run_disconnect,
+    ),
+)

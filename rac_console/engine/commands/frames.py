@@ -1,0 +1,125 @@
+"""frames, record, transcript, clear, help and quit: what the console and the REPL
+do with frames and with themselves."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+from ...commands.language import (
+    FrameFile,
+    Frames,
+    Help,
+    Simple,
+    Step,
+    frame_file_parser,
+    parse_frames,
+    parse_help,
+)
+from ...protocol import InputError
+from ...protocol.text import terminal_safe
+from ..context import CommandContext
+from ..events import Feedback, Message, UiStep
+from ..registry import CommandSpec, Option, Sources, no_argument
+
+
+def run_frames(context: CommandContext, command: Frames, line: str | None) -> list[Feedback]:
+    return [UiStep.FRAMES_ON if command.on else UiStep.FRAMES_OFF]
+
+
+def run_frame_file(context: CommandContext, command: FrameFile, line: str | None) -> list[Feedback]:
+    """``record FILE`` / ``transcript FILE`` from now on (the interesting moment is rarely
+    foreseen at start), ``… stop``, or where frames go now."""
+    files, word = context.parts.files, command.kind
+    flag = "--record" if word == "record" else "--log"
+    running = files.running(word)
+    if command.stop or command.path is None:
+        if running is None:
+            return [Message(f"no {word} running: {word} FILE starts one (as {flag} FILE)")]
+        if not command.stop:
+            return [Message(f"{word} to {terminal_safe(running.path)}: {word} stop ends it")]
+        running.close()
+        files.set(word, None)
+        context.parts.publisher.status_dirty = True
+        return [Message(f"{word} stopped: {terminal_safe(running.path)}")]
+    if running is not None:
+        return [
+            Message(
+                f"{word} already goes to {terminal_safe(running.path)}: {word} stop first",
+                "error",
+            )
+        ]
+    try:
+        files.set(word, command.path)
+    except InputError as exc:
+        return [Message(str(exc), "error")]
+    context.parts.publisher.status_dirty = True
+    what = "every frame as JSON lines" if word == "record" else "a transcript of every frame"
+    return [Message(f"{word}: {what} to {terminal_safe(command.path)} ({word} stop ends it)")]
+
+
+def run_help(context: CommandContext, command: Help, line: str | None) -> list[Feedback]:
+    return [Message("\n".join(context.registry.help_lines(command.topic)))]
+
+
+def run_step(context: CommandContext, command: Simple, line: str | None) -> list[Feedback]:
+    return [UiStep.CLEAR if command.step is Step.CLEAR else UiStep.QUIT]
+
+
+def _on_off(args: list[str], sources: Sources) -> Sequence[Option]:
+    return [("on", "echo every frame"), ("off", "stop echoing frames")] if not args else ()
+
+
+def _commands(args: list[str], sources: Sources) -> Sequence[Option]:
+    return sources.commands if not args else ()
+
+
+FRAMES_SPEC = CommandSpec(
+    "frames",
+    "on|off",
+    "echo every frame sent and received (REPL)",
+    parse_frames,
+    run_frames,
+    "frames on",
+    complete=_on_off,
+    types=(Frames,),
+)
+
+FILE_SPECS = (
+    CommandSpec(
+        "record",
+        "FILE | stop",
+        "append every frame to FILE as JSON lines from now on (as --record)",
+        frame_file_parser("record"),
+        run_frame_file,
+        "record cell3.jsonl",
+        notes=(
+            "record stop ends it; record alone says where frames go; "
+            "rac-console sim --replay FILE serves what was recorded",
+        ),
+        types=(FrameFile,),
+    ),
+    CommandSpec(
+        "transcript",
+        "FILE | stop",
+        "append every frame to FILE as a plain timestamped transcript (as --log)",
+        frame_file_parser("transcript"),
+        run_frame_file,
+        "transcript cell3.log",
+        notes=("transcript stop ends it; transcript alone says where it goes",),
+    ),
+)
+
+CONSOLE_SPECS = (
+    CommandSpec("clear", "", "clear the frame log", no_argument(Step.CLEAR), run_step),
+    CommandSpec(
+        "help",
+        "[COMMAND]",
+        "list commands, or explain one",
+        parse_help,
+        run_help,
+        "help put",
+        complete=_commands,
+        types=(Help,),
+    ),
+    CommandSpec("quit", "", "leave the console", no_argument(Step.QUIT), run_step),
+)

@@ -1,0 +1,231 @@
+"""watch, unwatch, interval, pause, resume, save, load and log: the live table's
+commands, at a terminal (the CLI's ``watch`` has its own words)."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+from ...commands.conditions import parse_log
+from ...commands.language import (
+    CsvLog,
+    SetInterval,
+    Simple,
+    Step,
+    Unwatch,
+    VarRef,
+    Watch,
+    WatchFile,
+    parse_interval,
+    parse_load,
+    parse_save,
+    parse_unwatch,
+    parse_watch,
+)
+from ...protocol import InputError
+from ...protocol.text import counted
+from .. import watchlist
+from ..context import CommandContext
+from ..events import Feedback, Message
+from ..registry import CommandSpec, Option, no_argument, variable_completion, words_of
+from .exchanges import TYPE_NOTE
+
+
+def run_watch(context: CommandContext, command: Watch, line: str | None) -> list[Feedback]:
+    poller, variables = context.parts.poller, command.vars
+    added = poller.watch.add(variables, command.label, command.every)
+    for var in variables:
+        context.parts.publisher.show_row(poller.watch.rows[var])
+    poller.see(variables)
+    poller.wake()
+    names = names_text(variables)
+    text = f"watching {names}" if added else f"{names} already watched"
+    if command.every is not None:
+        text += f", polled every {command.every:g} s (other rows: interval {poller.interval:g} s)"
+    log = context.parts.csv.log
+    if log is not None and not set(variables) <= set(log.variables):
+        text += " (not in the CSV log's columns: log stop, then log FILE again to add them)"
+    return [Message(text)]
+
+
+def run_unwatch(context: CommandContext, command: Unwatch, line: str | None) -> list[Feedback]:
+    watch, variables = context.parts.poller.watch, command.vars
+    absent = [v for v in variables if v not in watch.rows]
+    if variables and len(absent) == len(variables):
+        return [Message(f"{names_text(variables)} not watched: nothing to stop", "error")]
+    removed = watch.remove(variables)
+    context.parts.publisher.outbox.put_removed(removed)
+    text = f"stopped watching {counted(len(removed), 'variable')}"
+    if absent:
+        verb = "was" if len(absent) == 1 else "were"
+        text += f" ({names_text(tuple(absent))} {verb} not watched)"
+    return [Message(text)]
+
+
+def run_interval(context: CommandContext, command: SetInterval, line: str | None) -> list[Feedback]:
+    context.parts.poller.interval = command.seconds
+    context.parts.poller.wake()
+    return [Message(f"poll interval {command.seconds:g} s")]
+
+
+def run_pause(context: CommandContext, command: Simple, line: str | None) -> list[Feedback]:
+    poller = context.parts.poller
+    poller.set_paused(command.step is Step.PAUSE)
+    return [Message("polling paused" if poller.paused else "polling resumed")]
+
+
+def run_watch_file(context: CommandContext, command: WatchFile, line: str | None) -> list[Feedback]:
+    poller = context.parts.poller
+    try:
+        if command.action == "save":
+            saved = [(row.var, row.label, row.every) for row in poller.watch.rows.values()]
+            watchlist.save(command.path, saved)
+            return [Message(f"saved {len(saved)} watched variables to {command.path}")]
+        rows = watchlist.load(command.path)
+    except InputError as exc:
+        return [Message(str(exc), "error")]
+    for var, label, every in rows:
+        poller.watch.add((var,), label, every)
+        context.parts.publisher.show_row(poller.watch.rows[var])
+    poller.see([var for var, _, _ in rows])
+    poller.wake()
+    return [Message(f"loaded {len(rows)} watched variables from {command.path}")]
+
+
+def run_csv_log(context: CommandContext, command: CsvLog, line: str | None) -> list[Feedback]:
+    return [_csv_log(context, command)]
+
+
+def _csv_log(context: CommandContext, command: CsvLog) -> Message:
+    sink, rows = context.parts.csv, context.parts.poller.watch.rows
+    current, log = sink.path, sink.log
+    if command.stop:
+        ended = sink.stop()
+        if ended is not None:
+            return Message(f"CSV log stopped: {counted(ended.rows, 'row')} in {ended.path}")
+        if current is not None:
+            return Message(f"CSV log to {current} stopped before its first row")
+        return Message("no CSV log to stop", "error")
+    if command.path is None:
+        if log is not None:
+            count = counted(len(log.variables), "variable")
+            return Message(f"logging {count} to {log.path}: {counted(log.rows, 'row')} so far")
+        if current is not None:
+            return Message(f"logging to {current} from the first poll cycle")
+        return Message("not logging: log FILE.csv starts a CSV log of the watched values")
+    if current is not None:
+        return Message(f"already logging to {current}: log stop first", "error")
+    try:
+        if not rows:
+            sink.wait_for_rows(command.path)
+            return Message(
+                f"logging to {sink.pending} from the first poll cycle: "
+                "the variables watched then are its columns"
+            )
+        started = sink.start(command.path, list(rows))
+    except InputError as exc:
+        return Message(f"CSV log not started: {exc}", "error")
+    if started.failure is not None:  # its header failed: said here, not as an alert too
+        return Message(started.failure, "error")
+    how = "appending to" if started.appending else "logging to"
+    return Message(
+        f"{how} {started.path}: {counted(len(started.variables), 'variable')}, "
+        "one row per poll cycle (log stop ends it)"
+    )
+
+
+def names_text(variables: tuple[VarRef, ...]) -> str:
+    """``IO4``, ``IO4..IO7 (4 variables)`` for a range, else ``P0, J0``."""
+    if len(variables) == 1:
+        return str(variables[0])
+    first = variables[0]
+    if all(v.kind == first.kind and v.index == first.index + n for n, v in enumerate(variables)):
+        return f"{first}..{variables[-1]} ({len(variables)} variables)"
+    if len(variables) <= 6:
+        return ", ".join(str(v) for v in variables)
+    return f"{', '.join(str(v) for v in variables[:5])} and {len(variables) - 5} more"
+
+
+def _watch_hint(args: list[str]) -> str:
+    if any(word.lower() == "every" for word in args[2:]):
+        return "SECONDS" if args[-1].lower() == "every" else ""
+    return words_of("TYPE INDEX [LABEL] [every SECONDS]")(args)
+
+
+_ALL: Sequence[Option] = (("all", "every watched variable"),)
+
+SPECS = (
+    CommandSpec(
+        "watch",
+        "TYPE INDEX [LABEL] [every SECONDS]",
+        "add variables to the live table",
+        parse_watch,
+        run_watch,
+        "watch IO 128-135",
+        (TYPE_NOTE,),
+        takes_variable=True,
+        complete=variable_completion(),
+        hint=_watch_hint,
+        types=(Watch,),
+    ),
+    CommandSpec(
+        "unwatch",
+        "TYPE INDEX | all",
+        "remove variables from the live table",
+        parse_unwatch,
+        run_unwatch,
+        "unwatch P 10",
+        (TYPE_NOTE,),
+        takes_variable=True,
+        complete=variable_completion(first=_ALL),
+        types=(Unwatch,),
+    ),
+    CommandSpec(
+        "interval",
+        "SECONDS",
+        "time between poll cycles",
+        parse_interval,
+        run_interval,
+        "interval 0.5",
+        types=(SetInterval,),
+    ),
+    CommandSpec(
+        "pause", "", "stop polling the watched variables", no_argument(Step.PAUSE), run_pause
+    ),
+    CommandSpec("resume", "", "start polling again", no_argument(Step.RESUME), run_pause),
+)
+
+FILE_SPECS = (
+    CommandSpec(
+        "save",
+        "FILE",
+        "save the watch list as TOML",
+        parse_save,
+        run_watch_file,
+        "save cell3.toml",
+        types=(WatchFile,),
+    ),
+    CommandSpec(
+        "load",
+        "FILE",
+        "add the watch list saved in FILE",
+        parse_load,
+        run_watch_file,
+        "load cell3.toml",
+    ),
+)
+
+LOG_SPEC = CommandSpec(
+    "log",
+    "FILE.csv | stop",
+    "log the watched values to a CSV file, one row per poll cycle",
+    parse_log,
+    run_csv_log,
+    "log cell3.csv",
+    notes=(
+        "columns: time, then one per field (P10.X, P10.Y, ..., IO128), "
+        "taken when logging starts",
+        "an existing file is appended to if its columns are the same; log alone "
+        "says where the log goes",
+    ),
+    types=(CsvLog,),
+)

@@ -1,0 +1,50 @@
+"""The job runner: a submitted line or command, parsed once, run by its entry's handler.
+
+The same for every front end: the engine runs each job on its thread; ``rac-console
+run`` and the one-shot commands run theirs on the CLI's. Every problem becomes
+feedback, never an exception.
+"""
+
+from __future__ import annotations
+
+from ..commands.language import Command
+from ..protocol import InputError
+from .events import Feedback, Message
+from .registry import Registry, Where
+
+
+def run_job(
+    registry: Registry,
+    context: object,
+    what: str | Command,
+    where: Where,
+    line: str | None = None,
+) -> tuple[Command | None, list[Feedback]]:
+    """Parse ``what`` (a typed line; a command object is run as it is, ``line`` being
+    what it was made from), check that its command runs ``where``, and run it: the
+    command as parsed and its feedback."""
+    command: Command | None = None
+    line = what if isinstance(what, str) else line
+    try:
+        command = registry.parse(what) if isinstance(what, str) else what
+        if command is None:
+            return None, []
+        spec = registry.spec_of(command)
+        if where not in spec.where:
+            return command, [Message(not_here(registry, spec.name, where), "error")]
+        return command, spec.handle(context, command, line)
+    except InputError as exc:
+        return command, [Message(str(exc), "error")]
+    except Exception as exc:  # a bug must not end the session at the cell
+        return command, [Message(f"internal error: {exc!r}", "error")]
+
+
+def not_here(registry: Registry, name: str, where: Where) -> str:
+    """Why ``name`` does not run ``where``, and what does."""
+    if where is Where.RUN:
+        takes = ", ".join(registry.runs_in(Where.RUN))
+        return (
+            f"{name!r} works in the console and the REPL; "
+            f"run takes {takes} and GET:/PUT: lines"
+        )
+    return f"{name!r} does not run in the {where.value}"

@@ -1,0 +1,253 @@
+"""The watch list's schedule: which row is polled next, the cycle figures, the backoff
+after a failure, and what a cycle hands to the CSV log and the trends.
+
+Run on the engine's thread between jobs, one row at a time, so a typed command waits
+at most for the one poll in flight.
+"""
+
+from __future__ import annotations
+
+import time
+from collections import deque
+from collections.abc import Callable
+
+from ..commands.language import VarRef
+from ..protocol import Variant, describe_hresult, hresult_name
+from ..session import BadReply, ConnectFailed, RequestTimeout, TransportError
+from .csvsink import CsvSink
+from .events import Cycle
+from .link import Link
+from .publisher import Publisher
+from .watch import WatchList, WatchRow
+
+
+class Poller:
+    def __init__(
+        self,
+        link: Link,
+        publisher: Publisher,
+        csv: CsvSink,
+        *,
+        interval: float,
+        cycles: bool,
+        publish_status: Callable[[bool], None],
+    ) -> None:
+        """``publish_status(force)``: the status now (``force``), or at most every
+        tenth of a second while polling flat out."""
+        self._link = link
+        self.publish_status = publish_status
+        self._publisher = publisher
+        self.csv = csv
+        self.interval = interval
+        self.publish_cycles = cycles
+        self.watch = WatchList()
+        self.paused = False
+        self.seen: frozenset[tuple[str, int]] = frozenset()  # offered by completion
+        self.cycle_seconds: float | None = None
+        self.polls_per_second: float | None = None
+        self._cycle: deque[WatchRow] = deque()  # rows still to poll in this cycle
+        self._cycle_started = 0.0  # perf_counter()
+        self._cycle_count = 0
+        self._samples: list[tuple[VarRef, Variant | None]] = []  # read in this cycle
+        self._last_cycle: tuple[float, int] | None = None  # start, polls: for polls/s
+        self._next_cycle_at = 0.0  # monotonic()
+
+    # ------------------------------------------------------ what commands change
+
+    def see(self, variables: tuple[VarRef, ...] | list[VarRef]) -> None:
+        """Indices used or watched, offered by completion."""
+        more = {(v.kind.code, v.index) for v in variables} - self.seen
+        if more:
+            self.seen = self.seen | more
+
+    def wake(self) -> None:
+        """The watch list, interval, pause or target changed: poll (or retry) now."""
+        self._next_cycle_at = 0.0
+        if self._link.retry_at is not None:
+            self._link.end_retry()
+        self._publisher.status_dirty = True
+
+    def set_paused(self, paused: bool) -> None:
+        self.paused = paused
+        if paused:
+            self.forget_figures()
+            self._cycle.clear()
+        self.wake()
+
+    def forget_figures(self) -> None:
+        """Round trips and poll rates measured on a connection that is gone say nothing now."""
+        self.cycle_seconds = self.polls_per_second = None
+        self._last_cycle = None
+
+    def stop_cycle(self) -> None:
+        self._cycle.clear()
+
+    def new_target(self) -> None:
+        """Another target: nothing of the last one is shown as its (one CSV file, one
+        controller)."""
+        for row in self.watch.start_afresh():
+            self._publisher.show_row(row)
+        ended = self.csv.stop() if self.csv.path is not None else None
+        if ended is not None:
+            self._publisher.alert(f"CSV log stopped at the change of target: {ended.path}")
+
+    # ------------------------------------------------------------- figures
+
+    @property
+    def period(self) -> float:
+        """Seconds between poll cycles: the interval, or a row's shorter ``every``."""
+        return self.watch.period(self.interval)
+
+    def interval_met(self) -> bool:
+        """Period 0 asks for polls back to back: met by definition."""
+        period = self.period
+        if self.cycle_seconds is None or period == 0:
+            return True
+        return self.cycle_seconds <= period * 1.05 + 0.001
+
+    # ------------------------------------------------------------ polling
+
+    def wait_time(self) -> float | None:
+        """How long the engine may wait for a job before it has a poll to make (None:
+        nothing to poll)."""
+        if self._link.session is None or self.paused or not self.watch.rows:
+            return None
+        now = time.monotonic()
+        if self._link.retry_at is not None:
+            return max(0.0, self._link.retry_at - now)
+        if self._cycle:
+            return 0
+        return max(0.0, self._next_cycle_at - now)
+
+    def poll_once(self) -> None:
+        """One step: one row polled, or a cycle begun or ended."""
+        link = self._link
+        now = time.monotonic()
+        if link.retry_at is not None:
+            if now < link.retry_at:
+                return
+            link.end_retry()
+        if not self._cycle:
+            if now < self._next_cycle_at:
+                return
+            self._begin_cycle(now)
+            if not self._cycle:  # every row has its own, longer period
+                self._next_cycle_at = now + self.period
+                return
+        row = self._cycle[0]
+        if not row.watched:  # unwatched during the cycle
+            self._cycle.popleft()
+            self._end_cycle_if_done()
+            return
+        if link.early_drop:
+            # The last connection closed before it served a couple of exchanges: wait,
+            # then go on with this row (cutting the cycle would starve the rest).
+            link.early_drop = False
+            served = link.backoff.served
+            self._publisher.note(
+                f"the connection closed after {served} good exchange{'s' * (served != 1)}: "
+                f"waiting {link.backoff.delay:g} s before the next try"
+            )
+            self._retry("dropped")
+            return
+        self._cycle.popleft()
+        try:
+            self._poll_row(row)
+        except ConnectFailed as exc:
+            self._unreachable(exc)
+            return
+        self._cycle_count += 1
+        self._end_cycle_if_done()
+
+    def _unreachable(self, exc: ConnectFailed) -> None:
+        link = self._link
+        if not link.lost:
+            link.lost = True
+            for failed in self.watch.mark_all("DISCONNECTED"):
+                self._publisher.show_row(failed)
+            # A connection that never opened was not lost: say why it cannot open.
+            self._publisher.note(f"connection lost: {exc}" if link.ever_connected else str(exc))
+        self._cycle.clear()
+        if self.csv.path is not None:  # a row per try, its cells empty: no connection
+            self.csv.cycle_ended(time.time(), self.watch.rows)
+        link.early_drop = False  # this failure has its own wait
+        self._retry("lost" if link.ever_connected else exc.problem)
+
+    def _retry(self, state: str) -> None:
+        self._link.begin_retry(state)
+        self.publish_status(True)
+
+    def _begin_cycle(self, now: float) -> None:
+        started = time.perf_counter()
+        if self._last_cycle is not None:
+            last_start, last_count = self._last_cycle
+            if last_count and started > last_start:
+                self.polls_per_second = last_count / (started - last_start)
+        interval = self.interval
+        self._cycle.extend(row for row in self.watch.rows.values() if row.due(now, interval))
+        self._cycle_started, self._cycle_count = started, 0
+        self._samples = []
+        self._next_cycle_at = now + self.period
+
+    def _end_cycle_if_done(self) -> None:
+        if self._cycle:
+            return
+        if self._cycle_count:
+            self.cycle_seconds = time.perf_counter() - self._cycle_started
+            self._last_cycle = (self._cycle_started, self._cycle_count)
+        if self._samples:
+            self._cycle_ended(tuple(self._samples))
+            self._samples = []
+        self.publish_status(False)  # at most every STATUS_EVERY while polling flat out
+
+    def _poll_row(self, row: WatchRow) -> None:
+        session = self._link.session
+        assert session is not None
+        try:
+            reply = session.exchange(row.request, poll=True)
+        except ConnectFailed:
+            raise
+        except TransportError as exc:
+            self._link.mark_failure(exc)
+            status = {RequestTimeout: "TIMEOUT", BadReply: "BAD REPLY"}.get(type(exc))
+            if row.fail(status or "DISCONNECTED", time.monotonic()):
+                self._publisher.show_row(row)
+            self._samples.append((row.var, None))
+            return
+        self._link.backoff.good()
+        response = reply.response
+        variant = response.variant
+        if response.ok and variant is not None:
+            changed = row.update(variant, time.monotonic())
+        else:
+            variant = None
+            status = hresult_name(response.code) or describe_hresult(response.code)[:10]
+            changed = row.fail(status, time.monotonic())
+        self._samples.append((row.var, variant))
+        if changed:
+            self._publisher.show_row(row)
+
+    def _cycle_ended(self, samples: tuple[tuple[VarRef, Variant | None], ...]) -> None:
+        """A cycle's values go to the CSV log and the trends (when asked for)."""
+        wall = time.time()
+        if self.csv.path is not None:
+            self.csv.cycle_ended(wall, self.watch.rows)
+        if self.publish_cycles:
+            self._publisher.emit(Cycle(wall, time.monotonic(), samples, self._link.opened))
+
+    def poll_until(self, until: float, deadline: float, stopping: Callable[[], bool]) -> None:
+        """Until ``time.perf_counter()`` reaches ``until`` (between a job's reads): poll
+        the rows that are due, sleep when none is. A poll may take a whole timeout: none
+        starts that could end after the job's ``deadline``. ``stopping()`` ends it."""
+        while not stopping():
+            now = time.perf_counter()
+            if now >= until:
+                return
+            wait = self.wait_time()
+            if wait == 0 and deadline - now > self._link.timeout:
+                self.poll_once()
+                continue
+            if wait == 0:
+                wait = None  # no time for a poll: sleep to the next read
+            remaining = until - now
+            time.sleep(remaining if wait is None else min(remaining, wait))

@@ -1,0 +1,70 @@
+"""The engine's side of the outbox: events batched, notes and alerts, row views.
+
+Frames and notes are handed over in batches (one lock per batch, not per frame);
+results, alerts and the questions a front end must answer go at once.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+
+from ..session import Frame
+from .events import Alert, Event, Note
+from .frame_files import FrameFiles
+from .outbox import Outbox
+from .watch import WatchRow
+
+#: Events are handed to the outbox in batches at least this often while polling (and at
+#: once when the engine goes idle or answers a line).
+EVENTS_EVERY = 0.01
+
+
+class Publisher:
+    """Owned by the engine's thread; :attr:`outbox` is the only thing another reads."""
+
+    def __init__(self, outbox: Outbox, files: FrameFiles) -> None:
+        self.outbox = outbox
+        self.files = files
+        self.observers: list[Callable[[Frame], None]] = []  # Engine.add_frame_observer
+        self._events: list[Event] = []
+        self._events_at = 0.0  # perf_counter() of the last flush
+        #: Something the status line shows changed: published when the loop next idles.
+        self.status_dirty = True
+
+    def emit(self, event: Event) -> None:
+        """Queue an event for the outbox (handed over by :meth:`flush`)."""
+        self._events.append(event)
+
+    def flush(self) -> None:
+        if self._events:
+            self.outbox.put_many(self._events)
+            self._events = []
+        self._events_at = time.perf_counter()
+
+    def frame(self, frame: Frame) -> None:
+        """A frame crossed the wire: to the files, and to the front ends in a batch."""
+        self.files.frame(frame)
+        for observer in self.observers:
+            observer(frame)
+        self._events.append(frame)
+        # The request in flight, for the status line's "waiting for a reply": set as a
+        # request leaves, cleared by its reply or by the connection's end.
+        self.outbox.waiting_since = time.perf_counter() if frame.direction == "tx" else None
+        if time.perf_counter() - self._events_at > EVENTS_EVERY:
+            self.flush()  # while polling, and during a long command (latency)
+
+    def note(self, text: str) -> None:
+        """A mark in the frame log (and the transcript)."""
+        now = time.time()
+        self.files.note(text, now)
+        self.emit(Note(text, now))
+
+    def alert(self, text: str) -> None:
+        """Said at once, whatever the user is doing."""
+        self.files.note(text, time.time())
+        self.emit(Alert(text))
+        self.flush()
+
+    def show_row(self, row: WatchRow) -> None:
+        self.outbox.put_row(row.view())

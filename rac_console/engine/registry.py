@@ -1,0 +1,231 @@
+"""A command, declared once: name, arguments, help, completion, hint, where it runs,
+its parser and its handler.
+
+Everything that knows about a command reads its entry: ``help``, completion, hints,
+the lexer's colours, the parser, the job runner (:mod:`.jobs`) and ``run``'s refusal
+of what only works at a terminal. Adding a command is one :class:`CommandSpec` in a
+module of :mod:`rac_console.engine.commands` (or :meth:`Registry.register` at run
+time), and its tests; no front end matches on its name.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterable, Iterator, Sequence
+from dataclasses import dataclass, field
+from enum import Enum
+from typing import Any
+
+from ..commands.language import (
+    Command,
+    FrameFile,
+    Simple,
+    Step,
+    WatchFile,
+    is_raw_line,
+    parse_exchange,
+    split_word,
+)
+from ..protocol import KINDS, InputError
+from ..protocol.text import close_match
+from .events import Feedback
+
+
+class Where(Enum):
+    """Where a command can run."""
+
+    CONSOLE = "console"
+    REPL = "REPL"
+    RUN = "run"  # a line of rac-console run FILE
+    COMMAND_LINE = "command line"  # rac-console get, put, send, latency
+
+
+AT_A_TERMINAL = frozenset({Where.CONSOLE, Where.REPL})
+EVERYWHERE = frozenset(Where)
+
+#: (completion text, what it means)
+Option = tuple[str, str]
+
+
+@dataclass(frozen=True)
+class Sources:
+    """What completion may offer beyond the registry: indices used or watched (TYPE,
+    index), and the config file's profiles (name, label or host)."""
+
+    seen: Iterable[tuple[str, int]] = ()
+    targets: Iterable[Option] = ()
+    commands: Sequence[Option] = ()  # every command and its summary (help TOPIC)
+
+
+#: The options for the argument being typed, given the arguments before it (``P 10``
+#: already split as ``P``, ``10``).
+Completer = Callable[[list[str], Sources], Sequence[Option]]
+#: What the command still needs after the arguments given, in grey; "" for nothing.
+Hinter = Callable[[list[str]], str]
+#: Runs the parsed command on the engine's thread (or the CLI's): the feedback to show.
+#: Its first argument is the job's context: a :class:`~.context.JobContext` for the
+#: commands that run everywhere, a :class:`~.context.CommandContext` for the rest.
+Handler = Callable[[Any, Any, "str | None"], list[Feedback]]
+
+
+TYPE_OPTIONS: tuple[Option, ...] = tuple((code, kind.title) for code, kind in KINDS.items())
+
+
+def no_completion(args: list[str], sources: Sources) -> Sequence[Option]:
+    return ()
+
+
+def variable_completion(
+    after: Callable[[str, list[str]], Sequence[Option]] | None = None,
+    first: Sequence[Option] = (),
+) -> Completer:
+    """TYPE, then an index seen before, then (``after(type code, words after the
+    index)``) what the command takes next. ``first`` adds options to the types."""
+
+    def complete(args: list[str], sources: Sources) -> Sequence[Option]:
+        if not args:
+            return (*TYPE_OPTIONS, *first)
+        kind = KINDS.get(args[0].upper())
+        if kind is None:
+            return ()
+        if len(args) == 1:
+            indices = sorted({i for code, i in sources.seen if code == kind.code})
+            return [(str(i), f"{kind.code}{i}") for i in indices]
+        return after(kind.code, args[2:]) if after is not None else ()
+
+    return complete
+
+
+def no_argument(step: Step) -> Callable[[str], Command]:
+    """The parser of a command that takes nothing."""
+
+    def parse(rest: str) -> Command:
+        if rest:
+            raise InputError(f"{step.value} takes no argument")
+        return Simple(step)
+
+    return parse
+
+
+def words_of(arguments: str) -> Hinter:
+    """The default hint: the usage's words not yet given, one per argument typed."""
+    needs = arguments.split()
+
+    def hint(args: list[str]) -> str:
+        return " ".join(needs[len(args) :])
+
+    return hint
+
+
+@dataclass(frozen=True)
+class CommandSpec:
+    name: str
+    arguments: str
+    summary: str
+    parse: Callable[[str], Command]
+    handle: Handler
+    example: str = ""
+    notes: tuple[str, ...] = ()  # more lines for ``help NAME``
+    where: frozenset[Where] = AT_A_TERMINAL
+    takes_variable: bool = False  # TYPE INDEX first: coloured, and P10 split as P 10
+    complete: Completer = no_completion
+    hint: Hinter | None = None  # None: the usage's words (:func:`words_of`)
+    types: tuple[type, ...] = field(default=())  # the command objects its parser makes
+
+    @property
+    def usage(self) -> str:
+        return f"{self.name} {self.arguments}".strip()
+
+    def hint_for(self, args: list[str]) -> str:
+        return (self.hint or words_of(self.arguments))(args)
+
+
+def _named(command: Command) -> str | None:
+    """The name of a command whose object is shared by several entries (pause and
+    resume are one :class:`Simple`; record and transcript one :class:`FrameFile`)."""
+    if isinstance(command, Simple):
+        return command.step.value
+    if isinstance(command, FrameFile):
+        return command.kind
+    if isinstance(command, WatchFile):
+        return command.action
+    return None
+
+
+RAW_HELP = "GET:... / PUT:... lines are sent exactly as typed (raw RAC entry)"
+
+
+class Registry:
+    """The commands by name, in the order ``help`` lists them, and the handler of each
+    kind of command object (a raw line, or F2's pause, made without a name)."""
+
+    def __init__(self, specs: Iterable[CommandSpec] = ()) -> None:
+        self._specs: dict[str, CommandSpec] = {}
+        self._by_type: dict[type, CommandSpec] = {}
+        for spec in specs:
+            self.register(spec)
+
+    def register(self, spec: CommandSpec) -> CommandSpec:
+        self._specs[spec.name] = spec
+        for kind in spec.types:
+            self._by_type.setdefault(kind, spec)
+        return spec
+
+    def unregister(self, name: str) -> None:
+        spec = self._specs.pop(name)
+        self._by_type = {k: s for k, s in self._by_type.items() if s is not spec}
+
+    def __iter__(self) -> Iterator[CommandSpec]:
+        return iter(list(self._specs.values()))
+
+    def __contains__(self, name: object) -> bool:
+        return name in self._specs
+
+    def get(self, name: str) -> CommandSpec | None:
+        return self._specs.get(name)
+
+    def names(self) -> list[str]:
+        return list(self._specs)
+
+    def spec_of(self, command: Command) -> CommandSpec:
+        """The entry that runs ``command`` (a command object carries no name)."""
+        named = _named(command)
+        spec = self._specs.get(named) if named is not None else self._by_type.get(type(command))
+        if spec is None:
+            raise LookupError(f"no command runs {type(command).__name__}")
+        return spec
+
+    def parse(self, line: str) -> Command | None:
+        """One line of the command language; None for a blank line or a ``#`` comment."""
+        stripped = line.strip()
+        if not stripped or stripped.startswith("#"):
+            return None
+        if is_raw_line(line):
+            return parse_exchange(line.rstrip("\r\n"))
+        word, rest = split_word(line.rstrip("\r\n"))
+        spec = self._specs.get(word)
+        if spec is None:
+            meant = close_match(word, self._specs)
+            guess = f"did you mean {meant}? " if meant is not None else ""
+            raise InputError(
+                f"unknown command {word!r}: {guess}type help for the list, "
+                "or start a raw line with GET: or PUT:"
+            )
+        return spec.parse(rest)
+
+    def help_lines(self, topic: str | None = None) -> list[str]:
+        """The text of ``help`` or ``help COMMAND``."""
+        if topic:
+            spec = self._specs.get(topic.lower())
+            if spec is None:
+                return [f"no command {topic!r}: type help for the list"]
+            lines = [f"{spec.usage}  -  {spec.summary}"]
+            if spec.example:
+                lines.append(f"  e.g. {spec.example}")
+            lines.extend(f"  {note}" for note in spec.notes)
+            return lines
+        specs = list(self._specs.values())
+        width = max(len(s.usage) for s in specs)
+        return [f"{s.usage:<{width}}  {s.summary}" for s in specs] + [RAW_HELP]
+
+    def runs_in(self, where: Where) -> list[str]:
+        return [spec.name for spec in self._specs.values() if where in spec.where]

@@ -1,0 +1,121 @@
+"""What fits at the cursor: completion candidates and argument hints.
+
+Pure functions of the text before the cursor, so the console and the REPL show
+the same candidates and hints, and tests need no terminal. What a command takes is
+its registry entry's to say (:mod:`rac_console.engine.registry`); nothing here names
+a command.
+"""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass
+
+from ..commands.language import is_raw_line
+from ..engine.commands import BUILTIN
+from ..engine.registry import Registry, Sources
+from ..protocol import KINDS
+
+
+@dataclass(frozen=True)
+class Candidate:
+    """A completion: ``text`` replaces the word being typed (``start`` chars back)."""
+
+    text: str
+    help: str
+    start: int
+
+
+def _tokens(text: str) -> tuple[list[str], str]:
+    """Finished words before the cursor, and the word being typed ('' after a space)."""
+    words = text.split()
+    if text and not text[-1].isspace() and words:
+        return words[:-1], words[-1]
+    return words, ""
+
+
+def _split_var(words: list[str]) -> list[str]:
+    """Treat ``P10`` and ``P[10]`` like ``P 10`` so the position counts stay simple."""
+    if len(words) >= 2:
+        match = re.fullmatch(r"([A-Za-z]+)\[?(\d+)\]?", words[1], re.ASCII)
+        if match and match.group(1).upper() in KINDS:
+            return [words[0], match.group(1), match.group(2), *words[2:]]
+    return words
+
+
+def complete(
+    text: str,
+    seen: Iterable[tuple[str, int]] = (),
+    targets: Iterable[tuple[str, str]] = (),
+    registry: Registry = BUILTIN,
+) -> list[Candidate]:
+    """Candidates for the word at the end of ``text``: a command name, or what the
+    command's entry offers for the argument being typed.
+
+    ``seen`` holds (TYPE, index) pairs already used or watched, offered as indices;
+    ``targets`` the config file's profiles (name, label or host), offered after connect.
+    """
+    if is_raw_line(text):
+        return []
+    done, partial = _tokens(text)
+    done = _split_var(done)
+    low = partial.lower()
+    start = len(partial)
+    names = [(spec.name, spec.summary) for spec in registry]
+    if not done:
+        options: Sequence[tuple[str, str]] = names
+    else:
+        spec = registry.get(done[0].lower())
+        if spec is None:
+            return []
+        options = spec.complete(done[1:], Sources(seen, targets, names))
+    return [Candidate(o, h, start) for o, h in options if o.lower().startswith(low)]
+
+
+#: A candidate list this long or shorter is listed whole (the 9 types, the 7 conditions
+#: of a ``wait`` on a number): a cut short list hides the very choice asked for. A longer
+#: one (the 19 commands) is cut: it would push the rest of the screen away.
+WHOLE_LIST = 12
+
+
+def shown_candidates(candidates: list[Candidate]) -> tuple[list[Candidate], int]:
+    """The candidates to list, and how many are left out: a list of up to
+    :data:`WHOLE_LIST` whole; a longer one its first ``WHOLE_LIST - 1``, so the list
+    with its "… and N more" line still takes ``WHOLE_LIST`` lines."""
+    if len(candidates) <= WHOLE_LIST:
+        return candidates, 0
+    shown = candidates[: WHOLE_LIST - 1]
+    return shown, len(candidates) - len(shown)
+
+
+def hint(text: str, registry: Registry = BUILTIN) -> str:
+    """Grey text showing what the command still needs, redis-cli style; '' if nothing."""
+    if not text or is_raw_line(text):
+        return ""
+    done, partial = _tokens(text)
+    if partial or not done:
+        return ""
+    done = _split_var(done)
+    spec = registry.get(done[0].lower())
+    if spec is None:
+        return ""
+    args = done[1:]
+    if spec.takes_variable and args and args[0].upper() not in KINDS:
+        return ""
+    return spec.hint_for(args)
+
+
+def common_prefix(candidates: list[Candidate]) -> str:
+    """The longest text every candidate starts with (case-insensitively)."""
+    if not candidates:
+        return ""
+    first = candidates[0].text
+    length = len(first)
+    for candidate in candidates[1:]:
+        length = min(length, len(candidate.text))
+        for i in range(length):
+            if candidate.text[i].lower() != first[i].lower():
+                length = i
+                break
+    return first[:length]
