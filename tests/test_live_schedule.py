@@ -1,8 +1,10 @@
-"""The schedule of ``get -r N -i S`` and ``watch --every S``, on a clock the test holds.
+"""The poll cycles' schedule (the console's, and ``get -r N -i S`` and ``watch --every
+S``), on a clock the test holds.
 
-:class:`Schedule` is given the clock's readings and says when each start is, so these
-tests pin start-to-start timing exactly; the subprocess tests in test_cli_live.py only
-show that the CLI uses it.
+:class:`Schedule` is given the clock's readings and says when each start is, and the
+poller asks it, with the backoff's delay after a failure as a floor; so these tests pin
+start-to-start timing exactly; the subprocess tests in test_cli_live.py only show that
+the CLI runs on the engine's poller.
 """
 
 from __future__ import annotations
@@ -11,8 +13,8 @@ import itertools
 
 import pytest
 
-from rac_console.cli.live import Schedule
-from rac_console.engine.backoff import FIRST_DELAY, MAX_DELAY
+from rac_console.engine.backoff import FIRST_DELAY, MAX_DELAY, Backoff
+from rac_console.engine.schedule import Schedule
 
 T0 = 1000.0  # any reading of a monotonic clock
 
@@ -21,17 +23,20 @@ def run(
     interval: float, durations: list[float], failing: frozenset[int] = frozenset()
 ) -> list[float]:
     """The starts of ``len(durations)`` repetitions, each taking its duration (from T0);
-    the ones numbered in ``failing`` (from 0) end in a connection failure. The loop
-    sleeps until each start, as run_live does."""
-    schedule = Schedule(interval)
+    the ones numbered in ``failing`` (from 0) end in a connection failure, after which
+    the next start waits the backoff (as the poller retries)."""
+    schedule, backoff = Schedule(), Backoff()
     clock, starts = T0, []
     for number, duration in enumerate(durations):
-        start = schedule.start(clock)
+        start = schedule.start(clock, interval)
         assert start >= clock  # never in the past
         clock = start
         starts.append(start - T0)
         clock += duration
-        schedule.ended(clock, connection_failed=number in failing)
+        if number in failing:
+            schedule.not_before(clock + backoff.next_delay())
+        else:
+            backoff.good()
     return starts
 
 
@@ -40,7 +45,7 @@ def gaps(starts: list[float]) -> list[float]:
 
 
 def test_the_first_start_is_at_once() -> None:
-    assert Schedule(5).start(T0) == T0
+    assert Schedule().start(T0, 5) == T0
 
 
 @pytest.mark.parametrize("duration", [0.0, 0.01, 0.25, 0.99])
@@ -73,11 +78,10 @@ def test_an_interval_of_0_runs_back_to_back() -> None:
 def test_the_start_stays_on_the_grid_when_asked_early() -> None:
     """Asked before the start is due, the schedule gives the due time, not a later one
     made of the time asked plus the interval."""
-    schedule = Schedule(1.0)
-    schedule.start(T0)
-    schedule.ended(T0 + 0.3, connection_failed=False)
-    assert schedule.start(T0 + 0.3) == pytest.approx(T0 + 1.0)
-    assert schedule.start(T0 + 1.0) == pytest.approx(T0 + 2.0)
+    schedule = Schedule()
+    schedule.start(T0, 1.0)
+    assert schedule.start(T0 + 0.3, 1.0) == pytest.approx(T0 + 1.0)
+    assert schedule.start(T0 + 1.0, 1.0) == pytest.approx(T0 + 2.0)
 
 
 def test_after_a_connection_failure_the_next_start_waits_the_backoff() -> None:

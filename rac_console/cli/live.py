@@ -1,10 +1,12 @@
 """Live values for pipes: ``get ... -r N -i S`` and ``watch VAR...``, one line at a time.
 
-Both run over one session (:func:`.target.open_session`) and send through
-:func:`~rac_console.engine.execute.execute`, like ``get`` and ``run``. Every line is
-flushed as it is written, so ``| grep --line-buffered`` sees it at once; a reader that
-goes away (``| head -3``) ends the command quietly. The exit status is the worst one
-seen, as for ``run``.
+Both are the console's ``watch`` run by an engine (:mod:`rac_console.engine`): its
+poller reads the variables on its schedule, its CSV log writes ``--log-csv``, and each
+poll cycle comes back as a :class:`~rac_console.engine.Cycle` that becomes a line. Every
+line is flushed as it is written, so ``| grep --line-buffered`` sees it at once; a
+reader that goes away (``| head -3``) ends the command quietly. The exit status is the
+worst one seen, as for ``run``; only that worst is kept, so a watch left running for
+days holds no more memory than after its first minute.
 """
 
 from __future__ import annotations
@@ -16,21 +18,40 @@ import io
 import json
 import os
 import sys
-import time
+import threading
 from collections.abc import Callable, Iterator
 from typing import Any, TextIO, cast
 
 from ..commands.argv import exchange_from_words, input_line
-from ..commands.language import Get, VarRef, parse_var_list
+from ..commands.language import (
+    Command,
+    CsvLog,
+    Get,
+    Simple,
+    Step,
+    VarRef,
+    Watch,
+    parse_var_list,
+)
 from ..commands.outcome import ExitStatus, Outcome, refused, worst
-from ..engine.backoff import Backoff
-from ..engine.csvlog import CsvLog, timestamp
-from ..engine.execute import execute
+from ..engine import (
+    SIMULATOR_NOTICE,
+    Alert,
+    Batch,
+    Cycle,
+    Engine,
+    EngineOptions,
+    Message,
+    Outbox,
+    Result,
+)
+from ..engine.csvlog import timestamp
+from ..engine.execute import outcome_of
+from ..engine.registry import Where
 from ..present.render import error_text, outcome_text, print_error
-from ..protocol import InputError, Variant, hresult_name
-from ..session import BadReply, ConnectFailed, RequestTimeout, Session
+from ..protocol import InputError, hresult_name
+from ..session import BadReply, ConnectFailed, RequestTimeout
 from .oneshot import Output
-from .target import open_session
 
 WATCH_USAGE = "rac-console watch TYPE INDEX [TYPE INDEX|TYPE FIRST-LAST]..., e.g. watch IO 128-135"
 
@@ -41,41 +62,8 @@ _READER_GONE = {errno.EPIPE, *([errno.EINVAL] if sys.platform == "win32" else []
 
 #: watch's default cycle, as the console's poll interval.
 WATCH_EVERY = 0.5
-
-
-class Schedule:
-    """When each repetition (or watch cycle) starts: ``interval`` seconds start to start.
-
-    Pure: it is told the clock's readings (``time.monotonic()`` in :func:`run_live`, a
-    test's own numbers in test_live_schedule.py). Starts are counted from the previous
-    *scheduled* start, so a slow reply does not push the later ones back. A start that
-    is already late begins at once and the count goes on from it: missed starts are
-    never made up in a burst. After a transport failure the next start waits at least
-    the poller's backoff (0.5 s doubling to 5 s), so a controller that is down is not
-    asked in a tight loop.
-    """
-
-    def __init__(self, interval: float) -> None:
-        self.interval = interval
-        self._due: float | None = None  # when the next start is due; None: at once
-        self._backoff = Backoff()
-
-    def start(self, now: float) -> float:
-        """When the next start is, asked at ``now``: when it is due, or ``now`` when
-        that has passed. The caller sleeps until then; the start after it is due an
-        interval later, however late that sleep wakes."""
-        start = now if self._due is None else max(self._due, now)
-        self._due = start + self.interval
-        return start
-
-    def ended(self, now: float, *, connection_failed: bool) -> None:
-        """The requests of the start before ``now`` are done; ``connection_failed``:
-        one of them failed on the connection (connect, timeout, bad reply)."""
-        if connection_failed:
-            due = now if self._due is None else self._due
-            self._due = max(due, now + self._backoff.next_delay())
-        else:
-            self._backoff.good()
+#: How long the CLI waits for the engine at a time (Ctrl-C is seen between waits).
+WAKE_EVERY = 0.5
 
 
 def write_line(text: str) -> None:
@@ -145,59 +133,152 @@ def _stderr_may_close() -> Iterator[None]:
         yield
 
 
-# ------------------------------------------------------------ the shared loop
+# ------------------------------------------------------------ the shared run
 
-Tick = Callable[[Session, int, float, list[ExitStatus]], list[Outcome]]
-"""One repetition or cycle: ``tick(session, number, wall_time, seen)`` reads, adds the
-statuses to ``seen`` before it prints (a Ctrl-C during the print must not lose them),
-prints, and returns the outcomes."""
+#: What a cycle read: each variable's outcome, None when it was not read (the
+#: connection failed earlier in that cycle).
+Results = dict[VarRef, Outcome | None]
+#: Shows one cycle (its number from 1, its wall-clock time, its results).
+Show = Callable[[int, float, Results], None]
 
 
 def run_live(
     args: argparse.Namespace,
     output: Output,
-    tick: Tick,
+    variables: tuple[VarRef, ...],
+    show: Show,
     *,
     count: int | None,
     interval: float,
     until_ctrl_c: bool,
+    line: str | None = None,
+    log_csv: str | None = None,
 ) -> ExitStatus:
-    """``count`` ticks (None: without end) over one session, ``interval`` apart.
+    """``count`` cycles (None: without end) of ``variables``, ``interval`` apart, by an
+    engine's poller; each shown as it ends.
 
     The status is the worst one seen. A closed stdout ends it quietly; Ctrl-C ends it
     the same way when ``until_ctrl_c`` (the usual end of a watch), else it goes on up
     to ``main`` (status 130: fewer results than asked for).
     """
-    statuses: list[ExitStatus] = []
-    schedule = Schedule(interval)
+    woke = threading.Event()
+    options = EngineOptions(
+        timeout=args.timeout,
+        interval=interval,
+        cycles=True,
+        record=args.record,
+        transcript=getattr(args, "transcript", None),
+        frames=False,
+        cut_cycles=True,
+        max_cycles=count,
+    )
     try:
-        with open_session(args, output.local_failure) as session:
-            for number in _ticks(count):
-                now = time.monotonic()
-                start = schedule.start(now)
-                if start > now:
-                    time.sleep(start - now)
-                outcomes = tick(session, number, time.time(), statuses)
-                failed = any(o.status == ExitStatus.TRANSPORT for o in outcomes)
-                schedule.ended(time.monotonic(), connection_failed=failed)
-    except KeyboardInterrupt:
-        if not until_ctrl_c:
-            raise
+        engine = Engine(
+            target=args.target, options=options, outbox=Outbox(woke.set), where=Where.COMMAND_LINE
+        )
     except InputError as exc:  # --record cannot open its file
         print_error(output.err, str(exc))
         return ExitStatus.REFUSED
+    run = _LiveRun(engine, woke, output, variables, show, line)
+    engine.start(connect=False)
+    try:
+        if not run.set_up(log_csv):
+            return ExitStatus.REFUSED
+        run.cycles(count)
+    except KeyboardInterrupt:
+        if not until_ctrl_c:
+            raise
     except OSError as exc:
         if not _reader_gone(exc):
             raise
-    return output.status(worst(statuses))
+    finally:
+        engine.stop()
+    run.ended = True
+    run.take(engine.outbox.drain())  # the last alerts (a file that failed at the end)
+    return output.status(run.worst)
 
 
-def _ticks(count: int | None) -> Iterator[int]:
-    """Numbers from 1: ``count`` of them, or without end."""
-    number = 0
-    while count is None or number < count:
-        number += 1
-        yield number
+class _LiveRun:
+    """The CLI's side of the engine: what it said, and the worst status seen."""
+
+    def __init__(
+        self,
+        engine: Engine,
+        woke: threading.Event,
+        output: Output,
+        variables: tuple[VarRef, ...],
+        show: Show,
+        line: str | None,
+    ) -> None:
+        self.engine, self.woke, self.output = engine, woke, output
+        self.variables, self.show, self.line = variables, show, line
+        self.worst = ExitStatus.OK
+        self.shown = 0  # cycles shown
+        self._results: list[Result] = []
+        self._told_simulator = False
+        self.ended = False  # stopped: a cycle the stop cut short is no result
+        self.csv_failure: str | None = None  # why the CSV log failed once it was open
+
+    def set_up(self, log_csv: str | None) -> bool:
+        """The variables watched (and the CSV log started), as the console would: False
+        when the log was refused (said on stderr; nothing was sent)."""
+        engine = self.engine
+        # Paused until the log is known good: a refused log sends nothing.
+        commands: list[Command] = [Simple(Step.PAUSE), Watch(self.variables)]
+        if log_csv is not None:
+            commands.append(CsvLog(log_csv))
+        for command in commands:
+            engine.submit_command(command)
+        while len(self._results) < len(commands):
+            self._wait()
+        for result in self._results:
+            errors = [
+                f.text for f in result.feedback if isinstance(f, Message) and f.level == "error"
+            ]
+            if errors and self.csv_failure is not None:  # opened, then failed: go on (exit 4)
+                for error in errors:
+                    self.output.local_failure(error)
+            elif errors:
+                engine.stop()
+                for error in errors:
+                    print_error(self.output.err, error)
+                return False
+        engine.submit_command(Simple(Step.RESUME))
+        return True
+
+    def cycles(self, count: int | None) -> None:
+        while count is None or self.shown < count:
+            self._wait()
+
+    def _wait(self) -> None:
+        self.woke.wait(WAKE_EVERY)
+        self.woke.clear()
+        self.take(self.engine.outbox.drain())
+
+    def take(self, batch: Batch) -> None:
+        status = batch.status
+        if status is not None:
+            self.csv_failure = status.csv_failure
+        if status is not None and status.is_simulator and not self._told_simulator:
+            self._told_simulator = True
+            print_error(self.output.err, f"{SIMULATOR_NOTICE} (at {status.host}:{status.port})")
+        for event in batch.events:
+            if isinstance(event, Alert):  # a --record, --log or CSV file that failed
+                self.output.local_failure(event.text)
+            elif isinstance(event, Result):
+                self._results.append(event)
+            elif isinstance(event, Cycle) and not self.ended:
+                self._cycle(event)
+
+    def _cycle(self, cycle: Cycle) -> None:
+        read = {var: outcome_of(Get(var), reading, self.line) for var, reading in cycle.readings}
+        results: Results = {var: read.get(var) for var in self.variables}
+        # Added to the worst before the line is printed: a Ctrl-C during the print must
+        # not lose them.
+        statuses = [o.status for o in results.values() if o is not None]
+        self.worst = worst([self.worst, *statuses])
+        self.shown += 1
+        self.show(self.shown, cycle.time, results)
 
 
 # ------------------------------------------------------------------ get -r N
@@ -220,18 +301,23 @@ def repeat_get(args: argparse.Namespace) -> ExitStatus:
     except InputError as exc:
         output.show(refused(line, str(exc)))
         return ExitStatus.REFUSED
+    assert isinstance(command, Get)  # get's words make a Get
 
-    def repetition(
-        session: Session, number: int, wall: float, seen: list[ExitStatus]
-    ) -> list[Outcome]:
-        outcome = execute(session, command, read_only=args.read_only, line=line)
-        seen.append(outcome.status)
-        _show_repetition(output, outcome, number, timestamp(wall))
-        return [outcome]
+    def repetition(number: int, wall: float, results: Results) -> None:
+        outcome = results[command.var]
+        if outcome is not None:
+            _show_repetition(output, outcome, number, timestamp(wall))
 
     interval = args.repeat_interval or 0.0
     return run_live(
-        args, output, repetition, count=args.repeat, interval=interval, until_ctrl_c=False
+        args,
+        output,
+        (command.var,),
+        repetition,
+        count=args.repeat,
+        interval=interval,
+        until_ctrl_c=False,
+        line=line,
     )
 
 
@@ -274,65 +360,30 @@ def watch(args: argparse.Namespace) -> ExitStatus:
     """
     output = Output(args.json)
     try:
-        variables = watch_variables(args.variables)
-        log = _csv_log(args.log_csv, variables, output)
+        variables = tuple(dict.fromkeys(watch_variables(args.variables)))
     except InputError as exc:
         print_error(output.err, str(exc))
         return ExitStatus.REFUSED
     reported: dict[VarRef, str] = {}  # each variable's failure, said on stderr once
 
-    def cycle(session: Session, number: int, wall: float, seen: list[ExitStatus]) -> list[Outcome]:
-        results = _read_cycle(session, variables, args.read_only)
-        outcomes = [o for o in results.values() if o is not None]
-        seen += [o.status for o in outcomes]
+    def cycle(number: int, wall: float, results: Results) -> None:
         _report_failures(output, results, reported)
         started = timestamp(wall)
         if output.as_json:
             write_line(json.dumps(_cycle_json(number, started, results)))
         else:
             write_line(_cycle_text(started, results))
-        if log is not None:
-            log.write(wall, {var: _good_value(outcome) for var, outcome in results.items()})
-        return outcomes
 
-    try:
-        return run_live(
-            args, output, cycle, count=args.count, interval=_every(args), until_ctrl_c=True
-        )
-    finally:
-        if log is not None:
-            log.close()
-
-
-def _csv_log(path: str | None, variables: tuple[VarRef, ...], output: Output) -> CsvLog | None:
-    """The ``--log-csv`` log with a column per field of each variable, as the console's
-    ``log FILE.csv``: appended to when the file has the same header, refused
-    (InputError) when it has other columns or cannot be opened."""
-    if path is None:
-        return None
-    return CsvLog(path, list(dict.fromkeys(variables)), output.local_failure)
-
-
-def _good_value(outcome: Outcome | None) -> Variant | None:
-    """What a CSV row holds of a read: its value, or nothing (an empty cell) when it failed."""
-    return outcome.variant if outcome is not None and outcome.ok else None
-
-
-def _read_cycle(
-    session: Session, variables: tuple[VarRef, ...], read_only: bool
-) -> dict[VarRef, Outcome | None]:
-    """Each variable's outcome; after a connection failure the rest of the cycle is
-    not read (None): it would only wait out the same failure once per variable."""
-    results: dict[VarRef, Outcome | None] = {}
-    broken = False
-    for var in variables:
-        if broken:
-            results[var] = None
-            continue
-        outcome = execute(session, Get(var), read_only=read_only)
-        results[var] = outcome
-        broken = outcome.status == ExitStatus.TRANSPORT
-    return results
+    return run_live(
+        args,
+        output,
+        variables,
+        cycle,
+        count=args.count,
+        interval=_every(args),
+        until_ctrl_c=True,
+        log_csv=args.log_csv,
+    )
 
 
 def _report_failures(

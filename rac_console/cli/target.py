@@ -15,9 +15,8 @@ from ..engine.config import load_config
 from ..engine.recorder import FrameRecorder
 from ..engine.transcript import FrameTranscript
 from ..protocol import InputError
-from ..protocol.request import Request
 from ..protocol.text import terminal_safe
-from ..session import ConnectFailed, Reply, Session
+from ..session import Session
 from ..session.endpoints import addresses
 
 
@@ -54,35 +53,6 @@ def settle_target(args: argparse.Namespace) -> bool:
     return True
 
 
-class _HintedSession(Session):
-    """A session to a bare name that is no profile: failing to connect says so."""
-
-    def __init__(self, host: str, port: int, hint: str, *, timeout: float) -> None:
-        super().__init__(host, port, timeout=timeout)
-        self.hint = hint
-
-    def connect(self) -> None:
-        with self._hinted():
-            super().connect()
-
-    def exchange(
-        self,
-        request: Request,
-        *,
-        poll: bool = False,
-        cancelled: Callable[[], bool] | None = None,
-    ) -> Reply:
-        with self._hinted():
-            return super().exchange(request, poll=poll, cancelled=cancelled)
-
-    @contextmanager
-    def _hinted(self) -> Iterator[None]:
-        try:
-            yield
-        except ConnectFailed as exc:
-            raise ConnectFailed(f"{exc} ({self.hint})", problem=exc.problem) from None
-
-
 @contextmanager
 def open_session(
     args: argparse.Namespace,
@@ -98,12 +68,12 @@ def open_session(
         target = getattr(args, "target", None) or resolve_target(args)
     with ExitStack() as stack:
         if target.host:
-            if target.unreachable_hint:
-                session: Session = _HintedSession(
-                    target.host, target.port, target.unreachable_hint, timeout=args.timeout
-                )
-            else:
-                session = Session(target.host, target.port, timeout=args.timeout)
+            session = Session(
+                target.host,
+                target.port,
+                timeout=args.timeout,
+                unreachable_hint=target.unreachable_hint,
+            )
         else:
             from ..sim.thread import SimulatorThread
 

@@ -59,6 +59,9 @@ class EngineOptions:
     record: str | None = None  # --record FILE
     transcript: str | None = None  # --log FILE
     log_csv: str | None = None  # a CSV log from the first poll cycle
+    frames: bool = True  # publish every frame (the CLI's watch shows none)
+    cut_cycles: bool = False  # a poll cycle ends at its first failed exchange (the CLI)
+    max_cycles: int | None = None  # polling pauses after this many cycles (--count N)
 
 
 class Engine:
@@ -87,7 +90,7 @@ class Engine:
         self.where, self.registry = where, registry
         options = self.options
         self._files = FrameFiles(options.record, options.transcript, self._alert)
-        self._publisher = Publisher(self.outbox, self._files)
+        self._publisher = Publisher(self.outbox, self._files, options.frames)
         self._csv = CsvSink(self._alert, lambda: self.publish_status(force=True))
         self._link = Link(
             self._publisher, options.timeout, went_down=self._went_down, connecting=self._connecting
@@ -99,6 +102,8 @@ class Engine:
             interval=options.interval,
             cycles=options.cycles,
             publish_status=self.publish_status,
+            cut_cycles=options.cut_cycles,
+            max_cycles=options.max_cycles,
         )
         self._parts = EngineParts(
             self._link, self._poller, self._publisher, self._files, self._csv,

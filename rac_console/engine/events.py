@@ -14,7 +14,7 @@ from ..commands.latency import LatencySummary
 from ..commands.outcome import Outcome
 from ..protocol import Variant
 from ..protocol.text import terminal_safe
-from ..session import Frame
+from ..session import Frame, Reply, TransportError
 
 OK = "OK"
 WAITING = "…"
@@ -150,6 +150,10 @@ class Status:
         return 4 if status == 0 and failed else status
 
 
+#: A watched variable's read in a cycle: the reply, or how the exchange failed.
+Reading = tuple[VarRef, "Reply | TransportError"]
+
+
 @dataclass(frozen=True, slots=True)
 class Cycle:
     """One poll cycle ended: what it read, for trends and the CSV log.
@@ -162,6 +166,9 @@ class Cycle:
     monotonic: float  # time.monotonic() then (for windows of seconds)
     samples: tuple[tuple[VarRef, Variant | None], ...]
     target_id: int = 0  # the target polled (Status.target_id): an old one's is dropped
+    #: How each read went (its reply, or the failure): a CLI watch's lines are made of
+    #: them. A cycle cut short by an unreachable controller ends with that failure.
+    readings: tuple[Reading, ...] = ()
 
 
 #: A yes within this many seconds of a confirm question is not taken as its answer (the

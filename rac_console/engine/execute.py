@@ -19,6 +19,7 @@ from ..session import (
     ConnectFailed,
     Disconnected,
     NotSent,
+    Reply,
     RequestTimeout,
     Session,
     TransportError,
@@ -63,35 +64,54 @@ def execute(
     """Send one command and describe what came of it; never raises for I/O.
 
     ``cancelled`` is the job's cancel, asked right before the request goes out."""
+    if read_only and (refusal := read_only_refusal(command)) is not None:
+        return refused(line, refusal, command.request.text)
+    try:
+        reply: Reply | TransportError = session.exchange(command.request, cancelled=cancelled)
+    except TransportError as exc:
+        reply = exc
+    return outcome_of(command, reply, line, cancelled)
+
+
+def outcome_of(
+    command: Exchange,
+    reply: Reply | TransportError,
+    line: str | None = None,
+    cancelled: Callable[[], bool] = never,
+) -> Outcome:
+    """What came of sending ``command``: its reply, or how the exchange failed (the
+    engine's poller keeps just that, and a CLI watch makes the outcome of it)."""
     request = command.request
     wire = request.text
     var = command.var if isinstance(command, Get | Put) else None
-    if read_only and (refusal := read_only_refusal(command)) is not None:
-        return refused(line, refusal, wire)
-    try:
-        reply = session.exchange(request, cancelled=cancelled)
-    except NotSent as exc:
-        return Outcome(wire, ExitStatus.REFUSED, var, error=str(exc), input_line=line, failure=exc)
-    except RequestTimeout as exc:
-        message = str(exc)
+    if isinstance(reply, NotSent):
+        return Outcome(
+            wire, ExitStatus.REFUSED, var, error=str(reply), input_line=line, failure=reply
+        )
+    if isinstance(reply, RequestTimeout):
+        message = str(reply)
         if request.write:
             message += ": outcome unknown, the PUT may have been applied or may still arrive"
-        return Outcome(wire, ExitStatus.TRANSPORT, var, error=message, input_line=line, failure=exc)
-    except Disconnected as exc:
-        message = str(exc)
+        return Outcome(
+            wire, ExitStatus.TRANSPORT, var, error=message, input_line=line, failure=reply
+        )
+    if isinstance(reply, Disconnected):
+        message = str(reply)
         if request.write and cancelled():  # cut while the PUT was on its way
             message += ": outcome unknown, the PUT may have been applied"
-        return Outcome(wire, ExitStatus.TRANSPORT, var, error=message, input_line=line, failure=exc)
-    except TransportError as exc:
-        text = escape_bytes(exc.raw) if isinstance(exc, BadReply) and exc.raw is not None else None
+        return Outcome(
+            wire, ExitStatus.TRANSPORT, var, error=message, input_line=line, failure=reply
+        )
+    if isinstance(reply, TransportError):
+        raw = reply.raw if isinstance(reply, BadReply) else None
         return Outcome(
             wire,
             ExitStatus.TRANSPORT,
             var,
-            response_text=text,
-            error=str(exc),
+            response_text=escape_bytes(raw) if raw is not None else None,
+            error=str(reply),
             input_line=line,
-            failure=exc,
+            failure=reply,
         )
     response = reply.response
     status = ExitStatus.OK if response.ok else ExitStatus.CONTROLLER_ERROR

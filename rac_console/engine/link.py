@@ -65,7 +65,9 @@ class Link:
         self.opened += 1
         self.backoff, self.early_drop, self.lost = Backoff(), False, False
         self.ever_connected = False
-        session = Session(host, port, timeout=self.timeout)
+        session = Session(
+            host, port, timeout=self.timeout, unreachable_hint=target.unreachable_hint
+        )
         session.add_frame_observer(self._publisher.frame)
         session.add_state_observer(self._on_state)
         session.add_resend_observer(self._on_resend)

@@ -15,9 +15,10 @@ from ..commands.language import VarRef
 from ..protocol import Variant, describe_hresult, hresult_name
 from ..session import BadReply, ConnectFailed, RequestTimeout, TransportError
 from .csvsink import CsvSink
-from .events import Cycle
+from .events import Cycle, Reading
 from .link import Link
 from .publisher import Publisher
+from .schedule import Schedule
 from .watch import WatchList, WatchRow
 
 
@@ -31,10 +32,18 @@ class Poller:
         interval: float,
         cycles: bool,
         publish_status: Callable[[bool], None],
+        cut_cycles: bool = False,
+        max_cycles: int | None = None,
     ) -> None:
         """``publish_status(force)``: the status now (``force``), or at most every
-        tenth of a second while polling flat out."""
+        tenth of a second while polling flat out. ``cut_cycles``: a cycle ends at its
+        first failed exchange (the rest are marked SKIPPED), so a script watching a dead
+        controller waits out one timeout a cycle, not one a variable. ``max_cycles``:
+        polling pauses after that many cycles (``watch --count N``)."""
         self._link = link
+        self._cut_cycles = cut_cycles
+        self._max_cycles = max_cycles
+        self.cycles_done = 0
         self.publish_status = publish_status
         self._publisher = publisher
         self.csv = csv
@@ -49,8 +58,9 @@ class Poller:
         self._cycle_started = 0.0  # perf_counter()
         self._cycle_count = 0
         self._samples: list[tuple[VarRef, Variant | None]] = []  # read in this cycle
+        self._readings: list[Reading] = []  # and how each read went, for Cycle
         self._last_cycle: tuple[float, int] | None = None  # start, polls: for polls/s
-        self._next_cycle_at = 0.0  # monotonic()
+        self._schedule = Schedule()  # on time.monotonic()
 
     # ------------------------------------------------------ what commands change
 
@@ -62,7 +72,7 @@ class Poller:
 
     def wake(self) -> None:
         """The watch list, interval, pause or target changed: poll (or retry) now."""
-        self._next_cycle_at = 0.0
+        self._schedule.restart()
         if self._link.retry_at is not None:
             self._link.end_retry()
         self._publisher.status_dirty = True
@@ -117,7 +127,7 @@ class Poller:
             return max(0.0, self._link.retry_at - now)
         if self._cycle:
             return 0
-        return max(0.0, self._next_cycle_at - now)
+        return self._schedule.wait(now)
 
     def poll_once(self) -> None:
         """One step: one row polled, or a cycle begun or ended."""
@@ -128,11 +138,10 @@ class Poller:
                 return
             link.end_retry()
         if not self._cycle:
-            if now < self._next_cycle_at:
+            if self._schedule.wait(now) > 0:
                 return
             self._begin_cycle(now)
             if not self._cycle:  # every row has its own, longer period
-                self._next_cycle_at = now + self.period
                 return
         row = self._cycle[0]
         if not row.watched:  # unwatched during the cycle
@@ -154,12 +163,12 @@ class Poller:
         try:
             self._poll_row(row)
         except ConnectFailed as exc:
-            self._unreachable(exc)
+            self._unreachable(row.var, exc)
             return
         self._cycle_count += 1
         self._end_cycle_if_done()
 
-    def _unreachable(self, exc: ConnectFailed) -> None:
+    def _unreachable(self, var: VarRef, exc: ConnectFailed) -> None:
         link = self._link
         if not link.lost:
             link.lost = True
@@ -170,11 +179,18 @@ class Poller:
         self._cycle.clear()
         if self.csv.path is not None:  # a row per try, its cells empty: no connection
             self.csv.cycle_ended(time.time(), self.watch.rows)
+        if self.publish_cycles:  # the cycle ends here: the rest were not read
+            self._samples.append((var, None))
+            self._readings.append((var, exc))
+            self._publish_cycle(time.time())
+        self._count_cycle()
         link.early_drop = False  # this failure has its own wait
         self._retry("lost" if link.ever_connected else exc.problem)
 
     def _retry(self, state: str) -> None:
         self._link.begin_retry(state)
+        if self._link.retry_at is not None:
+            self._schedule.not_before(self._link.retry_at)
         self.publish_status(True)
 
     def _begin_cycle(self, now: float) -> None:
@@ -186,8 +202,8 @@ class Poller:
         interval = self.interval
         self._cycle.extend(row for row in self.watch.rows.values() if row.due(now, interval))
         self._cycle_started, self._cycle_count = started, 0
-        self._samples = []
-        self._next_cycle_at = now + self.period
+        self._samples, self._readings = [], []
+        self._schedule.start(now, self.period)
 
     def _end_cycle_if_done(self) -> None:
         if self._cycle:
@@ -196,8 +212,7 @@ class Poller:
             self.cycle_seconds = time.perf_counter() - self._cycle_started
             self._last_cycle = (self._cycle_started, self._cycle_count)
         if self._samples:
-            self._cycle_ended(tuple(self._samples))
-            self._samples = []
+            self._cycle_ended()
         self.publish_status(False)  # at most every STATUS_EVERY while polling flat out
 
     def _poll_row(self, row: WatchRow) -> None:
@@ -213,6 +228,10 @@ class Poller:
             if row.fail(status or "DISCONNECTED", time.monotonic()):
                 self._publisher.show_row(row)
             self._samples.append((row.var, None))
+            if self.publish_cycles:
+                self._readings.append((row.var, exc))
+            if self._cut_cycles:
+                self._skip_the_rest()
             return
         self._link.backoff.good()
         response = reply.response
@@ -224,16 +243,40 @@ class Poller:
             status = hresult_name(response.code) or describe_hresult(response.code)[:10]
             changed = row.fail(status, time.monotonic())
         self._samples.append((row.var, variant))
+        if self.publish_cycles:
+            self._readings.append((row.var, reply))
         if changed:
             self._publisher.show_row(row)
 
-    def _cycle_ended(self, samples: tuple[tuple[VarRef, Variant | None], ...]) -> None:
+    def _skip_the_rest(self) -> None:
+        now = time.monotonic()
+        for skipped in self._cycle:
+            if skipped.fail("SKIPPED", now):
+                self._publisher.show_row(skipped)
+        self._cycle.clear()
+
+    def _cycle_ended(self) -> None:
         """A cycle's values go to the CSV log and the trends (when asked for)."""
         wall = time.time()
         if self.csv.path is not None:
             self.csv.cycle_ended(wall, self.watch.rows)
         if self.publish_cycles:
-            self._publisher.emit(Cycle(wall, time.monotonic(), samples, self._link.opened))
+            self._publish_cycle(wall)
+        self._samples = []
+        self._count_cycle()
+
+    def _publish_cycle(self, wall: float) -> None:
+        samples, readings = tuple(self._samples), tuple(self._readings)
+        self._samples, self._readings = [], []
+        cycle = Cycle(wall, time.monotonic(), samples, self._link.opened, readings)
+        self._publisher.emit(cycle)
+
+    def _count_cycle(self) -> None:
+        """A cycle ended, whichever way: after ``max_cycles`` of them polling pauses."""
+        self.cycles_done += 1
+        if self._max_cycles is not None and self.cycles_done >= self._max_cycles:
+            self.paused = True
+            self._cycle.clear()
 
     def poll_until(self, until: float, deadline: float, stopping: Callable[[], bool]) -> None:
         """Until ``time.perf_counter()`` reaches ``until`` (between a job's reads): poll

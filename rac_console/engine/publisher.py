@@ -23,9 +23,11 @@ EVENTS_EVERY = 0.01
 class Publisher:
     """Owned by the engine's thread; :attr:`outbox` is the only thing another reads."""
 
-    def __init__(self, outbox: Outbox, files: FrameFiles) -> None:
+    def __init__(self, outbox: Outbox, files: FrameFiles, frames: bool = True) -> None:
+        """``frames``: publish every frame (a front end that shows none saves the work)."""
         self.outbox = outbox
         self.files = files
+        self._frames = frames
         self.observers: list[Callable[[Frame], None]] = []  # Engine.add_frame_observer
         self._events: list[Event] = []
         self._events_at = 0.0  # perf_counter() of the last flush
@@ -47,10 +49,13 @@ class Publisher:
         self.files.frame(frame)
         for observer in self.observers:
             observer(frame)
-        self._events.append(frame)
-        # The request in flight, for the status line's "waiting for a reply": set as a
-        # request leaves, cleared by its reply or by the connection's end.
-        self.outbox.waiting_since = time.perf_counter() if frame.direction == "tx" else None
+        if self._frames:
+            self._events.append(frame)
+            # The request in flight, for the status line's "waiting for a reply": set as
+            # a request leaves, cleared by its reply or by the connection's end.
+            self.outbox.waiting_since = (
+                time.perf_counter() if frame.direction == "tx" else None
+            )
         if time.perf_counter() - self._events_at > EVENTS_EVERY:
             self.flush()  # while polling, and during a long command (latency)
 

@@ -79,8 +79,12 @@ class Session:
         timeout: float = DEFAULT_TIMEOUT,
         connect_timeout: float | None = None,
         max_line: int = MAX_REPLY_LINE,
+        unreachable_hint: str | None = None,
     ) -> None:
+        """``unreachable_hint`` is added to a failure to connect (a bare name that is
+        no profile: ``no profile named cel3 in FILE``)."""
         self.host = host
+        self.unreachable_hint = unreachable_hint
         self.port = port
         self.timeout = timeout
         self.connect_timeout = connect_timeout if connect_timeout is not None else timeout
@@ -372,8 +376,9 @@ class Session:
             sock = socket.create_connection((self.host, self.port), self.connect_timeout)
         except (OSError, UnicodeError, ValueError) as exc:  # TimeoutError is an OSError
             self._set_state("closed")
+            hint = f" ({self.unreachable_hint})" if self.unreachable_hint else ""
             raise ConnectFailed(
-                f"cannot connect to {self.address}: {_reason(exc)}", problem=_problem(exc)
+                f"cannot connect to {self.address}: {_reason(exc)}{hint}", problem=_problem(exc)
             ) from None
         with contextlib.suppress(OSError):
             sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)

@@ -41,8 +41,6 @@ def run_connect(context: CommandContext, command: Connect, line: str | None) -> 
             context.parts.link.connect_failed(exc)
         text = f"{exc}; will keep retrying while variables are watched"
         text += f" {check_pointer(command.host, given)}"
-        if target.unreachable_hint is not None:
-            text += f"; {target.unreachable_hint}"
         return [Message(text, "error")]
     return [Message(_connected(context, target))]
 

@@ -26,7 +26,15 @@ from ...protocol.text import counted
 from .. import watchlist
 from ..context import CommandContext
 from ..events import Feedback, Message
-from ..registry import CommandSpec, Option, no_argument, variable_completion, words_of
+from ..registry import (
+    AT_A_TERMINAL,
+    CommandSpec,
+    Option,
+    Where,
+    no_argument,
+    variable_completion,
+    words_of,
+)
 from .exchanges import TYPE_NOTE
 
 
@@ -164,6 +172,7 @@ SPECS = (
         (TYPE_NOTE,),
         takes_variable=True,
         complete=variable_completion(),
+        where=AT_A_TERMINAL | {Where.COMMAND_LINE},  # rac-console watch
         hint=_watch_hint,
         types=(Watch,),
     ),
@@ -189,9 +198,21 @@ SPECS = (
         types=(SetInterval,),
     ),
     CommandSpec(
-        "pause", "", "stop polling the watched variables", no_argument(Step.PAUSE), run_pause
+        "pause",
+        "",
+        "stop polling the watched variables",
+        no_argument(Step.PAUSE),
+        run_pause,
+        where=AT_A_TERMINAL | {Where.COMMAND_LINE},  # watch --log-csv: until the log opened
     ),
-    CommandSpec("resume", "", "start polling again", no_argument(Step.RESUME), run_pause),
+    CommandSpec(
+        "resume",
+        "",
+        "start polling again",
+        no_argument(Step.RESUME),
+        run_pause,
+        where=AT_A_TERMINAL | {Where.COMMAND_LINE},
+    ),
 )
 
 FILE_SPECS = (
@@ -227,5 +248,6 @@ LOG_SPEC = CommandSpec(
         "an existing file is appended to if its columns are the same; log alone "
         "says where the log goes",
     ),
+    where=AT_A_TERMINAL | {Where.COMMAND_LINE},  # rac-console watch --log-csv
     types=(CsvLog,),
 )
