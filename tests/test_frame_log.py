@@ -13,9 +13,9 @@ import pytest
 from textual.pilot import Pilot
 from tui_helpers import log_text, make_app, results_text, type_line, until
 
-from rac_console.present.filtering import FrameFilter, request_var
+from rac_console.present.filtering import FrameFilter
 from rac_console.present.frames import gap_text, hex_text
-from rac_console.protocol import parse_response
+from rac_console.protocol import parse_request, parse_response
 from rac_console.session import Frame
 from rac_console.tui.app import RacConsoleApp
 from rac_console.tui.frame_log import KEPT, FrameHighlighter, FrameLog
@@ -69,18 +69,18 @@ def test_hex_text_is_every_byte_cr_included() -> None:
         (b"\xff\r", None),
     ],
 )
-def test_request_var_reads_the_variable_a_request_names(
-    data: bytes, var: tuple[str, int] | None
-) -> None:
-    assert request_var(data) == var
+def test_a_request_line_names_its_variable(data: bytes, var: tuple[str, int] | None) -> None:
+    parsed = parse_request(data).var
+    assert (None if parsed is None else (parsed[0].code, parsed[1])) == var
 
 
 def test_filter_by_variable_matches_its_requests_and_their_replies() -> None:
     io = FrameFilter.of("IO128")
     assert io.var == ("IO", 128)
-    assert io.matches(b"GET:RC8:128:IO:\r", "→ GET:RC8:128:IO:↵")
-    assert io.matches(b"GET:RC8:128:IO:\r", "← 0,11,-1↵   S_OK")  # a reply: by its request
-    assert not io.matches(b"GET:RC8:12:IO:\r", "→ GET:RC8:12:IO:↵")
+    assert io.matches(parse_request(b"GET:RC8:128:IO:\r"), "→ GET:RC8:128:IO:↵")
+    # a reply: by its request
+    assert io.matches(parse_request(b"GET:RC8:128:IO:\r"), "← 0,11,-1↵   S_OK")
+    assert not io.matches(parse_request(b"GET:RC8:12:IO:\r"), "→ GET:RC8:12:IO:↵")
     assert not io.matches(None, "← 0,11,-1↵")  # a reply nobody asked for
     assert FrameFilter.of("I 10").var == ("I", 10)
     assert FrameFilter.of("P[3]").var == ("P", 3)
@@ -90,8 +90,8 @@ def test_filter_by_variable_matches_its_requests_and_their_replies() -> None:
 def test_filter_by_text_matches_the_line_any_case() -> None:
     text = FrameFilter.of("invalidcommand")
     assert text.var is None
-    assert text.matches(b"FOO\r", "← -2147418107↵   E_INVALIDCOMMAND 0x...")
-    assert not text.matches(b"FOO\r", "→ FOO↵")
+    assert text.matches(parse_request(b"FOO\r"), "← -2147418107↵   E_INVALIDCOMMAND 0x...")
+    assert not text.matches(parse_request(b"FOO\r"), "→ FOO↵")
     assert FrameFilter.of("S_OK").var is None
     assert not FrameFilter.of("")  # no filter: everything passes
     assert FrameFilter.of("  ").matches(None, "anything")
@@ -259,8 +259,9 @@ def test_the_log_is_bounded_and_counts_what_it_keeps() -> None:
     reply = parse_response("0,3,1")
     for n in range(KEPT // 2 + 500):  # more frames than the log keeps
         t = 1_700_000_000 + n / 1000
-        log.add(Frame(t, "tx", f"GET:RC8:{n % 7}:I:\r".encode()))
-        log.add(Frame(t + 0.0001, "rx", b"0,3,1\r", 0.0001, response=reply))
+        request = parse_request(f"GET:RC8:{n % 7}:I:\r".encode())
+        log.add(Frame(t, "tx", f"GET:RC8:{n % 7}:I:\r".encode(), request=request))
+        log.add(Frame(t + 0.0001, "rx", b"0,3,1\r", 0.0001, response=reply, request=request))
     log.flush()
     assert log.frames_kept == KEPT
     log.set_filter("I 3")

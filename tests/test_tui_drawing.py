@@ -11,20 +11,21 @@ import pytest
 from textual.pilot import Pilot
 from tui_helpers import make_app, results_text, type_line, until
 
-from rac_console.protocol import parse_response
+from rac_console.protocol import parse_request, parse_response
 from rac_console.session import Frame
 from rac_console.tui.app import RacConsoleApp
 from rac_console.tui.frame_log import HEX_SEPARATOR, KEPT, FrameLog
 
 REPLY = parse_response("0,3,1")
+I1 = parse_request(b"GET:RC8:1:I:\r")
 
 
 def add_exchanges(log: FrameLog, count: int, *, poll: bool, start: float = 1_700_000_000) -> None:
     """``count`` GETs and their replies, a millisecond apart."""
     for n in range(count):
         t = start + n / 1000
-        log.add(Frame(t, "tx", b"GET:RC8:1:I:\r", poll=poll))
-        log.add(Frame(t + 0.0001, "rx", b"0,3,1\r", 0.0001, response=REPLY, poll=poll))
+        log.add(Frame(t, "tx", b"GET:RC8:1:I:\r", poll=poll, request=I1))
+        log.add(Frame(t + 0.0001, "rx", b"0,3,1\r", 0.0001, response=REPLY, poll=poll, request=I1))
 
 
 def shown_of_kept(log: FrameLog) -> tuple[int, int]:
@@ -59,8 +60,10 @@ def test_a_filter_counts_what_it_shows_and_forgets_the_oldest() -> None:
     add_exchanges(log, 10, poll=False)
     log.flush()
     assert shown_of_kept(log) == (0, 20)
-    log.add(Frame(1_700_000_001, "tx", b"GET:RC8:128:IO:\r"))
-    log.add(Frame(1_700_000_001.1, "rx", b"0,11,-1\r", 0.0001, response=parse_response("0,11,-1")))
+    io128 = parse_request(b"GET:RC8:128:IO:\r")
+    log.add(Frame(1_700_000_001, "tx", b"GET:RC8:128:IO:\r", request=io128))
+    reply = parse_response("0,11,-1")
+    log.add(Frame(1_700_000_001.1, "rx", b"0,11,-1\r", 0.0001, response=reply, request=io128))
     log.flush()
     assert shown_of_kept(log) == (2, 22)
     add_exchanges(log, KEPT, poll=False, start=1_700_000_100)  # pushes the IO128 pair out

@@ -56,18 +56,14 @@ def parse_allow(text: str) -> AllowRange:
     return AllowRange(kind_of(code), first, high)
 
 
-_RAW_PUT = re.compile(r"PUT:RC8:(\d{1,5}):([A-Za-z]{1,2}):", re.ASCII | re.IGNORECASE)
-
-
 def written_var(command: Exchange) -> VarRef | None:
     """The variable a command writes: a typed put's, or a raw well-formed
     ``PUT:RC8:<index>:<type>:...`` line's; None for a GET or a line we cannot read."""
     if isinstance(command, Put):
         return command.var
-    if isinstance(command, Raw) and command.request.write:
-        match = _RAW_PUT.match(command.request.text)
-        if match and match.group(2).upper() in KINDS and int(match.group(1)) <= MAX_INDEX:
-            return VarRef(kind_of(match.group(2).upper()), int(match.group(1)))
+    line = command.request.line
+    if isinstance(command, Raw) and line.is_put and line.var is not None:
+        return VarRef(*line.var)
     return None
 
 

@@ -214,9 +214,9 @@ def _value_of(command: Put | Raw) -> Variant | None:
     """The value a write sends: a typed put's, or the one a raw PUT line carries."""
     if isinstance(command, Put):
         return command.value
-    text = command.request.text.split(":", 4)
+    value = command.request.line.value
     try:
-        return parse_variant(text[4]) if len(text) == 5 else None
+        return parse_variant(value) if value is not None else None
     except ProtocolError:
         return None
 

@@ -3,13 +3,14 @@
 from .errors import EncodeError, FrameTooLong, InputError, ProtocolError, RacError
 from .framing import LineDecoder
 from .hresult import HRESULTS, describe_hresult, hresult_name
-from .messages import (
+from .messages import Response, decode_frame, parse_response
+from .request import (
     MAX_FRAME,
-    Response,
-    decode_frame,
+    Request,
+    RequestLine,
     encode_request,
     get_request,
-    parse_response,
+    parse_request,
     put_request,
 )
 from .text import escape_bytes, value_text, wire_text
@@ -29,6 +30,8 @@ __all__ = [
     "LineDecoder",
     "ProtocolError",
     "RacError",
+    "Request",
+    "RequestLine",
     "Response",
     "VarKind",
     "Variant",
@@ -42,6 +45,7 @@ __all__ = [
     "hresult_name",
     "kind_of",
     "parse_index",
+    "parse_request",
     "parse_response",
     "parse_variant",
     "put_request",

@@ -27,7 +27,7 @@ import time
 from collections.abc import Callable
 from typing import Any
 
-from ..protocol import Variant, VarKind, format_variant
+from ..protocol import RequestLine, Variant, VarKind, format_variant
 from ..protocol.request import Request, get_for, put_for, raw_request
 from ..protocol.text import escape_bytes
 from .machine import SessionMachine, Verdict, bad_reply_message
@@ -212,15 +212,21 @@ class Session:
                 f"the connection failed while sending: {_reason(exc)}", before_reply=True
             ) from None
         if self._frame_observers:
-            self._publish(Frame(sent_time, "tx", data, poll=poll))
-        return self._await_reply(sock, sent_at, sent_time, poll)
+            self._publish(Frame(sent_time, "tx", data, poll=poll, request=request.line))
+        return self._await_reply(sock, sent_at, sent_time, poll, request.line)
 
     def _await_reply(
-        self, sock: socket.socket, sent_at: float, sent_time: float, poll: bool
+        self,
+        sock: socket.socket,
+        sent_at: float,
+        sent_time: float,
+        poll: bool,
+        asked: RequestLine,
     ) -> Reply:
         """The reply to the request sent at ``sent_at`` (``time.perf_counter()``), which
         is ``sent_time`` (``time.time()``): a reply's frame is stamped ``sent_time + rtt``,
-        so the log's times and gaps agree with the round trip."""
+        so the log's times and gaps agree with the round trip. ``asked`` is the request's
+        line, carried by the frames of its reply."""
         machine = self._machine
         deadline = sent_at + self.timeout
         first = True
@@ -248,10 +254,17 @@ class Session:
             verdict = machine.feed(chunk)
             if verdict.answer is None and not verdict.drop:
                 continue
-            return self._conclude(verdict, now - sent_at, poll, now, sent_time + now - sent_at)
+            arrived = sent_time + now - sent_at
+            return self._conclude(verdict, now - sent_at, poll, now, arrived, asked)
 
     def _conclude(
-        self, verdict: Verdict, rtt: float, poll: bool, now: float, arrived: float
+        self,
+        verdict: Verdict,
+        rtt: float,
+        poll: bool,
+        now: float,
+        arrived: float,
+        asked: RequestLine,
     ) -> Reply:
         observers = bool(self._frame_observers)
         answer = verdict.answer
@@ -260,7 +273,15 @@ class Session:
             # The usual reply: one good line, nothing else (a drop is set for anything else).
             if observers:
                 self._publish(
-                    Frame(arrived, "rx", answer + b"\r", rtt, poll=poll, response=response)
+                    Frame(
+                        arrived,
+                        "rx",
+                        answer + b"\r",
+                        rtt,
+                        poll=poll,
+                        response=response,
+                        request=asked,
+                    )
                 )
             self._replied_at = now
             self.last_rtt = rtt
@@ -275,6 +296,7 @@ class Session:
                     poll=poll,
                     response=verdict.response,
                     problem=verdict.problem,
+                    request=asked,
                 )
             )
         if verdict.strays:
@@ -282,8 +304,16 @@ class Session:
         for stray in verdict.strays:
             self._publish(Frame(arrived, "rx", stray, unsolicited=True))
         if verdict.too_long is not None:
-            tail = verdict.too_long
-            self._publish(Frame(arrived, "rx", tail, unsolicited=answer is not None))
+            unasked = answer is not None  # the reply came: the tail answers nothing
+            self._publish(
+                Frame(
+                    arrived,
+                    "rx",
+                    verdict.too_long,
+                    unsolicited=unasked,
+                    request=None if unasked else asked,
+                )
+            )
         if verdict.drop:
             self._drop()
         if verdict.problem is not None:
@@ -311,7 +341,9 @@ class Session:
             message = "cancelled"
         fragment = self._machine.pending
         if fragment:
-            self._publish(Frame(time.time(), "rx", fragment))
+            in_flight = self._machine.in_flight  # the request this fragment began to answer
+            asked = in_flight.line if in_flight is not None else None
+            self._publish(Frame(time.time(), "rx", fragment, request=asked))
         self._drop(abort=True)  # nothing more of ours may reach a peer that dropped us
         detail = f" after '{escape_bytes(fragment)}'" if fragment else ""
         return Disconnected(f"{message}{detail}", fragment or None, before_reply=not fragment)

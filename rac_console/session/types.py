@@ -6,7 +6,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Literal
 
-from ..protocol import RacError, Response
+from ..protocol import RacError, RequestLine, Response
 
 DEFAULT_PORT = 5006
 DEFAULT_TIMEOUT = 2.0
@@ -68,6 +68,10 @@ class Frame:
     closed connection has no CR. A reply to a request carries its ``rtt`` and what
     the session made of it: the parsed ``response``, or the ``problem`` that made it
     refuse the reply. Nobody parses a reply again.
+
+    ``request`` is what the request line says (read once, when the request was made
+    from the bytes sent): a sent frame's own, a reply's (or a reply cut short's) the one
+    it answered, as the session knows it; None for a line nobody asked for.
     """
 
     time: float
@@ -78,6 +82,7 @@ class Frame:
     poll: bool = False
     response: Response | None = None
     problem: str | None = None
+    request: RequestLine | None = None
 
 
 @dataclass(frozen=True, slots=True)

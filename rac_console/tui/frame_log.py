@@ -1,8 +1,8 @@
 """The raw frame log: one line per frame, written in batches, bounded in memory.
 
 Besides the lines drawn, the log keeps the last :data:`KEPT` poll frames it was given and,
-apart, the last :data:`KEPT` others (typed exchanges and notes), each with its gap and the
-request it answers, so the hex view (F7), the frame times, the filter (``/``) and the poll
+apart, the last :data:`KEPT` others (typed exchanges and notes), each with its gap (a frame
+carries its request), so the hex view (F7), the frame times, the filter (``/``) and the poll
 frames (F3) redraw what is on screen, not only what comes; a fast poll cannot push the
 typed exchanges out (with polls hidden they would vanish at the next redraw).
 Lines are plain strings (cheap to write at thousands a second); the few on screen are
@@ -53,9 +53,8 @@ SLOW_STYLE = "bold black on yellow"
 
 #: What the log holds: a frame, or a note (its time and text).
 Event = Frame | tuple[float, str]
-#: An event as drawn: with its gap (seconds since the frame before it on the wire) and its
-#: request (a request's own bytes, a reply's request's, None for anything else).
-Drawn = tuple[Event, float | None, bytes | None]
+#: An event as drawn: with its gap (seconds since the frame before it on the wire).
+Drawn = tuple[Event, float | None]
 #: A kept event: its place in the order events came, and the event as drawn.
 Kept = tuple[int, Drawn]
 
@@ -81,10 +80,8 @@ class FrameLog(Log):
         self._kept_polls: deque[Kept] = deque()
         self._kept_others: deque[Kept] = deque()
         self._order = itertools.count()
-        # The wire after the newest event (its frame's time, the request waiting): the
-        # next frame's gap and a reply's request follow from them.
+        # The newest frame's time: the next frame's gap follows from it.
         self._last_time: float | None = None
-        self._request: bytes | None = None
         self._bodies: dict[int, str] = {}  # kept frames' lines after their time, by id
         self._frames_kept = 0
         self._frames_shown = 0  # counted while narrowed (a filter, or polls hidden)
@@ -266,11 +263,11 @@ class FrameLog(Log):
         return len(events)
 
     def _keep(self, events: list[Event]) -> tuple[int, list[Drawn]]:
-        """Keep new events with their gap and request (the oldest of their kind go past
+        """Keep new events with their gap (the oldest of their kind go past
         KEPT); how many of them are shown, and the newest of those (all a flush may draw)."""
         polls, others, order = self._kept_polls, self._kept_others, self._order
         narrowed, passes = self._narrowed, self._passes
-        last_time, waiting = self._last_time, self._request
+        last_time = self._last_time
         tail = 0 if narrowed else len(events) - MAX_LINES_PER_FLUSH - 1
         shown: list[Drawn] = []
         count = frames = 0
@@ -279,25 +276,19 @@ class FrameLog(Log):
                 frames += 1
                 gap = None if last_time is None else event.time - last_time
                 last_time = event.time
-                if event.direction == "tx":
-                    request = waiting = event.data
-                elif event.unsolicited:
-                    request = None
-                else:  # one request in flight: a reply answers the last one sent
-                    request, waiting = waiting, None
-                drawn: Drawn = (event, gap, request)
+                drawn: Drawn = (event, gap)
                 (polls if event.poll else others).append((next(order), drawn))
                 if narrowed:
-                    if not passes(event, request):
+                    if not passes(event):
                         continue
                     self._frames_shown += 1
             else:
-                drawn = (event, None, None)
+                drawn = (event, None)
                 others.append((next(order), drawn))
             count += 1
             if n >= tail:
                 shown.append(drawn)
-        self._last_time, self._request = last_time, waiting
+        self._last_time = last_time
         self._frames_kept += frames
         for kept in (polls, others):
             if len(kept) > KEPT:
@@ -309,28 +300,28 @@ class FrameLog(Log):
         bodies = self._bodies
         narrowed = self._narrowed
         for _ in range(count):
-            _, (event, _, request) = kept.popleft()
+            _, (event, _) = kept.popleft()
             if not isinstance(event, Frame):
                 continue
             self._frames_kept -= 1
-            if narrowed and self._passes(event, request):
+            if narrowed and self._passes(event):
                 self._frames_shown -= 1
             if bodies:
                 bodies.pop(id(event), None)
 
     def _walk(self) -> list[Drawn]:
-        """Every kept event with its gap and request, in the order they came."""
+        """Every kept event with its gap, in the order they came."""
         merged = heapq.merge(self._kept_polls, self._kept_others, key=itemgetter(0))
         return [drawn for _, drawn in merged]
 
-    def _passes(self, frame: Frame, request: bytes | None) -> bool:
+    def _passes(self, frame: Frame) -> bool:
         if frame.poll and not self._show_polls:
             return False
         if not self._filter:
             return True
         if self._filter.var is not None:
-            return self._filter.matches(request, "")
-        return self._filter.matches(request, self._body(frame))
+            return self._filter.matches(frame.request, "")
+        return self._filter.matches(frame.request, self._body(frame))
 
     def _rematch(self) -> None:
         """The filter or F3 changed: which kept frames pass, counted, and drawn again."""
@@ -341,9 +332,7 @@ class FrameLog(Log):
         """Draw again the kept events that pass (the newest MAX_LINES); count them."""
         passes = self._passes
         shown = [
-            drawn
-            for drawn in self._walk()
-            if not isinstance(drawn[0], Frame) or passes(drawn[0], drawn[2])
+            drawn for drawn in self._walk() if not isinstance(drawn[0], Frame) or passes(drawn[0])
         ]
         self._frames_shown = sum(isinstance(drawn[0], Frame) for drawn in shown)
         self.update_title()
@@ -392,7 +381,7 @@ class FrameLog(Log):
         if not width:
             return 0  # not laid out yet: drawn again at the first size
         fits: list[tuple[int, int]] = []  # (text, hex) lengths of the frames that could
-        for event, gap, _ in shown:
+        for event, gap in shown:
             if isinstance(event, Frame):
                 line, _ = self._frame_line(event, gap)
                 hexed = len(event.data) * 3 - 1
@@ -411,7 +400,7 @@ class FrameLog(Log):
         column = self._hex_column
         if column is None:
             return False  # every frame's bytes under it: more frames cannot change that
-        for event, gap, _ in shown:
+        for event, gap in shown:
             if isinstance(event, Frame):
                 line, _ = self._frame_line(event, gap)
                 hexed = len(event.data) * 3 - 1
@@ -427,7 +416,7 @@ class FrameLog(Log):
         width = self._hex_width
         column = self._hex_column
         placed = self._hex_placed
-        for event, gap, _ in shown:
+        for event, gap in shown:
             if not isinstance(event, Frame):
                 stamp, text = event
                 lines.append(f"{self._head(stamp, None)} ── {terminal_safe(text)} ──")
