@@ -15,7 +15,7 @@ from ..commands.language import Command, Latency
 from ..commands.outcome import ExitStatus, Outcome, refused, worst
 from ..commands.policy import Writes
 from ..commands.target import Target
-from ..engine import Feedback, Measured, Message
+from ..engine import Measured, Message
 from ..engine.commands import BUILTIN, parse_command
 from ..engine.jobs import run_job
 from ..engine.registry import Where
@@ -45,6 +45,14 @@ class Output:
         """4 when the commands succeeded but a local file failed; a controller or
         connection failure keeps its own status (the file's failure was said already)."""
         return ExitStatus.LOCAL_IO if self.local_failed and status == ExitStatus.OK else status
+
+    def say(self, text: str, extra: dict[str, object] | None = None) -> None:
+        """What a command said that is no exchange (a line of ``run``)."""
+        if self.as_json:
+            sys.stdout.write(json.dumps({"ok": True, "message": text} | (extra or {})) + "\n")
+            sys.stdout.flush()
+        else:
+            self.out.print(notice_text(text))
 
     def show(
         self, outcome: Outcome, extra: dict[str, object] | None = None, prefix: str = ""
@@ -77,8 +85,8 @@ def one_command(args: argparse.Namespace) -> ExitStatus:
             raise InputError(args.words_problem)
         command = exchange_from_words(args.command, args.words)
         with open_session(args, output.local_failure) as session:
-            outcome = _run(session, command, args, line, Where.COMMAND_LINE)
-        assert outcome is not None  # a command object always has an outcome
+            results = _results(session, command, args, line, Where.COMMAND_LINE)
+        outcome = next(r for r in results if isinstance(r, Outcome))  # an exchange has one
     except InputError as exc:
         outcome = refused(line, str(exc))
     output.show(outcome)
@@ -106,7 +114,7 @@ def _script_lines(source: str) -> Iterator[str]:
 def run_script(args: argparse.Namespace) -> ExitStatus:
     """``run FILE|-``: every line over one session; the worst status is the exit status."""
     output = Output(args.json)
-    statuses: list[ExitStatus] = []
+    status = ExitStatus.OK  # the worst so far (a script may be endless: no list of them)
     try:
         lines = _script_lines(args.file)
         first = next(lines, None)  # opens the file: a missing one is said before connecting
@@ -117,14 +125,16 @@ def run_script(args: argparse.Namespace) -> ExitStatus:
         with open_session(args, output.local_failure) as session:
             for number, raw_line in enumerate(itertools.chain([first] if first else [], lines), 1):
                 line = raw_line.rstrip("\r\n")
-                outcome = _run_line(session, line, args)
-                if outcome is not None:
-                    output.show(outcome, {"line": number}, prefix=f"line {number}: ")
-                    statuses.append(outcome.status)
+                for result in _results(session, line, args, line, Where.RUN):
+                    if isinstance(result, Outcome):
+                        output.show(result, {"line": number}, prefix=f"line {number}: ")
+                        status = worst([status, result.status])
+                    else:
+                        output.say(result.text, {"line": number})
     except InputError as exc:
         print_error(output.err, str(exc))
         return ExitStatus.REFUSED
-    return output.status(worst(statuses))
+    return output.status(status)
 
 
 def _context(session: Session, args: argparse.Namespace) -> SessionContext:
@@ -136,27 +146,22 @@ def _context(session: Session, args: argparse.Namespace) -> SessionContext:
     return SessionContext(session, rules, args.verify)
 
 
-def _run(
+def _results(
     session: Session, what: str | Command, args: argparse.Namespace, line: str, where: Where
-) -> Outcome | None:
+) -> list[Outcome | Message]:
     """One line or command through the registry's job runner, as the console runs it:
-    its outcome (a refusal for what only runs at a terminal); None for a blank line."""
-    command, feedback = run_job(BUILTIN, _context(session, args), what, where, line)
-    if command is None and not feedback:
-        return None
-    return _outcome_of(feedback, line)
-
-
-def _outcome_of(feedback: list[Feedback], line: str) -> Outcome:
+    its outcomes, a refusal for each error (what only runs at a terminal, a line that
+    does not parse), and what else it said; nothing for a blank line or a comment."""
+    _, feedback = run_job(BUILTIN, _context(session, args), what, where, line)
+    results: list[Outcome | Message] = []
     for item in feedback:
         if isinstance(item, Outcome):
-            return item
-    texts = [item.text for item in feedback if isinstance(item, Message)]
-    return refused(line, "; ".join(texts) or "nothing to run")
-
-
-def _run_line(session: Session, line: str, args: argparse.Namespace) -> Outcome | None:
-    return _run(session, line, args, line, Where.RUN)
+            results.append(item)
+        elif isinstance(item, Message) and item.level == "error":
+            results.append(refused(line, item.text))
+        elif isinstance(item, Message):
+            results.append(item)
+    return results
 
 
 def _latency_command(args: argparse.Namespace) -> Latency:
