@@ -18,7 +18,7 @@ from bench_common import CPrograms, start_responder
 
 from rac_console.commands.language import parse_put
 from rac_console.commands.policy import WritePolicy
-from rac_console.engine.writes import write
+from rac_console.engine.writes import WriteRules, write
 from rac_console.session import Session
 
 PUT = parse_put("I 10 5")
@@ -43,7 +43,7 @@ def client(port: int, count: int, verify: bool) -> float:
     try:
         started = time.perf_counter()
         for _ in range(count):
-            write(session, PUT, policy=WritePolicy(), verify=verify)
+            write(session, PUT, WriteRules(WritePolicy(), verify=verify), None)
         return count / (time.perf_counter() - started)
     finally:
         session.close()

@@ -12,15 +12,10 @@ days holds no more memory than after its first minute.
 from __future__ import annotations
 
 import argparse
-import contextlib
-import errno
-import io
 import json
-import os
-import sys
 import threading
-from collections.abc import Callable, Iterator
-from typing import Any, TextIO, cast
+from collections.abc import Callable
+from typing import Any
 
 from ..commands.argv import exchange_from_words, input_line
 from ..commands.language import (
@@ -52,85 +47,14 @@ from ..present.render import error_text, outcome_text, print_error
 from ..protocol import InputError, hresult_name
 from ..session import BadReply, ConnectFailed, RequestTimeout
 from .oneshot import Output
+from .pipes import reader_gone, stderr_may_close, write_line
 
 WATCH_USAGE = "rac-console watch TYPE INDEX [TYPE INDEX|TYPE FIRST-LAST]..., e.g. watch IO 128-135"
-
-#: How a write to stdout fails once its reader has gone: EPIPE (BrokenPipeError), and
-#: on Windows also EINVAL.
-_READER_GONE = {errno.EPIPE, *([errno.EINVAL] if sys.platform == "win32" else [])}
-
 
 #: watch's default cycle, as the console's poll interval.
 WATCH_EVERY = 0.5
 #: How long the CLI waits for the engine at a time (Ctrl-C is seen between waits).
 WAKE_EVERY = 0.5
-
-
-def write_line(text: str) -> None:
-    """One line on stdout, flushed now, for readers that act line by line."""
-    sys.stdout.write(text + "\n")
-    sys.stdout.flush()
-
-
-def _reader_gone(exc: OSError, stream: TextIO | None = None) -> bool:
-    """True when the reader of ``stream`` (stdout by default) has gone; the stream then
-    points at the null device, so nothing more (Python's last flush at exit included)
-    can fail on it."""
-    if exc.errno not in _READER_GONE:
-        return False
-    with contextlib.suppress(OSError, ValueError):  # ValueError: the stream has no descriptor
-        null = os.open(os.devnull, os.O_WRONLY)
-        try:
-            os.dup2(null, (stream or sys.stdout).fileno())
-        finally:
-            os.close(null)
-    return True
-
-
-class _Stderr:
-    """stderr for a live run, as Rich and ``print`` see it: the real one until its reader
-    goes (``2> >(head -1)``), then the null device, and the run goes on with stdout.
-
-    Rich would instead end the process with status 1 (and point stdout at the null
-    device too); stdout's lines and the status the run earned matter more than its
-    messages. With no stderr at all (None), what is written goes nowhere.
-    """
-
-    def __init__(self, real: TextIO | None) -> None:
-        self._real = real
-
-    def __getattr__(self, name: str) -> Any:  # encoding, fileno, errors...: the real one's
-        if self._real is None:
-            raise AttributeError(name)
-        return getattr(self._real, name)
-
-    def isatty(self) -> bool:
-        return self._real is not None and self._real.isatty()
-
-    def write(self, text: str) -> int:
-        with self._unless_gone() as real:
-            real.write(text)
-        return len(text)
-
-    def flush(self) -> None:
-        with self._unless_gone() as real:
-            real.flush()
-
-    @contextlib.contextmanager
-    def _unless_gone(self) -> Iterator[TextIO]:
-        real = self._real if self._real is not None else io.StringIO()
-        try:
-            yield real
-        except OSError as exc:
-            if not _reader_gone(exc, real):
-                raise
-
-
-@contextlib.contextmanager
-def _stderr_may_close() -> Iterator[None]:
-    """Run with stderr as :class:`_Stderr` (as a decorator: the whole command)."""
-    with contextlib.redirect_stderr(cast(TextIO, _Stderr(sys.stderr))):
-        yield
 
 
 # ------------------------------------------------------------ the shared run
@@ -189,7 +113,7 @@ def run_live(
         if not until_ctrl_c:
             raise
     except OSError as exc:
-        if not _reader_gone(exc):
+        if not reader_gone(exc):
             raise
     finally:
         engine.stop()
@@ -284,7 +208,7 @@ class _LiveRun:
 # ------------------------------------------------------------------ get -r N
 
 
-@_stderr_may_close()
+@stderr_may_close()
 def repeat_get(args: argparse.Namespace) -> ExitStatus:
     """``get TYPE INDEX -r N [-i S]``: N results, one a line, each with its time."""
     output = Output(args.json)
@@ -348,7 +272,7 @@ def watch_variables(words: list[str]) -> tuple[VarRef, ...]:
     return variables
 
 
-@_stderr_may_close()
+@stderr_may_close()
 def watch(args: argparse.Namespace) -> ExitStatus:
     """``watch VAR... [--every S] [--count N] [--log-csv FILE]``: one line a cycle until
     N cycles or Ctrl-C, and with --log-csv one CSV row a cycle, as the console logs.

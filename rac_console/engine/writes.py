@@ -10,7 +10,7 @@ caught by the read-back: the outcome says what the controller holds now.
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import replace
+from dataclasses import dataclass, replace
 
 from ..commands.check import check_pointer
 from ..commands.language import Exchange, Get, Put, Raw, VarRef
@@ -75,55 +75,42 @@ def _confirmed(
     )
 
 
+def _nothing_known(var: VarRef) -> Variant | None:
+    return None
+
+
+@dataclass(frozen=True)
+class WriteRules:
+    """What a write is held to: the target's rules, and its job's (ask, cancel)."""
+
+    policy: WritePolicy
+    read_only: bool = False
+    verify: bool = True  # read every PUT back
+    #: A watched variable's value now (no extra GET then).
+    known_before: Callable[[VarRef], Variant | None] = _nothing_known
+    confirm: Confirm | None = None  # None: nobody to ask (the CLI without --yes)
+    cancelled: Callable[[], bool] = never  # the job's cancel, asked before each send
+
+
 def exchange(
-    session: Session,
-    command: Exchange,
-    *,
-    policy: WritePolicy,
-    read_only: bool = False,
-    verify: bool = True,
-    known_before: Callable[[VarRef], Variant | None] = lambda var: None,
-    confirm: Confirm | None = None,
-    line: str | None = None,
-    cancelled: Callable[[], bool] = never,
+    session: Session, command: Exchange, rules: WriteRules, line: str | None = None
 ) -> Outcome:
     """One GET, PUT or raw line, from any front end: a put, and any raw line but a
     well-formed GET (a line that does not start with PUT may still write on a lenient
-    controller), goes by the target's rules (:func:`write`); a read is just sent.
-    ``cancelled`` is the job's cancel, asked before each of its sends."""
+    controller), goes by the target's rules (:func:`write`); a read is just sent."""
     if isinstance(command, Put) or (
         isinstance(command, Raw) and not command.request.read_only_safe
     ):
-        return write(
-            session,
-            command,
-            policy=policy,
-            read_only=read_only,
-            verify=verify,
-            known_before=known_before,
-            confirm=confirm,
-            line=line,
-            cancelled=cancelled,
-        )
-    return execute(session, command, read_only=read_only, line=line, cancelled=cancelled)
+        return write(session, command, rules, line)
+    return execute(
+        session, command, read_only=rules.read_only, line=line, cancelled=rules.cancelled
+    )
 
 
-def write(
-    session: Session,
-    command: Put | Raw,
-    *,
-    policy: WritePolicy,
-    read_only: bool = False,
-    verify: bool = True,
-    known_before: Callable[[VarRef], Variant | None] = lambda var: None,
-    confirm: Confirm | None = None,
-    line: str | None = None,
-    cancelled: Callable[[], bool] = never,
-) -> Outcome:
-    """Send one write the way the target allows; never raises for I/O.
-
-    ``known_before`` gives a watched variable's current value (no extra GET then);
-    ``confirm`` is None where nobody can be asked (the CLI without ``--yes``)."""
+def write(session: Session, command: Put | Raw, rules: WriteRules, line: str | None) -> Outcome:
+    """Send one write the way the target allows; never raises for I/O."""
+    policy, read_only, verify = rules.policy, rules.read_only, rules.verify
+    confirm, cancelled = rules.confirm, rules.cancelled
     wire = command.request.text
     if read_only:
         profile_rule = policy.writes is Writes.READ_ONLY and policy.source
@@ -148,7 +135,7 @@ def write(
             "(nothing was sent)",
             wire,
         )
-    before = known_before(var)
+    before = rules.known_before(var)
     if before is None and (verify or policy.confirms):
         first = execute(session, Get(var), cancelled=cancelled)
         if isinstance(first.failure, NotSent):

@@ -1,5 +1,10 @@
 """The session driver: one blocking socket, driven by the thread that owns the session.
 
+Over 450 lines on purpose: this is the only client code that touches a socket, and
+connecting, the one exchange, the resend of a GET, the idle check, keepalive and the
+abort of a timed-out PUT all share the socket's state; split, they would share it
+through attributes of one another.
+
 The protocol allows one request in flight, so a request is ``sendall`` then ``recv``
 until the reply: no event loop between the bytes and the caller. The rules live in
 :class:`~.machine.SessionMachine`; this class only moves bytes, keeps time and tells
@@ -269,23 +274,6 @@ class Session:
         observers = bool(self._frame_observers)
         answer = verdict.answer
         response = verdict.response
-        if not verdict.drop and answer is not None and response is not None:
-            # The usual reply: one good line, nothing else (a drop is set for anything else).
-            if observers:
-                self._publish(
-                    Frame(
-                        arrived,
-                        "rx",
-                        answer + b"\r",
-                        rtt,
-                        poll=poll,
-                        response=response,
-                        request=asked,
-                    )
-                )
-            self._replied_at = now
-            self.last_rtt = rtt
-            return Reply(answer, response, rtt)
         if answer is not None and observers:
             self._publish(
                 Frame(
@@ -294,7 +282,7 @@ class Session:
                     answer + b"\r",
                     rtt,
                     poll=poll,
-                    response=verdict.response,
+                    response=response,
                     problem=verdict.problem,
                     request=asked,
                 )
@@ -320,11 +308,11 @@ class Session:
             if answer is None:  # too long: the tail is in the log
                 raise BadReply(verdict.problem, verdict.too_long)
             raise BadReply(bad_reply_message(answer, verdict.problem), answer)
-        if answer is None or verdict.response is None:
+        if answer is None or response is None:
             raise Disconnected("the connection was dropped: a line nobody asked for came")
-        self._replied_at = time.perf_counter()
+        self._replied_at = now
         self.last_rtt = rtt
-        return Reply(answer, verdict.response, rtt)
+        return Reply(answer, response, rtt)
 
     def _set_timeout(self, sock: socket.socket, seconds: float) -> None:
         if not (self._kernel_timeout and _set_kernel_timeout(sock, seconds)):

@@ -1,5 +1,8 @@
 """The simulator's asyncio TCP server: many sessions over one SimulatedController.
 
+Over 450 lines on purpose: the fast path, the fault queue and the limits that bound
+what a client can cost are one connection's life, read together.
+
 Without faults every reply is written as its request is read (the fast path). A read
 that is one GET answered before, with no PUT since, is answered from the controller's
 kept replies without being split or parsed: that is what a polling client sends, and

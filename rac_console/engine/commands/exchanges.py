@@ -33,7 +33,7 @@ from ..registry import (
     Where,
     variable_completion,
 )
-from ..writes import exchange
+from ..writes import WriteRules, exchange
 
 NOT_CONNECTED = (
     "not connected: connect HOST[:PORT], connect PROFILE, or connect sim for the built-in simulator"
@@ -49,18 +49,16 @@ def run_exchange(context: JobContext, command: Exchange, line: str | None) -> li
         return [Message(NOT_CONNECTED, "error")]
     if isinstance(command, Get | Put):
         context.see((command.var,))
-    rules = context.rules
-    outcome = exchange(
-        session,
-        command,
-        policy=rules.policy,
-        read_only=rules.read_only,
-        verify=context.verify,
-        known_before=context.known_before,
-        confirm=context.confirm,
-        line=line,
-        cancelled=context.cancelled,
+    target = context.rules
+    rules = WriteRules(
+        target.policy,
+        target.read_only,
+        context.verify,
+        context.known_before,
+        context.confirm,
+        context.cancelled,
     )
+    outcome = exchange(session, command, rules, line)
     context.read_back(outcome)
     return [noted(context, outcome)]
 
