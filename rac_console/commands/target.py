@@ -9,11 +9,14 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass, field
+from typing import Literal
 
 from .policy import TargetProfile, WritePolicy, Writes
 from .profiles import Addresses, could_be_profile_name, match_profile
 
 DEFAULT_PORT = 5006
+#: What a target lets be written, as the status line says it.
+WritesShown = Literal["open", "confirm", "read-only"]
 OPEN = WritePolicy()
 
 
@@ -34,9 +37,11 @@ class Target:
     notices: tuple[str, ...] = ()
 
     @property
-    def writes(self) -> str:
+    def writes(self) -> WritesShown:
         """``open``, ``confirm`` or ``read-only``, as the status line says it."""
-        return "read-only" if self.read_only else self.policy.writes.value
+        if self.read_only or self.policy.writes is Writes.READ_ONLY:
+            return "read-only"
+        return "confirm" if self.policy.writes is Writes.CONFIRM else "open"
 
     @property
     def label(self) -> str | None:

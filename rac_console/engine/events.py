@@ -8,15 +8,23 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from enum import Enum
+from typing import Literal
 
 from ..commands.language import Command, VarRef
 from ..commands.latency import LatencySummary
 from ..commands.outcome import Outcome
+from ..commands.target import WritesShown
 from ..protocol import Variant
 from ..protocol.text import terminal_safe
-from ..session import Frame, Reply, TransportError
+from ..session import Frame, Reply, State, TransportError
+from ..session.types import ConnectProblem
 
 OK = "OK"
+#: The connection as the status line says it: the session's state, lost (found dead
+#: while idle, or a poll's connection failed after one had opened), dropped (closed
+#: early: backing off), or why connecting failed.
+Connection = State | Literal["lost", "dropped"] | ConnectProblem
+
 WAITING = "…"
 #: Characters of a profile's label shown (the badges after it must fit 80 columns).
 LABEL_WIDTH = 32
@@ -113,9 +121,7 @@ class Status:
     port: int
     timeout: float
     read_only: bool
-    # closed, connecting, connected, lost, dropped, or why connecting failed: refused,
-    # unreachable, timed out, unknown host, failed
-    connection: str
+    connection: Connection
     retry_at: float | None  # time.monotonic() of the next try, during a backoff
     rtt: float | None
     paused: bool
@@ -133,7 +139,7 @@ class Status:
     profile: str | None = None  # the target profile's name (-H cell3, connect cell3)
     label: str | None = None  # its label: "Cell 3 — welding"
     colour: str | None = None  # its colour, a Rich colour name or #rrggbb
-    writes: str = "open"  # open, confirm or read-only (the profile's, or --read-only)
+    writes: WritesShown = "open"  # the profile's, or --read-only
     verify: bool = True  # every PUT is read back (off: --no-verify)
     target_id: int = 0  # changes when another target is opened (connect): trends restart
     ever_connected: bool = False  # a connection to this target opened at least once

@@ -14,6 +14,7 @@ from ..commands.target import Target
 from ..session import ConnectFailed, Disconnected, Session, State, TransportError
 from ..sim.thread import SimulatorThread
 from .backoff import Backoff
+from .events import Connection
 from .publisher import Publisher
 
 
@@ -37,7 +38,7 @@ class Link:
         self.host: str | None = None
         self.port = 5006
         #: closed, connecting, connected, lost, dropped, or why connecting failed.
-        self.connection = "closed"
+        self.connection: Connection = "closed"
         self.ever_connected = False  # on this target: "not connected yet" until it has
         self.retry_at: float | None = None  # time.monotonic() of the next try
         self.backoff = Backoff()
@@ -126,7 +127,7 @@ class Link:
                 f"connection lost while idle: {reason}; the next command reconnects"
             )
 
-    def begin_retry(self, state: str) -> None:
+    def begin_retry(self, state: Connection) -> None:
         """Back off before the next try; the status line counts it down."""
         self.connection = state
         self.retry_at = time.monotonic() + self.backoff.next_delay()

@@ -15,7 +15,7 @@ from ..commands.language import VarRef
 from ..protocol import Variant, describe_hresult, hresult_name
 from ..session import BadReply, ConnectFailed, RequestTimeout, TransportError
 from .csvsink import CsvSink
-from .events import Cycle, Reading
+from .events import Connection, Cycle, Reading
 from .link import Link
 from .publisher import Publisher
 from .schedule import Schedule
@@ -187,7 +187,7 @@ class Poller:
         link.early_drop = False  # this failure has its own wait
         self._retry("lost" if link.ever_connected else exc.problem)
 
-    def _retry(self, state: str) -> None:
+    def _retry(self, state: Connection) -> None:
         self._link.begin_retry(state)
         if self._link.retry_at is not None:
             self._schedule.not_before(self._link.retry_at)
