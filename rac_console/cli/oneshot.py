@@ -16,7 +16,7 @@ from ..commands.outcome import ExitStatus, Outcome, refused, worst
 from ..commands.policy import Writes
 from ..commands.target import Target
 from ..engine import Measured, Message
-from ..engine.commands import BUILTIN, parse_command
+from ..engine.commands import BUILTIN
 from ..engine.jobs import run_job
 from ..engine.registry import Where
 from ..engine.session_context import SessionContext
@@ -165,8 +165,8 @@ def _results(
 
 
 def _latency_command(args: argparse.Namespace) -> Latency:
-    """``latency 20 I 1`` as in the console, or ``--count 20 --var 'I 1'``: one parser
-    (the console's) for both; the two forms at once are refused, not merged."""
+    """``latency 20 I 1`` as in the console, or ``--count 20 --var 'I 1'``: the entry's
+    own parser (the console's) for both; the two forms at once are refused, not merged."""
     words = " ".join(args.words)
     options = (args.count, args.var)
     if words and options != (None, None):
@@ -177,7 +177,9 @@ def _latency_command(args: argparse.Namespace) -> Latency:
     if not words:
         count = "" if args.count is None else str(max(1, int(args.count)))
         words = f"{count} {args.var or ''}".strip()
-    command = parse_command(f"latency {words}".strip())
+    spec = BUILTIN.get("latency")
+    assert spec is not None
+    command = spec.parse(words)
     assert isinstance(command, Latency)
     return command
 

@@ -61,7 +61,7 @@ from .terminal import keys_held, no_mouse
 
 STOP_KEYS = {Keys.Enter, Keys.ControlM, Keys.ControlJ, Keys.ControlC, Keys.ControlD, "q"}
 LIVE_REFRESH_SECONDS = 0.25
-#: How often the outbox is drained while nothing is awaited (alerts, frames, rows).
+#: Drains at most this often while nothing is awaited (frames and rows of polls).
 DRAIN_SECONDS = 0.1
 
 
@@ -87,6 +87,7 @@ class Repl:
         self._waiting: dict[int, asyncio.Future[Result]] = {}
         self._wake = asyncio.Event()
         self._closing = False
+        self._submitted = asyncio.Event()  # a line was submitted: drain without a pause
         self.asking: ConfirmWrite | None = None  # the confirm question on screen
         self._confirm_prompt: PromptSession[str] | None = None
         self._questions: set[asyncio.Task[None]] = set()
@@ -204,20 +205,22 @@ class Repl:
             self.engine.answer_confirm(question.seq, yes)
 
     async def _drain_forever(self) -> None:
-        # asyncio.timeout, not wait_for: 3.11's wait_for can swallow the cancellation that
-        # ends this task when the event is set at the same moment (the REPL then hung).
+        """Drain when the engine says there is something: nothing wakes an idle REPL.
+        While a poll's frames and rows stream in (nothing awaited), drains are at most
+        DRAIN_SECONDS apart: one print of many frames, not a wake-up per frame."""
         while not self._closing:
-            with contextlib.suppress(TimeoutError):
-                async with asyncio.timeout(DRAIN_SECONDS):
-                    await self._wake.wait()
+            await self._wake.wait()
             self._wake.clear()
             self.drain()
+            if not self._waiting:  # a line submitted meanwhile ends the pause at once
+                self._submitted.clear()
+                with contextlib.suppress(TimeoutError):
+                    async with asyncio.timeout(DRAIN_SECONDS):
+                        await self._submitted.wait()
 
     def _notify(self, loop: asyncio.AbstractEventLoop) -> None:
-        """Called on the engine's thread: wake the drain only while a result is awaited
-        (polls alone are drained on the timer, so they cost the engine no wake-ups)."""
-        if self._waiting:
-            loop.call_soon_threadsafe(self._wake.set)
+        """Called on the engine's thread when its outbox stops being empty."""
+        loop.call_soon_threadsafe(self._wake.set)
 
     async def submit(self, line: str | Watch | Unwatch) -> Result:
         """Run a line (or a command of the REPL's own) and wait for its result."""
@@ -232,6 +235,7 @@ class Repl:
         seq = engine.submit(line) if isinstance(line, str) else engine.submit_command(line)
         self._waiting[seq] = future
         self._wake.set()
+        self._submitted.set()
         try:
             return await future
         finally:
