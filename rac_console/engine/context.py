@@ -36,11 +36,12 @@ class Job:
 
     seq: int
     what: str | Command
+    shown: str | None = None  # how a command object is shown (a typed line shows itself)
     _cancelled: threading.Event = field(default_factory=threading.Event, repr=False)
 
     @property
     def line(self) -> str | None:
-        return self.what if isinstance(self.what, str) else None
+        return self.what if isinstance(self.what, str) else self.shown
 
     def cancel(self) -> None:
         self._cancelled.set()

@@ -141,14 +141,15 @@ class Engine:
         """Queue a typed line; its :class:`Result` comes out with the number returned."""
         return self._queue(line)
 
-    def submit_command(self, command: Command) -> int:
-        """Queue a command a front end made itself (F2's pause, the REPL's end of a
-        live watch): run like a typed line, with no line to echo."""
-        return self._queue(command)
+    def submit_command(self, command: Command, line: str | None = None) -> int:
+        """Queue a command a front end made itself (F2's pause, Space on an IO row):
+        run like a typed line, never parsed; ``line`` is how it is shown (the echo,
+        the result), or None for nothing to echo."""
+        return self._queue(command, line)
 
-    def _queue(self, what: str | Command) -> int:
+    def _queue(self, what: str | Command, line: str | None = None) -> int:
         with self._jobs_lock:
-            job = Job(next(self._seq), what)
+            job = Job(next(self._seq), what, line)
             self._queued[job.seq] = job
         self._inbox.put(job)
         return job.seq
@@ -261,7 +262,9 @@ class Engine:
                     self.options.verify,
                     self._stopping.is_set,
                 )
-                command, feedback = run_job(self.registry, context, job.what, self.where)
+                command, feedback = run_job(
+                    self.registry, context, job.what, self.where, job.line
+                )
         finally:
             with self._jobs_lock:
                 self._running = None

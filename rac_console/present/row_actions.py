@@ -9,12 +9,13 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from ..commands.language import VarRef, parse_put
+from ..commands.language import Put, VarRef, parse_put
 from ..commands.outcome import Outcome
 from ..engine.events import Cycle, Result
 from ..protocol import Variant
 from ..protocol.errors import InputError
 from ..protocol.text import scalar_text, terminal_safe
+from ..protocol.variables import encode_value
 from ..protocol.variant import float_text
 
 
@@ -94,6 +95,17 @@ def toggle_line(var: VarRef, variant: Variant | None) -> str | None:
     if var.kind.code != "IO" or variant is None:
         return None
     return f"put IO {var.index} {'off' if variant.value else 'on'}"
+
+
+def toggle_command(var: VarRef, variant: Variant | None) -> tuple[Put, str] | None:
+    """Space on an IO row: the write of the opposite of the value shown, made here (the
+    engine runs it as it is, never parsing a line back), and how it is shown; None
+    when there is nothing to toggle."""
+    line = toggle_line(var, variant)
+    if line is None:
+        return None
+    value, text = encode_value(var.kind, "off" if variant and variant.value else "on")
+    return Put.of(var, value, text), line
 
 
 @dataclass
