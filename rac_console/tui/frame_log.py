@@ -24,13 +24,13 @@ from rich.cells import cell_len
 from rich.highlighter import Highlighter
 from rich.text import Text
 from textual.binding import Binding, BindingType
-from textual.widgets import Log
 
 from ..engine import Alert, Feedback, Message, Note
 from ..present.filtering import FrameFilter, add_filter_title
 from ..present.frames import clock_text, frame_body, gap_text, hex_text
 from ..protocol.text import counted, terminal_safe
 from ..session import Frame
+from .compat import InlineWidthLog, forget_drawn_lines
 from .filter_line import FilterLine
 from .pane_keys import pane_bindings
 
@@ -60,7 +60,7 @@ Drawn = tuple[Event, float | None, bytes | None]
 Kept = tuple[int, Drawn]
 
 
-class FrameLog(Log):
+class FrameLog(InlineWidthLog):
     """Frames are queued as they cross the wire and written by :meth:`flush` at ~10 Hz:
     one ``write_lines`` per flush instead of one per frame."""
 
@@ -154,8 +154,7 @@ class FrameLog(Log):
     def slow_after(self, seconds: float) -> None:
         if seconds != self.highlighter.slow_after:
             self.highlighter.slow_after = seconds
-            self._render_line_cache.clear()
-            self.refresh()
+            forget_drawn_lines(self)
 
     @property
     def filter_text(self) -> str:
@@ -446,17 +445,13 @@ class FrameLog(Log):
                 placed[1] += 1
         return lines
 
-    def _update_size(self, updates: int, lines: list[str]) -> None:  # type: ignore[override]
-        """Log's width update, done here and now: Log starts a thread per write for it
-        (cell widths of every line). Frame lines are ASCII but for the arrows, so their
-        length is their width; only another line is measured. Also safe at shutdown."""
-        if not lines:
-            return
-        width = max(
+    def lines_width(self, lines: list[str]) -> int:
+        """Frame lines are ASCII but for the arrows, so their length is their width;
+        only another line is measured (thousands of lines a second)."""
+        return max(
             len(line) if line.isascii() or _NARROW.issuperset(line) else cell_len(line)
             for line in lines
         )
-        self._update_maximum_width(updates, width)
 
 
 #: Characters of a frame line that are one cell wide though not ASCII.
