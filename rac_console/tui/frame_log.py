@@ -24,8 +24,9 @@ from rich.cells import cell_len
 from rich.highlighter import Highlighter
 from rich.text import Text
 from textual.binding import Binding, BindingType
+from textual.message import Message as TextualMessage
 
-from ..engine import Alert, Feedback, Message, Note
+from ..engine import Alert, Note
 from ..present.filtering import FrameFilter, add_filter_title
 from ..present.frames import clock_text, frame_body, gap_text, hex_text
 from ..protocol.text import counted, terminal_safe
@@ -73,6 +74,10 @@ class FrameLog(InlineWidthLog):
         *pane_bindings("log"),
     ]
 
+    class OptionsChanged(TextualMessage):
+        """(log → app) Polls shown, the hex view or the frame times changed: settings
+        the console keeps."""
+
     def __init__(self, **kwargs: object) -> None:
         super().__init__(highlight=True, max_lines=MAX_LINES, auto_scroll=True, **kwargs)  # type: ignore[arg-type]
         self.highlighter: FrameHighlighter = FrameHighlighter()
@@ -113,6 +118,7 @@ class FrameLog(InlineWidthLog):
         if shown != self._show_polls:
             self._show_polls = shown
             self._rematch()
+            self.post_message(self.OptionsChanged())
 
     @property
     def hex_view(self) -> bool:
@@ -124,6 +130,7 @@ class FrameLog(InlineWidthLog):
         if shown != self._hex_view:
             self._hex_view = shown
             self._redraw()
+            self.post_message(self.OptionsChanged())
 
     @property
     def hex_placement(self) -> str:
@@ -144,6 +151,7 @@ class FrameLog(InlineWidthLog):
         if shown != self._show_gaps:
             self._show_gaps = shown
             self._redraw()
+            self.post_message(self.OptionsChanged())
 
     @property
     def slow_after(self) -> float:
@@ -494,48 +502,6 @@ class FrameHighlighter(Highlighter):
         at = plain.rfind(HEX_SEPARATOR)
         if at >= 0:
             text.stylize("dim", at)
-
-
-class LogActions:
-    """The frame log's keys, on the app: hex view (F7), frame times (``t``), filter (``/``)."""
-
-    frame_log: FrameLog
-    log_filter: FilterLine
-
-    def show(self, feedback: Feedback) -> None:
-        raise NotImplementedError  # the app's
-
-    def action_toggle_hex(self) -> None:
-        log = self.frame_log
-        log.hex_view = not log.hex_view
-        where = {
-            "beside": "beside its text, in one column",
-            "under": "on lines under its text (wider terminals put them beside)",
-            "mixed": "beside its text, or under it when the line is too long",
-            "none": "beside its text, or under it when both do not fit",
-        }[log.hex_placement]
-        self.show(
-            Message(
-                f"hex view: each frame's bytes {where} (F7 hides them)"
-                if log.hex_view
-                else "hex view off"
-            )
-        )
-
-    def action_toggle_frame_times(self) -> None:
-        log = self.frame_log
-        log.show_gaps = not log.show_gaps
-        self.show(
-            Message(
-                "frame times: the time since the previous frame on each line"
-                if log.show_gaps
-                else "frame times hidden (t in the frame log shows them)"
-            )
-        )
-
-    def action_filter_frames(self) -> None:
-        """``/`` in the frame log: its filter line, with the filter as it is."""
-        self.log_filter.open()
 
 
 def log_filter_line(log: FrameLog) -> FilterLine:
