@@ -341,7 +341,7 @@ class RacConsoleApp(PaletteActions, TableActions, LogActions, App[int]):
             or self.lines_pending  # the running line's time
             or self.engine.outbox.waiting_since is not None  # waiting for a reply
             or (status is not None and status.retry_at is not None)  # the countdown
-            or self._flushes  # the frame rate, back to 0
+            or self.frames_per_second() > 0  # the rate, back to 0
         )
 
     def sync_bindings(self) -> None:

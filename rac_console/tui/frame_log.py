@@ -37,7 +37,7 @@ from .pane_keys import pane_bindings
 
 MAX_LINES = 5000
 MAX_PENDING = 50_000
-#: Lines drawn per flush (10 a second) at most: past it only the newest are drawn, and one
+#: Lines drawn per flush at most: past it only the newest are drawn, and one
 #: line says how many were not (drawing them cost the poller its CPU, unread).
 MAX_LINES_PER_FLUSH = 500
 #: Poll frames kept to be drawn again (by the hex view, the frame times, the filter and
@@ -62,8 +62,9 @@ Kept = tuple[int, Drawn]
 
 
 class FrameLog(InlineWidthLog):
-    """Frames are queued as they cross the wire and written by :meth:`flush` at ~10 Hz:
-    one ``write_lines`` per flush instead of one per frame."""
+    """Frames are queued as they cross the wire and written by :meth:`flush` when the
+    app drains the engine (30 times a second at most): one ``write_lines`` per flush
+    instead of one per frame."""
 
     BINDINGS: ClassVar[list[BindingType]] = [
         Binding("escape", "app.focus_command_line", "Command line", id="log-leave"),
