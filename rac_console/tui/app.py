@@ -6,12 +6,16 @@ import asyncio
 import time
 from collections import deque
 from collections.abc import Sequence
+from functools import partial
 from typing import ClassVar
 
 from rich.text import Text
 from textual import on
 from textual.app import App, ComposeResult
 from textual.binding import Binding, BindingType
+from textual.message import Message as TextualMessage
+from textual.reactive import reactive
+from textual.timer import Timer
 from textual.widgets import Input, Static
 from textual.worker import Worker, WorkerState
 
@@ -46,23 +50,39 @@ from ..protocol.text import counted, terminal_safe
 from .ascii_screen import ascii_driver
 from .command_line import CommandLine
 from .confirm_screen import ConfirmWriteScreen, border_colour
+from .file_writes import FileWrites
 from .footer import FittingFooter
-from .frame_log import FrameLog, LogActions, log_filter_line
+from .frame_log import FrameLog, log_filter_line
 from .help_screen import key_of
 from .io_panel import IoPanel, WatchArea
+from .log_actions import LogActions
 from .palette import ConsoleCommands, PaletteActions, Providers
 from .results import ResultsLog
 from .row_detail import RowDetail
 from .settings import SettingsKeeper
 from .status_bar import StatusBar
-from .table_actions import TableActions, TableFilter
+from .table_actions import TableActions, toggle
 from .trend_view import TrendView
-from .watch_table import WatchTable, writes_refused
+from .watch_table import TableFilter, WatchTable, writes_refused
 
-#: The engine's outbox is drained this often: results, frames, rows, status.
-DRAIN_HZ = 20
-LOG_FLUSH_HZ = 10
-TABLE_REFRESH_HZ = 5
+#: Under a flood of frames the screen is brought up to date at most this often; the
+#: drains in between are put off by a one-shot timer, so keys are answered meanwhile.
+MIN_DRAIN_GAP = 1 / 30
+#: The clock's tick: what changes with time alone (row ages, the retry countdown, how
+#: long a reply or a line has been waited for, the frame rate) is shown in tenths.
+CLOCK_EVERY = 0.2
+#: The frame rate on the status line counts the frames drawn in this many seconds.
+RATE_WINDOW = 2.0
+
+
+class OutboxWoke(TextualMessage):
+    """The engine put something in its empty outbox (posted from the engine's thread).
+
+    A wake still queued stands for the new one: one pending wake at most, however fast
+    the engine publishes."""
+
+    def can_replace(self, message: TextualMessage) -> bool:
+        return isinstance(message, OutboxWoke)
 
 
 PAUSE_HELP = "Pause or resume polling"
@@ -71,6 +91,9 @@ FREEZE_HELP = "Freeze the log's scrolling, or follow new frames again"
 
 
 class RacConsoleApp(PaletteActions, TableActions, LogActions, App[int]):
+    """Woken by the engine: its outbox's ``notify`` posts :class:`OutboxWoke`, and the
+    screen is brought up to date then (see :meth:`on_outbox_woke`), not on a timer."""
+
     CSS_PATH = "app.tcss"
     COMMANDS: ClassVar[Providers] = {ConsoleCommands}  # ours, then Textual's (palette.py)
     TITLE = "rac-console"
@@ -153,6 +176,11 @@ class RacConsoleApp(PaletteActions, TableActions, LogActions, App[int]):
         ),
     ]
 
+    # What the footer's keys depend on (check_action), set in one place: sync_bindings.
+    line_running = reactive(False, bindings=True)  # Esc cancels it
+    polling_paused = reactive(False, bindings=True)  # F2 resumes
+    log_frozen = reactive(False, bindings=True)  # F4 follows
+
     def __init__(
         self,
         engine: Engine,
@@ -167,13 +195,17 @@ class RacConsoleApp(PaletteActions, TableActions, LogActions, App[int]):
         self.watch_file = watch_file
         self.profile_names = tuple(profile_names)  # the palette offers connect NAME
         self.profiles = dict(engine.profiles)  # read before the engine starts: its words
+        self.files = FileWrites()  # history and settings, written off this loop
         self.kept = SettingsKeeper(self, settings)  # theme, I/O grid, log toggles
         self.status: Status | None = None
         self.rows: dict[VarRef, RowView] = {}
         self._removed: set[VarRef] = set()
         #: Lines handed to the engine and not answered yet: seq -> (line, when), in order.
         self.lines_pending: dict[int, tuple[str, float]] = {}
-        self._flushes: deque[tuple[float, int]] = deque(maxlen=LOG_FLUSH_HZ * 2)
+        self._flushes: deque[tuple[float, int]] = deque()  # (when, frames) in RATE_WINDOW
+        self._last_drain = 0.0  # time.monotonic() of the last update
+        self._drain_due: Timer | None = None  # the put-off update, under a flood
+        self._clock: Timer | None = None
         self._status_line = Text()
         # Kept as attributes: timers and workers never query a DOM being torn down.
         self.status_bar = StatusBar(id="status")
@@ -197,7 +229,7 @@ class RacConsoleApp(PaletteActions, TableActions, LogActions, App[int]):
             placeholder="get P 1 · put IO 20 on · watch IO 0-7 · help",
         )
         self.command_line.targets = tuple(connect_targets(engine.profiles))
-        self.command_line.may_ask = self._may_ask
+        self.command_line.may_ask = self.may_ask
         #: The line whose question keys typed ahead must not answer (see CommandLine).
         self._held_seq: int | None = None
 
@@ -217,20 +249,25 @@ class RacConsoleApp(PaletteActions, TableActions, LogActions, App[int]):
 
     async def on_mount(self) -> None:
         self.kept.apply()
+        self.watch(self, "theme", self.kept.changed, init=False)
+        self.engine.outbox.notify = self._wake  # before the engine publishes anything
         await asyncio.to_thread(self.engine.start)
         self.drain_outbox()
         self._welcome()
         self.kept.say_problems()
         if self.watch_file:
             self.engine.submit_command(WatchFile("load", self.watch_file))
-        self.set_interval(1 / DRAIN_HZ, self.drain_outbox)
-        self.set_interval(1 / LOG_FLUSH_HZ, self.flush_log)
-        self.set_interval(1 / TABLE_REFRESH_HZ, self.refresh_table)
-        self.refresh_table()
+        # The one timer left: nothing comes from the engine while a reply, a retry or a
+        # typed line is waited for, or while polling is paused, yet their clocks and the
+        # rows' ages must go on. Paused when no clock is shown (see tick_clock).
+        self._clock = self.set_interval(CLOCK_EVERY, self.tick_clock)
+        self.update_screen()
         self.command_line.focus()
 
     async def on_unmount(self) -> None:
+        self.engine.outbox.notify = None
         self.kept.save(at_exit=True)
+        await self.files.close()  # the last save and history line are on disk
         await asyncio.to_thread(self.engine.stop)
         self.status = self.engine.outbox.drain().status or self.status
 
@@ -263,6 +300,59 @@ class RacConsoleApp(PaletteActions, TableActions, LogActions, App[int]):
 
     # -------------------------------------------------------------- refresh
 
+    def _wake(self) -> None:
+        """The outbox's ``notify``, on the engine's thread: post, never wait."""
+        self.post_message(OutboxWoke())
+
+    def on_outbox_woke(self, _: OutboxWoke) -> None:
+        """Bring the screen up to date now, or, under a flood, once MIN_DRAIN_GAP has
+        passed since the last time (one update put off at a time)."""
+        if self._drain_due is not None:
+            return  # an update is due already: it takes this wake's events too
+        wait = self._last_drain + MIN_DRAIN_GAP - time.monotonic()
+        if wait > 0:
+            self._drain_due = self.set_timer(wait, self._drain_when_due)
+        else:
+            self.update_screen()
+
+    def _drain_when_due(self) -> None:
+        self._drain_due = None
+        self.update_screen()
+
+    def update_screen(self) -> None:
+        """Everything the engine published, on screen: results, frames, rows, status."""
+        self._last_drain = time.monotonic()
+        self.drain_outbox()
+        self.flush_log()
+        self.refresh_table()
+
+    def tick_clock(self) -> None:
+        """The clock timer: what changes with time alone. It pauses itself when nothing
+        shown counts time, and :meth:`refresh_table` starts it again."""
+        self.refresh_table()
+        if self._clock is not None and not self._clock_shown():
+            self._clock.pause()
+
+    def _clock_shown(self) -> bool:
+        """Whether anything on screen changes with time alone."""
+        status = self.status
+        return bool(
+            self.rows  # their ages
+            or self.lines_pending  # the running line's time
+            or self.engine.outbox.waiting_since is not None  # waiting for a reply
+            or (status is not None and status.retry_at is not None)  # the countdown
+            or self.frames_per_second() > 0  # the rate, back to 0
+        )
+
+    def sync_bindings(self) -> None:
+        """The one place the state the footer's keys depend on is set: a change shows
+        the keys again (reactive ``bindings=True``)."""
+        status = self.status
+        self.line_running = bool(self.lines_pending)
+        self.polling_paused = status is not None and status.paused
+        self.log_frozen = not self.frame_log.auto_scroll
+        self.table.refuses_writes = writes_refused(status)
+
     def drain_outbox(self) -> None:
         """Take everything the engine published since the last tick, in order."""
         batch = self.engine.outbox.drain()
@@ -283,12 +373,13 @@ class RacConsoleApp(PaletteActions, TableActions, LogActions, App[int]):
         for event in batch.events:
             if isinstance(event, Result):
                 if event.line is not None:  # a typed line: kept by the history unless refused
-                    self.history.settle(event.line, refused=is_refused(event))
+                    self.files.run(
+                        partial(self.history.settle, event.line, refused=is_refused(event))
+                    )
                 self._close_question(event.seq)
                 if event.seq == self._held_seq:
                     self._release_keys()
-                if self.lines_pending.pop(event.seq, None) is not None and not self.lines_pending:
-                    self.refresh_bindings()  # Esc has nothing to cancel any more
+                self.lines_pending.pop(event.seq, None)
                 self.take_result(event)
                 self._show_result(event)
             elif isinstance(event, Cycle):
@@ -309,19 +400,24 @@ class RacConsoleApp(PaletteActions, TableActions, LogActions, App[int]):
                 if n
             ]
             self.frame_log.add(Alert(f"{' and '.join(lost)} not shown: the screen fell behind"))
+        self.sync_bindings()
 
     def flush_log(self) -> None:
         count = self.frame_log.flush()
-        self._flushes.append((time.monotonic(), count))
+        if count:
+            self._flushes.append((time.monotonic(), count))
 
     def frames_per_second(self) -> float:
-        if len(self._flushes) < 2:
-            return 0.0
-        span = self._flushes[-1][0] - self._flushes[0][0]
-        total = sum(count for _, count in list(self._flushes)[1:])
-        return total / span if span > 0 else 0.0
+        """Frames drawn in the last RATE_WINDOW seconds, per second."""
+        flushes = self._flushes
+        since = time.monotonic() - RATE_WINDOW
+        while flushes and flushes[0][0] < since:
+            flushes.popleft()
+        return sum(count for _, count in flushes) / RATE_WINDOW
 
     def refresh_table(self) -> None:
+        if self._clock is not None and self._clock_shown():
+            self._clock.resume()
         removed, self._removed = self._removed, set()
         self.table.refresh_rows(self.rows, removed, time.monotonic())
         self.redraw_trend()
@@ -351,9 +447,9 @@ class RacConsoleApp(PaletteActions, TableActions, LogActions, App[int]):
         queued = bool(self.lines_pending)
         seq = self.submit_line(event.line)
         if event.held:
-            self._hold_keys(seq, queued)
+            self.hold_keys(seq, queued)
 
-    def _may_ask(self, line: str) -> bool:
+    def may_ask(self, line: str) -> bool:
         """Whether this line, run now, may stop to ask before it writes: a write on a
         ``confirm`` target with nothing running before it (a write queued behind a
         long wait must not hold the keys typed meanwhile)."""
@@ -366,7 +462,7 @@ class RacConsoleApp(PaletteActions, TableActions, LogActions, App[int]):
             and may_ask(line)
         )
 
-    def _hold_keys(self, seq: int, queued: bool) -> None:
+    def hold_keys(self, seq: int, queued: bool) -> None:
         """The keys typed after line ``seq`` are held until it asked or ended; a line that
         turned out to be queued behind another holds none."""
         if queued or self._held_seq is not None:
@@ -392,8 +488,9 @@ class RacConsoleApp(PaletteActions, TableActions, LogActions, App[int]):
         counted as running or queued until its result, and cancelled by Esc."""
         seq = self.engine.submit(line)
         self.lines_pending[seq] = (line, time.monotonic())
-        if len(self.lines_pending) == 1:
-            self.refresh_bindings()
+        self.sync_bindings()
+        if self._clock is not None:
+            self._clock.resume()  # the running line's time
         return seq
 
     def _running_line(self) -> tuple[str, float, int] | None:
@@ -408,12 +505,11 @@ class RacConsoleApp(PaletteActions, TableActions, LogActions, App[int]):
         """Esc cancels only while a typed line is running (elsewhere it leaves a pane);
         F2 and F4 show the one of their pair that says what they will do."""
         if action == "cancel_command":
-            return bool(self.lines_pending)
+            return self.line_running
         if action == "toggle_polling":
-            paused = self.status is not None and self.status.paused
-            return paused == (parameters == ("resume",))
+            return self.polling_paused == (parameters == ("resume",))
         if action == "toggle_scroll":
-            return self.frame_log.auto_scroll != (parameters == ("follow",))
+            return self.log_frozen == (parameters == ("follow",))
         return True
 
     def action_cancel_command(self) -> None:
@@ -526,7 +622,7 @@ class RacConsoleApp(PaletteActions, TableActions, LogActions, App[int]):
     def action_toggle_scroll(self, _shown: str = "") -> None:
         log = self.frame_log
         log.auto_scroll = not log.auto_scroll
-        self.refresh_bindings()  # F4 says what it will do now
+        self.sync_bindings()  # F4 says what it will do now
         log.update_title()
         if log.auto_scroll:
             log.scroll_end(animate=False)
@@ -534,7 +630,7 @@ class RacConsoleApp(PaletteActions, TableActions, LogActions, App[int]):
     @on(IoPanel.Toggle)
     def toggle_from_grid(self, event: IoPanel.Toggle) -> None:
         """Space in the I/O grid: the table's toggle, with the same in-flight guard."""
-        self._toggle(event.row)
+        toggle(self, event.row)
 
     def action_toggle_io_grid(self) -> None:
         """IO rows move from the table to the grid, or back."""
@@ -542,6 +638,11 @@ class RacConsoleApp(PaletteActions, TableActions, LogActions, App[int]):
         self.io_panel.show(shown)
         self.table.set_hide_io(shown)
         self.refresh_table()
+        self.kept.changed()
+
+    @on(FrameLog.OptionsChanged)
+    def log_options_changed(self) -> None:
+        self.kept.changed()
 
     def _close_question(self, seq: int) -> None:
         """A write that ended (a cancel came before its answer) asks nothing any more."""

@@ -13,6 +13,7 @@ from textual.widgets import Input
 
 from ..present.completion import Candidate, common_prefix, complete, hint
 from ..present.history import History
+from .compat import input_suggestion, key_bindings
 
 
 class HintSuggester(Suggester):
@@ -157,7 +158,7 @@ class CommandLine(Input):
         if held is None:
             return False
         if isinstance(event, events.Key) and not (
-            event.is_printable or event.key in self._bindings.key_to_bindings
+            event.is_printable or bool(key_bindings(self, event.key))
         ):
             return False  # Esc, F-keys: the app's, at once
         if self._dropping:
@@ -172,20 +173,20 @@ class CommandLine(Input):
         if not self._take(events.Key(character, character)):
             self.insert_text_at_cursor(character)
 
-    def _on_command_line_asked(self, event: Asked) -> None:
+    def on_command_line_asked(self, event: Asked) -> None:
         event.stop()
         if self._held is not None:
             self._dropped += len(self._held)
             self._held.clear()
             self._dropping = True
 
-    def _on_command_line_answered(self, event: Answered) -> None:
+    def on_command_line_answered(self, event: Answered) -> None:
         event.stop()
         if self._held is not None:
             self._dropping = False
             self._say_dropped()
 
-    async def _on_command_line_release(self, event: Release) -> None:
+    async def on_command_line_release(self, event: Release) -> None:
         """Type the held keys in, in order, before any key that comes after them."""
         event.stop()
         held, self._held, self._dropping = self._held or [], None, False
@@ -203,7 +204,7 @@ class CommandLine(Input):
             self.post_message(self.Dropped(self._dropped))
             self._dropped = 0
 
-    async def _on_key(self, event: events.Key) -> None:
+    async def on_key(self, event: events.Key) -> None:
         """Run this line's own key bindings here, in key order.
 
         Textual runs a binding only after the key has bubbled up to the app, so in a
@@ -222,7 +223,7 @@ class CommandLine(Input):
             return  # on an empty line ? asks for help; anywhere else it is a character
         if event.is_printable:
             return  # Input inserts it, in order
-        for binding in self._bindings.key_to_bindings.get(event.key, ()):
+        for binding in key_bindings(self, event.key):
             event.stop()
             event.prevent_default()
             await self.run_action(binding.action)
@@ -235,11 +236,11 @@ class CommandLine(Input):
         elif event.is_printable and event.character:
             self.insert_text_at_cursor(event.character)
         else:
-            for binding in self._bindings.key_to_bindings.get(event.key, ()):
+            for binding in key_bindings(self, event.key):
                 await self.run_action(binding.action)
                 return
 
-    def _on_paste(self, event: events.Paste) -> None:
+    def on_paste(self, event: events.Paste) -> None:
         """A pasted block runs line by line, as if each line were typed and entered:
         every complete line is entered in order, the unfinished last one stays to edit
         (Textual's Input would keep the first line and drop the rest without a word)."""
@@ -271,7 +272,7 @@ class CommandLine(Input):
 
     def action_cursor_right(self, select: bool = False) -> None:
         needs = hint(self.value)
-        if self.cursor_at_end and needs and self._suggestion == self.value + needs:
+        if self.cursor_at_end and needs and input_suggestion(self) == self.value + needs:
             return  # an argument hint describes, it is not text to insert
         super().action_cursor_right(select)
 

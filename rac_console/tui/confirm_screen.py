@@ -12,7 +12,6 @@ from __future__ import annotations
 
 from rich.text import Text
 from textual import events, on
-from textual._time import get_time  # the clock of an event's ``time``
 from textual.app import ComposeResult
 from textual.color import Color
 from textual.containers import Horizontal, Vertical
@@ -22,6 +21,7 @@ from textual.widgets import Button, Static
 from ..engine import CONFIRM_GUARD_SECONDS, ConfirmWrite
 from ..present.status import label_text, profile_colour
 from ..protocol.text import terminal_safe
+from .compat import event_clock  # the clock of an event's ``time``
 
 #: Keys in the first this many seconds of the question (and any typed before it) are
 #: ignored; Esc still answers No.
@@ -59,7 +59,7 @@ class ConfirmWriteScreen(ModalScreen[bool]):
         self.question = question
         self.colour = colour
         self.ignored = 0  # keys ignored: typed ahead, or within the guard time
-        self._ready_at = float("inf")  # get_time() from when keys answer
+        self._ready_at = float("inf")  # event_clock() from when keys answer
         self._answered = False
 
     @property
@@ -70,7 +70,7 @@ class ConfirmWriteScreen(ModalScreen[bool]):
     @property
     def accepting(self) -> bool:
         """True once keys answer the question."""
-        return get_time() >= self._ready_at
+        return event_clock() >= self._ready_at
 
     def compose(self) -> ComposeResult:
         question = self.question
@@ -114,7 +114,7 @@ class ConfirmWriteScreen(ModalScreen[bool]):
     def _on_screen(self) -> None:
         """Painted: the guard time starts now (not when it was made: building a screen
         takes a moment, while keys typed ahead still arrive)."""
-        self._ready_at = get_time() + GUARD_SECONDS
+        self._ready_at = event_clock() + GUARD_SECONDS
 
     def on_key(self, event: events.Key) -> None:
         event.stop()

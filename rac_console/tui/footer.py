@@ -11,17 +11,19 @@ from __future__ import annotations
 
 from textual import events
 from textual.app import ComposeResult
+from textual.widget import Widget
 from textual.widgets import Footer
-from textual.widgets._footer import FooterKey
+
+from .compat import footer_key_text, footer_ready, is_palette_key
 
 #: The palette key's width besides its text: the bar at its left.
 PALETTE_BAR = 1
 
 
-def key_width(key: FooterKey) -> int:
-    """A compact key's cells: ``key description`` and the space after it."""
-    text = f"{key.key_display} {key.description}" if key.description else key.key_display
-    return len(text) + 1
+def key_width(widget: Widget) -> int:
+    """A compact key's cells: ``key description`` and the space after it (0: no key)."""
+    text = footer_key_text(widget)
+    return 0 if text is None else len(text) + 1
 
 
 class FittingFooter(Footer):
@@ -37,11 +39,9 @@ class FittingFooter(Footer):
         self._width = width
         keys = [w for w in widgets if not w.has_class("-command-palette")]
         palette = [w for w in widgets if w.has_class("-command-palette")]
-        room = width - sum(
-            key_width(w) - 1 + PALETTE_BAR for w in palette if isinstance(w, FooterKey)
-        )
+        room = width - sum(key_width(w) - 1 + PALETTE_BAR for w in palette if is_palette_key(w))
         for widget in keys:
-            need = key_width(widget) if isinstance(widget, FooterKey) else 0
+            need = key_width(widget)
             if need > room:
                 break  # the rest are less important: none is shown after a gap
             room -= need
@@ -49,5 +49,5 @@ class FittingFooter(Footer):
         yield from palette
 
     def on_resize(self, event: events.Resize) -> None:
-        if event.size.width != self._width and self._bindings_ready:
+        if event.size.width != self._width and footer_ready(self):
             self.call_after_refresh(self.recompose)

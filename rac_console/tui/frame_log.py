@@ -24,19 +24,20 @@ from rich.cells import cell_len
 from rich.highlighter import Highlighter
 from rich.text import Text
 from textual.binding import Binding, BindingType
-from textual.widgets import Log
+from textual.message import Message as TextualMessage
 
-from ..engine import Alert, Feedback, Message, Note
+from ..engine import Alert, Note
 from ..present.filtering import FrameFilter, add_filter_title
 from ..present.frames import clock_text, frame_body, gap_text, hex_text
 from ..protocol.text import counted, terminal_safe
 from ..session import Frame
+from .compat import InlineWidthLog, forget_drawn_lines
 from .filter_line import FilterLine
 from .pane_keys import pane_bindings
 
 MAX_LINES = 5000
 MAX_PENDING = 50_000
-#: Lines drawn per flush (10 a second) at most: past it only the newest are drawn, and one
+#: Lines drawn per flush at most: past it only the newest are drawn, and one
 #: line says how many were not (drawing them cost the poller its CPU, unread).
 MAX_LINES_PER_FLUSH = 500
 #: Poll frames kept to be drawn again (by the hex view, the frame times, the filter and
@@ -59,9 +60,10 @@ Drawn = tuple[Event, float | None]
 Kept = tuple[int, Drawn]
 
 
-class FrameLog(Log):
-    """Frames are queued as they cross the wire and written by :meth:`flush` at ~10 Hz:
-    one ``write_lines`` per flush instead of one per frame."""
+class FrameLog(InlineWidthLog):
+    """Frames are queued as they cross the wire and written by :meth:`flush` when the
+    app drains the engine (30 times a second at most): one ``write_lines`` per flush
+    instead of one per frame."""
 
     BINDINGS: ClassVar[list[BindingType]] = [
         Binding("escape", "app.focus_command_line", "Command line", id="log-leave"),
@@ -71,6 +73,10 @@ class FrameLog(Log):
         Binding("t", "app.toggle_frame_times", "Frame times", id="log-frame-times"),
         *pane_bindings("log"),
     ]
+
+    class OptionsChanged(TextualMessage):
+        """(log → app) Polls shown, the hex view or the frame times changed: settings
+        the console keeps."""
 
     def __init__(self, **kwargs: object) -> None:
         super().__init__(highlight=True, max_lines=MAX_LINES, auto_scroll=True, **kwargs)  # type: ignore[arg-type]
@@ -110,6 +116,7 @@ class FrameLog(Log):
         if shown != self._show_polls:
             self._show_polls = shown
             self._rematch()
+            self.post_message(self.OptionsChanged())
 
     @property
     def hex_view(self) -> bool:
@@ -121,6 +128,7 @@ class FrameLog(Log):
         if shown != self._hex_view:
             self._hex_view = shown
             self._redraw()
+            self.post_message(self.OptionsChanged())
 
     @property
     def hex_placement(self) -> str:
@@ -141,6 +149,7 @@ class FrameLog(Log):
         if shown != self._show_gaps:
             self._show_gaps = shown
             self._redraw()
+            self.post_message(self.OptionsChanged())
 
     @property
     def slow_after(self) -> float:
@@ -151,8 +160,7 @@ class FrameLog(Log):
     def slow_after(self, seconds: float) -> None:
         if seconds != self.highlighter.slow_after:
             self.highlighter.slow_after = seconds
-            self._render_line_cache.clear()
-            self.refresh()
+            forget_drawn_lines(self)
 
     @property
     def filter_text(self) -> str:
@@ -435,17 +443,13 @@ class FrameLog(Log):
                 placed[1] += 1
         return lines
 
-    def _update_size(self, updates: int, lines: list[str]) -> None:  # type: ignore[override]
-        """Log's width update, done here and now: Log starts a thread per write for it
-        (cell widths of every line). Frame lines are ASCII but for the arrows, so their
-        length is their width; only another line is measured. Also safe at shutdown."""
-        if not lines:
-            return
-        width = max(
+    def lines_width(self, lines: list[str]) -> int:
+        """Frame lines are ASCII but for the arrows, so their length is their width;
+        only another line is measured (thousands of lines a second)."""
+        return max(
             len(line) if line.isascii() or _NARROW.issuperset(line) else cell_len(line)
             for line in lines
         )
-        self._update_maximum_width(updates, width)
 
 
 #: Characters of a frame line that are one cell wide though not ASCII.
@@ -488,48 +492,6 @@ class FrameHighlighter(Highlighter):
         at = plain.rfind(HEX_SEPARATOR)
         if at >= 0:
             text.stylize("dim", at)
-
-
-class LogActions:
-    """The frame log's keys, on the app: hex view (F7), frame times (``t``), filter (``/``)."""
-
-    frame_log: FrameLog
-    log_filter: FilterLine
-
-    def show(self, feedback: Feedback) -> None:
-        raise NotImplementedError  # the app's
-
-    def action_toggle_hex(self) -> None:
-        log = self.frame_log
-        log.hex_view = not log.hex_view
-        where = {
-            "beside": "beside its text, in one column",
-            "under": "on lines under its text (wider terminals put them beside)",
-            "mixed": "beside its text, or under it when the line is too long",
-            "none": "beside its text, or under it when both do not fit",
-        }[log.hex_placement]
-        self.show(
-            Message(
-                f"hex view: each frame's bytes {where} (F7 hides them)"
-                if log.hex_view
-                else "hex view off"
-            )
-        )
-
-    def action_toggle_frame_times(self) -> None:
-        log = self.frame_log
-        log.show_gaps = not log.show_gaps
-        self.show(
-            Message(
-                "frame times: the time since the previous frame on each line"
-                if log.show_gaps
-                else "frame times hidden (t in the frame log shows them)"
-            )
-        )
-
-    def action_filter_frames(self) -> None:
-        """``/`` in the frame log: its filter line, with the filter as it is."""
-        self.log_filter.open()
 
 
 def log_filter_line(log: FrameLog) -> FilterLine:

@@ -7,18 +7,19 @@ cancelled by Esc); one that needs a file name puts the line on the command line 
 the user to finish. Titles and help made from names in a file or a reply are plain
 text, never markup.
 
-:class:`PaletteActions` is a mixin of :class:`~rac_console.tui.app.RacConsoleApp`:
-the help screen, and a screenshot that is saved even with no ``~/Downloads``.
+:class:`PaletteActions` is a mixin of the app (what it needs of it is
+:class:`~rac_console.tui.host.ConsoleHost`): the help screen, and a screenshot that is
+saved even with no ``~/Downloads``, written off the screen's loop.
 """
 
 from __future__ import annotations
 
+from asyncio import Future
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from datetime import datetime
 from functools import partial
 from pathlib import Path
-from typing import TYPE_CHECKING, cast
 
 from platformdirs import user_downloads_path
 from textual.command import DiscoveryHit, Hit, Hits, Provider
@@ -33,10 +34,8 @@ from ..protocol.text import terminal_safe
 from .command_line import CommandLine
 from .filter_line import focus_now
 from .help_screen import HelpScreen, console_key_groups, key_of
+from .host import ConsoleHost, host_of
 from .watch_table import WatchTable
-
-if TYPE_CHECKING:
-    from .app import RacConsoleApp
 
 
 @dataclass(frozen=True)
@@ -57,7 +56,7 @@ class PaletteCommand:
         return content
 
 
-def console_commands(app: RacConsoleApp) -> Iterator[PaletteCommand]:
+def console_commands(app: ConsoleHost) -> Iterator[PaletteCommand]:
     """The console's commands, titled for the state they would change."""
     cls = type(app)
     paused = app.status is not None and app.status.paused
@@ -91,14 +90,12 @@ def console_commands(app: RacConsoleApp) -> Iterator[PaletteCommand]:
         "watched IO bits as rows of the table" if grid else "watched IO bits as a grid of words",
         key_of(cls, "toggle_io_grid"),
     )
-    toggle_hex = getattr(app, "action_toggle_hex", None)
-    if callable(toggle_hex):
-        yield PaletteCommand(
-            "Hex view of frames",
-            toggle_hex,
-            "show or hide each frame's bytes in hex",
-            key_of(cls, "toggle_hex"),
-        )
+    yield PaletteCommand(
+        "Hex view of frames",
+        app.action_toggle_hex,
+        "show or hide each frame's bytes in hex",
+        key_of(cls, "toggle_hex"),
+    )
     detail = app.row_detail.is_open
     yield PaletteCommand(
         "Hide row details" if detail else "Show row details",
@@ -151,7 +148,7 @@ def console_commands(app: RacConsoleApp) -> Iterator[PaletteCommand]:
     yield from frame_file_commands(app)
 
 
-def frame_file_commands(app: RacConsoleApp) -> Iterator[PaletteCommand]:
+def frame_file_commands(app: ConsoleHost) -> Iterator[PaletteCommand]:
     """``record`` and ``transcript`` from now on, or their stop: the moment worth keeping
     is rarely foreseen when the console starts."""
     status = app.status
@@ -188,7 +185,7 @@ def profile_help(profile: TargetProfile | None, current: bool = False) -> str:
     return escape(terminal_safe(" · ".join(parts)))
 
 
-def textual_commands(app: RacConsoleApp) -> Iterator[PaletteCommand]:
+def textual_commands(app: ConsoleHost) -> Iterator[PaletteCommand]:
     """Textual's own (Theme, Keys, Screenshot, Quit…), with a key where one runs them."""
     for command in app.get_system_commands(app.screen):
         callback = command.callback
@@ -206,7 +203,7 @@ class ConsoleCommands(Provider):
     """The palette's commands: the console's own, then Textual's."""
 
     def _commands(self) -> list[PaletteCommand]:
-        app: RacConsoleApp = self.app  # type: ignore[assignment]
+        app = host_of(self.app)
         return [*console_commands(app), *textual_commands(app)]
 
     async def discover(self) -> Hits:
@@ -242,63 +239,63 @@ def screenshot_directory() -> tuple[Path, bool]:
 
 
 class PaletteActions:
-    """The help screen, the palette's line-making commands and the screenshot, for
-    :class:`~rac_console.tui.app.RacConsoleApp` (and only it: see ``_app``)."""
+    """The help screen, the palette's line-making commands and the screenshot."""
 
-    @property
-    def _app(self) -> RacConsoleApp:
-        return cast("RacConsoleApp", self)
-
-    def action_help(self) -> None:
+    def action_help(self: ConsoleHost) -> None:
         """F1, ``?`` on an empty line, the palette: open the help (F1 again closes it)."""
-        app = self._app
-        if isinstance(app.screen, HelpScreen):
-            app.screen.dismiss(None)
+        if isinstance(self.screen, HelpScreen):
+            self.screen.dismiss(None)
             return
-        sections = help_sections(console_key_groups(type(app)))
-        app.push_screen(HelpScreen(sections), self._help_closed)
+        sections = help_sections(console_key_groups(type(self.screen.app)))
+        command_line = self.command_line
+        # Back on the command line, wherever the help was opened from.
+        self.push_screen(HelpScreen(sections), lambda _: focus_now(command_line))
 
-    def _help_closed(self, _: None) -> None:
-        """Back on the command line, wherever the help was opened from."""
-        focus_now(self._app.command_line)
-
-    def on_command_line_help_requested(self, _: CommandLine.HelpRequested) -> None:
+    def on_command_line_help_requested(self: ConsoleHost, _: CommandLine.HelpRequested) -> None:
         self.action_help()
 
-    def put_on_command_line(self, text: str) -> None:
+    def put_on_command_line(self: ConsoleHost, text: str) -> None:
         """A line for the user to finish (a file name) and run with their own Enter."""
-        command_line = self._app.command_line
+        command_line = self.command_line
         command_line.value = text
         command_line.cursor_position = len(text)
         focus_now(command_line)
 
     def deliver_screenshot(
-        self,
+        self: ConsoleHost,
         filename: str | None = None,
         path: str | None = None,
         time_format: str | None = None,
     ) -> str | None:
         """Save an SVG of the screen in Downloads, or in the current directory when
-        there is no Downloads folder (Textual's own then fails), and say where."""
-        app = self._app
+        there is no Downloads folder (Textual's own then fails), and say where once it
+        is written (by the file-writing thread: a slow disk does not stop the screen)."""
         fallback = False
         if path is not None:
             directory = Path(path).expanduser()
         else:
             directory, fallback = screenshot_directory()
         stamp = datetime.now().strftime(time_format or "%Y-%m-%dT%H_%M_%S")
-        target = directory / (filename or f"{app.title}_{stamp}.svg")
-        shown = terminal_safe(str(target))
-        try:
-            target.write_text(app.export_screenshot(), encoding="utf-8")
-        except OSError as error:
-            why = error.strerror or type(error).__name__
-            app.notify(
-                f"Not saved: {shown}: {why}", title="Screenshot", severity="error", markup=False
-            )
-            app.show(Message(f"screenshot not saved: {shown}: {why}", "error"))
-            return None
-        where = " (no Downloads folder: saved in the current directory)" if fallback else ""
-        app.notify(f"Saved to {shown}{where}", title="Screenshot", markup=False)
-        app.show(Message(f"screenshot saved to {shown}{where}"))
+        target = directory / (filename or f"{self.title}_{stamp}.svg")
+        svg = self.export_screenshot()
+        written = self.files.run(partial(target.write_text, svg, encoding="utf-8"))
+        written.add_done_callback(partial(_say_screenshot, self, target, fallback))
         return str(target)
+
+
+def _say_screenshot(host: ConsoleHost, target: Path, fallback: bool, written: Future[int]) -> None:
+    """Where the screenshot went, or why it did not (a notification and a line)."""
+    shown = terminal_safe(str(target))
+    error = None if written.cancelled() else written.exception()
+    if isinstance(error, OSError):
+        why = error.strerror or type(error).__name__
+        host.notify(
+            f"Not saved: {shown}: {why}", title="Screenshot", severity="error", markup=False
+        )
+        host.show(Message(f"screenshot not saved: {shown}: {why}", "error"))
+        return
+    if error is not None or written.cancelled():
+        return  # a bug, or the console ending: nothing to say it on
+    where = " (no Downloads folder: saved in the current directory)" if fallback else ""
+    host.notify(f"Saved to {shown}{where}", title="Screenshot", markup=False)
+    host.show(Message(f"screenshot saved to {shown}{where}"))

@@ -15,6 +15,8 @@ from rich.console import RenderableType
 from textual import events
 from textual.widgets import RichLog
 
+from .compat import rich_log_sized
+
 #: Lines the pane keeps (and entries, each at least a line).
 MAX_LINES = 500
 
@@ -39,11 +41,11 @@ class ResultsLog(RichLog):
     ) -> Self:
         """One entry, kept to be wrapped again at another width (RichLog's own second
         write of an entry that came before the first size is not one more)."""
-        if self._waiting and self._size_known:
+        if self._waiting and rich_log_sized(self):
             self._waiting -= 1
         else:
             self._entries.append(content)  # type: ignore[arg-type]  # Rich renderables only
-            if not self._size_known:
+            if not rich_log_sized(self):
                 self._waiting += 1
         return super().write(content, width, expand, shrink, scroll_end, animate)
 

@@ -1,12 +1,13 @@
 """Settings that stay: the console's theme, I/O grid and frame-log toggles, applied at
 start from the config file's ``[settings]`` and saved there when they change.
 
-The keeper compares what the console shows with what it last saved, twice a second
-(so a burst of key presses is one write, and every way of changing a setting is seen:
-a key, the palette, a typed ``frames on``), and once more as the console ends. It
-writes only the keys changed in this session, reading the file afresh each time, so two
-consoles or an editor open on the same file lose nothing of each other's. Nothing is
-saved while the palette is open (the theme picker previews each theme it passes).
+Every way of changing a setting (a key, the palette, a typed ``frames on``) tells the
+keeper (:meth:`SettingsKeeper.changed`); it saves :data:`SAVE_AFTER` seconds after the
+last change (a burst of key presses is one write), and once more as the console ends.
+It writes only the keys changed in this session, reading the file afresh each time, so
+two consoles or an editor open on the same file lose nothing of each other's. Nothing
+is saved while the palette is open (the theme picker previews each theme it passes).
+The file is written by the console's file-writing thread, never on the screen's loop.
 
 A problem is one line in the results, said once: a bad value at start (ignored, left in
 the file), a file that cannot be written (the session goes on, its settings unsaved).
@@ -14,42 +15,43 @@ the file), a file that cannot be written (the session goes on, its settings unsa
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+from asyncio import Future
+from functools import partial
 
 from textual.app import ScreenStackError
 from textual.command import CommandPalette
+from textual.timer import Timer
 
 from ..commands.settings import Value
 from ..engine import Message
 from ..engine.settings import SettingsFile
 from ..protocol import InputError
+from .host import ConsoleHost
 
-if TYPE_CHECKING:
-    from .app import RacConsoleApp
-
-#: How often what is shown is compared with what was saved: at most this many writes.
-SAVE_EVERY = 0.5
+#: Seconds after the last change that the settings are saved.
+SAVE_AFTER = 0.5
 
 
 class SettingsKeeper:
-    """The settings of ``app``, kept in ``store`` (None: not kept, as in most tests)."""
+    """The settings of ``host``, kept in ``store`` (None: not kept, as in most tests)."""
 
-    def __init__(self, app: RacConsoleApp, store: SettingsFile | None) -> None:
-        self.app = app
+    def __init__(self, host: ConsoleHost, store: SettingsFile | None) -> None:
+        self.host = host
         self.store = store
         self._saved: dict[str, Value] = {}  # as the file holds them (or as applied)
         self._tried: dict[str, Value] | None = None  # the last state a save failed for
         self._said = False  # a failure already said
         self._problems: list[str] = []
+        self._due: Timer | None = None  # the save after the last change
 
     def current(self) -> dict[str, Value]:
         """The settings as the console shows them now."""
-        app = self.app
-        log = app.frame_log
+        host = self.host
+        log = host.frame_log
         return {
-            "theme": app.theme,
+            "theme": host.theme,
             # Not .display: False once the panel is being torn down (at exit).
-            "io_grid": app.io_panel.styles.display != "none",
+            "io_grid": host.io_panel.styles.display != "none",
             "poll_frames": log.show_polls,
             "hex_view": log.hex_view,
             "frame_gaps": log.show_gaps,
@@ -60,9 +62,9 @@ class SettingsKeeper:
         then watch for changes. Problems are said by :meth:`say_problems`."""
         if self.store is None:
             return
-        app = self.app
+        host = self.host
         try:
-            loaded = self.store.load(app.available_themes)
+            loaded = self.store.load(host.available_themes)
         except InputError as exc:
             self._problems = [f"settings not read, and not saved this session: {exc}"]
             self.store = None  # a file the console cannot read, it does not write
@@ -71,10 +73,10 @@ class SettingsKeeper:
         self._problems = list(loaded.problems)
         theme = values.get("theme")
         if isinstance(theme, str):
-            app.theme = theme
-        log = app.frame_log
+            host.theme = theme
+        log = host.frame_log
         if isinstance(shown := values.get("io_grid"), bool) and shown != self.current()["io_grid"]:
-            app.action_toggle_io_grid()
+            host.action_toggle_io_grid()
         if isinstance(shown := values.get("poll_frames"), bool):
             log.show_polls = shown
         if isinstance(shown := values.get("hex_view"), bool):
@@ -82,41 +84,63 @@ class SettingsKeeper:
         if isinstance(shown := values.get("frame_gaps"), bool):
             log.show_gaps = shown
         self._saved = self.current()
-        app.set_interval(SAVE_EVERY, self.check)
 
     def say_problems(self) -> None:
         """The start's problems, a line each in the results (after the welcome)."""
         problems, self._problems = self._problems, []
         for problem in problems:
-            self.app.show(Message(problem, "error"))
+            self.host.show(Message(problem, "error"))
 
-    def check(self) -> None:
-        """Save what changed since the last save (not while the palette is open, nor
-        while the console closes: its last timer may fire with no screen left, and the
-        exit saves anyway)."""
+    def changed(self) -> None:
+        """A setting may have changed: save after SAVE_AFTER, unless it changes again."""
+        if self.store is None:
+            return
+        if self._due is not None:
+            self._due.stop()
+        self._due = self.host.set_timer(SAVE_AFTER, self._save_when_due)
+
+    def _save_when_due(self) -> None:
+        """Save what changed (not while the palette is open: again once it is closed;
+        not while the console closes: the exit saves)."""
+        self._due = None
         try:
-            screen = self.app.screen
+            screen = self.host.screen
         except ScreenStackError:
             return
-        if not isinstance(screen, CommandPalette):
+        if isinstance(screen, CommandPalette):
+            self.changed()
+        else:
             self.save()
 
     def save(self, *, at_exit: bool = False) -> None:
+        """Queue a write of what changed since the last save (see :class:`FileWrites`)."""
         if self.store is None:
             return
+        if self._due is not None:
+            self._due.stop()
+            self._due = None
         now = self.current()
         changed = {key: value for key, value in now.items() if self._saved.get(key) != value}
         if not changed or now == self._tried:
             return  # nothing new, or what failed last time
-        try:
-            self.store.save(changed)
-        except InputError as exc:
-            self._tried = now
-            if not self._said and not at_exit:
-                self._said = True
-                self.app.show(
-                    Message(f"settings not saved (they hold for this session): {exc}", "error")
-                )
+        before = dict(self._saved)
+        self._saved.update(changed)  # the next save, queued behind this, needs not repeat it
+        written = self.host.files.run(partial(self.store.save, changed))
+        written.add_done_callback(partial(self._saved_or_not, now, before, at_exit))
+
+    def _saved_or_not(
+        self, now: dict[str, Value], before: dict[str, Value], at_exit: bool, written: Future[None]
+    ) -> None:
+        """On the loop, once written: a failure is said once, and the next save tries
+        again what this one could not write."""
+        error = None if written.cancelled() else written.exception()
+        if error is None:
+            self._tried = None
             return
-        self._saved.update(changed)
-        self._tried = None
+        self._saved = before
+        self._tried = now
+        if not self._said and not at_exit:
+            self._said = True
+            self.host.show(
+                Message(f"settings not saved (they hold for this session): {error}", "error")
+            )

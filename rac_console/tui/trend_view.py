@@ -2,7 +2,7 @@
 
 It takes the frame log's place while open (same height, any terminal size) rather
 than squeezing a third pane into 24 lines; the log keeps collecting and is back on
-close. Redrawn with the table (5 Hz), from the app's trend store.
+close. Redrawn with the table, from the app's trend store.
 
 The bars are drawn by time, each column a fixed slice of the window (window / width):
 a window only partly polled is blank where it has no data, and the header says how much

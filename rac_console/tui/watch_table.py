@@ -16,6 +16,7 @@ from rich.text import Text
 from textual import events
 from textual.binding import Binding, BindingType
 from textual.message import Message
+from textual.reactive import reactive
 from textual.widgets import DataTable
 
 from ..commands.language import VarRef
@@ -50,7 +51,11 @@ FIELD_WIDTH = 4
 
 
 class WatchTable(DataTable[object]):
-    """The app calls :meth:`refresh_rows` at ~5 Hz with every row it holds."""
+    """The app calls :meth:`refresh_rows` with every row it holds, as rows come and as
+    the clock ticks."""
+
+    #: The target refuses writes (set by the app as its status changes): no Space shown.
+    refuses_writes = reactive(False, bindings=True)
 
     BINDINGS: ClassVar[list[BindingType]] = [
         # In the footer in this order, as many as fit.
@@ -132,11 +137,7 @@ class WatchTable(DataTable[object]):
 
     def check_action(self, action: str, parameters: tuple[object, ...]) -> bool | None:
         """No Space in the footer on a read-only target (it still says why, see on_key)."""
-        return not (action == "row" and parameters == ("toggle",) and self._writes_refused())
-
-    def _writes_refused(self) -> bool:
-        status = getattr(self.app, "status", None)
-        return writes_refused(status if isinstance(status, Status) else None)
+        return not (action == "row" and parameters == ("toggle",) and self.refuses_writes)
 
     def __init__(
         self,
@@ -383,3 +384,11 @@ def _differs(old: object, new: object) -> bool:
     if isinstance(old, Text) and isinstance(new, Text):
         return old.plain != new.plain or old.spans != new.spans
     return old != new
+
+
+class TableFilter(FilterLine):
+    """The watch table's filter line, shown by ``/``: rows by name or label."""
+
+    def __init__(self, table: WatchTable, **kwargs: object) -> None:
+        super().__init__(table, "filter rows: name or label", **kwargs)
+        table.filter_line = self  # ``/`` on the table opens this line at once

@@ -1,0 +1,100 @@
+"""Every private Textual hook the console uses, each in one small function here.
+
+Textual gives no promise about names with a leading underscore. Keeping them in one
+place means an upgrade is checked here, and ``tests/test_tui_compat.py`` fails (one test
+per hook) when a hook stops existing or stops doing what the console relies on. Each
+was checked against Textual 8.2.8, and found in 2.0, 4.0 and 6.0 (the lower bound,
+``textual>=2.0``, is where ``Content`` and text selection came); the rest of ``tui/``
+uses public Textual only.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+from rich.cells import cell_len
+from textual import _time
+from textual.binding import Binding
+from textual.dom import DOMNode
+from textual.widget import Widget
+from textual.widgets import Footer, Input, Log, RichLog
+from textual.widgets._footer import FooterKey
+
+#: The Textual version these hooks were last checked against.
+CHECKED_WITH = "8.2.8"
+
+
+def event_clock() -> float:
+    """Now, on the clock Textual stamps every message's ``time`` with (``_time.get_time``:
+    monotonic, or ``perf_counter`` on Windows), so a key's ``time`` compares with it.
+    Checked with Textual 8.2.8."""
+    return _time.get_time()
+
+
+def key_bindings(node: DOMNode, key: str) -> Sequence[Binding]:
+    """The bindings ``node`` itself declares for ``key`` (its merged ``_bindings`` map,
+    without the app's or its ancestors'): a widget that runs its own bindings as keys
+    come, in key order. Checked with Textual 8.2.8."""
+    return node._bindings.key_to_bindings.get(key, ())
+
+
+def input_suggestion(field: Input) -> str:
+    """The grey suggestion an :class:`Input` shows after its value (its ``_suggestion``
+    reactive; empty when none). Checked with Textual 8.2.8."""
+    return field._suggestion
+
+
+def footer_key_text(widget: Widget) -> str | None:
+    """A footer key's ``key description`` as the compact footer draws it; None for any
+    other widget (``FooterKey`` lives in the private ``textual.widgets._footer``).
+    Checked with Textual 8.2.8."""
+    if not isinstance(widget, FooterKey):
+        return None
+    if widget.description:
+        return f"{widget.key_display} {widget.description}"
+    return widget.key_display
+
+
+def is_palette_key(widget: Widget) -> bool:
+    """Whether a footer widget is the palette's key (drawn last, at the right)."""
+    return isinstance(widget, FooterKey) and widget.has_class("-command-palette")
+
+
+def footer_ready(footer: Footer) -> bool:
+    """Whether the footer has had its bindings once (its ``_bindings_ready``): before,
+    a recompose draws nothing. Checked with Textual 8.2.8."""
+    return footer._bindings_ready
+
+
+def rich_log_sized(log: RichLog) -> bool:
+    """Whether a :class:`RichLog` knows its width yet (its ``_size_known``): before, it
+    keeps what is written and, at its first size, writes it again through ``write``.
+    Checked with Textual 8.2.8."""
+    return log._size_known
+
+
+def forget_drawn_lines(log: Log) -> None:
+    """Make a :class:`Log` style its lines again at the next paint (it caches each line
+    drawn in ``_render_line_cache``): the highlighter's rules changed, not the lines.
+    Checked with Textual 8.2.8."""
+    log._render_line_cache.clear()
+    log.refresh()
+
+
+class InlineWidthLog(Log):
+    """A :class:`Log` that measures the width of the lines it is given here and now.
+
+    Textual's ``Log.write_lines`` calls ``_update_size``, a thread worker measuring
+    every new line's cells, then ``_update_maximum_width`` back on the loop: one thread
+    per write, and a call into a loop that may be closing. Subclasses say how wide lines
+    are with :meth:`lines_width`, which can be much cheaper for lines they know.
+    Checked with Textual 8.2.8.
+    """
+
+    def lines_width(self, lines: list[str]) -> int:
+        """The widest of ``lines`` in cells."""
+        return max(cell_len(line) for line in lines)
+
+    def _update_size(self, updates: int, lines: list[str]) -> None:  # type: ignore[override]
+        if lines:
+            self._update_maximum_width(updates, self.lines_width(lines))
