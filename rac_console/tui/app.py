@@ -20,7 +20,7 @@ from textual.widgets import Input, Static
 from textual.worker import Worker, WorkerState
 
 from .. import __version__
-from ..commands.language import Simple, Step, VarRef, WatchFile
+from ..commands.language import Command, Simple, Step, VarRef, WatchFile
 from ..commands.outcome import Outcome
 from ..engine import (
     SIMULATOR_NOTICE,
@@ -483,10 +483,12 @@ class RacConsoleApp(PaletteActions, TableActions, LogActions, App[int]):
         )
         self.show(Message(f"{keys} ignored: nothing typed before a question answers it"))
 
-    def submit_line(self, line: str) -> int:
-        """Every line the console hands the engine (typed, or made by a key on a row):
+    def submit_line(self, line: str, command: Command | None = None) -> int:
+        """Every line the console hands the engine (typed, or made by a key on a row:
+        then ``command`` is run as it is, never parsed, and ``line`` shows it):
         counted as running or queued until its result, and cancelled by Esc."""
-        seq = self.engine.submit(line)
+        engine = self.engine
+        seq = engine.submit(line) if command is None else engine.submit_command(command, line)
         self.lines_pending[seq] = (line, time.monotonic())
         self.sync_bindings()
         if self._clock is not None:

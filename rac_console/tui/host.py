@@ -15,6 +15,7 @@ from textual.screen import Screen
 from textual.timer import Timer
 from textual.widget import Widget
 
+from ..commands.language import Command
 from ..commands.policy import TargetProfile
 from ..engine import Engine, Feedback, Status
 from ..present.row_actions import PendingToggles
@@ -75,8 +76,9 @@ class ConsoleHost(Protocol):
     def show(self, feedback: Feedback) -> None:
         """A message, an outcome or a UI step, in the results."""
 
-    def submit_line(self, line: str) -> int:
-        """Run a line as if typed (echoed, queued, cancelled by Esc): its sequence."""
+    def submit_line(self, line: str, command: Command | None = None) -> int:
+        """Run a line as if typed (echoed, queued, cancelled by Esc), or ``command``
+        shown as ``line``: its sequence."""
 
     def may_ask(self, line: str) -> bool:
         """Whether ``line``, run now, may stop to ask before it writes."""

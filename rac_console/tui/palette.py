@@ -20,13 +20,16 @@ from dataclasses import dataclass
 from datetime import datetime
 from functools import partial
 from pathlib import Path
+from typing import Literal
 
 from platformdirs import user_downloads_path
 from textual.command import DiscoveryHit, Hit, Hits, Provider
 from textual.content import Content
 from textual.markup import escape
 
+from ..commands.language import Connect, CsvLog, FrameFile
 from ..commands.policy import TargetProfile
+from ..commands.target import DEFAULT_PORT
 from ..engine import Message
 from ..present.help_text import help_sections
 from ..present.status import label_text
@@ -112,7 +115,7 @@ def console_commands(app: ConsoleHost) -> Iterator[PaletteCommand]:
     on_sim = status is not None and status.is_simulator
     yield PaletteCommand(
         "connect sim",
-        lambda: app.submit_line("connect sim"),
+        lambda: app.submit_line("connect sim", Connect(None, DEFAULT_PORT)),
         "the built-in simulator · writes open" + (" · connected now" if on_sim else ""),
     )
     for name in app.profile_names:
@@ -122,7 +125,7 @@ def console_commands(app: ConsoleHost) -> Iterator[PaletteCommand]:
         current = status is not None and status.profile == name
         yield PaletteCommand(
             terminal_safe(line) + label,
-            partial(app.submit_line, line),
+            partial(app.submit_line, line, Connect(name, DEFAULT_PORT)),
             profile_help(profile, current),
         )
     yield PaletteCommand(
@@ -137,7 +140,9 @@ def console_commands(app: ConsoleHost) -> Iterator[PaletteCommand]:
     )
     if app.status is not None and app.status.csv_log is not None:
         yield PaletteCommand(
-            "log stop", lambda: app.submit_line("log stop"), "stop logging to the CSV file"
+            "log stop",
+            lambda: app.submit_line("log stop", CsvLog(None, stop=True)),
+            "stop logging to the CSV file",
         )
     else:
         yield PaletteCommand(
@@ -152,14 +157,15 @@ def frame_file_commands(app: ConsoleHost) -> Iterator[PaletteCommand]:
     """``record`` and ``transcript`` from now on, or their stop: the moment worth keeping
     is rarely foreseen when the console starts."""
     status = app.status
-    for word, running, what in (
+    kinds: tuple[tuple[Literal["record", "transcript"], str | None, str], ...] = (
         ("record", status.recording if status else None, "every frame as JSON lines"),
         ("transcript", status.transcribing if status else None, "a plain transcript"),
-    ):
+    )
+    for word, running, what in kinds:
         if running is not None:
             yield PaletteCommand(
                 f"{word} stop",
-                partial(app.submit_line, f"{word} stop"),
+                partial(app.submit_line, f"{word} stop", FrameFile(word, None, stop=True)),
                 f"stop writing {what} to {terminal_safe(running)}",
             )
         else:

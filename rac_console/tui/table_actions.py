@@ -16,9 +16,9 @@ import time
 from textual.widget import Widget
 from textual.widgets import DataTable
 
-from ..commands.language import VarRef
+from ..commands.language import Unwatch, VarRef
 from ..engine import Cycle, Message, Result, RowView, Status
-from ..present.row_actions import put_line, toggle_line
+from ..present.row_actions import put_line, toggle_command
 from ..present.trends import has_trend
 from ..protocol.text import terminal_safe
 from .filter_line import FilterLine, focus_now
@@ -81,7 +81,8 @@ class TableActions:
         elif event.action == "toggle":
             toggle(self, row)
         elif event.action == "unwatch":
-            self.submit_line(f"unwatch {row.var.kind.code} {row.var.index}")
+            shown = f"unwatch {row.var.kind.code} {row.var.index}"
+            self.submit_line(shown, Unwatch((row.var,)))
         elif event.action == "trend" and not has_trend(row.var.kind):
             self.show(Message(f"{row.var} has no trend: t draws numbers, IO bits and positions"))
         elif event.action == "trend":
@@ -184,14 +185,15 @@ def put_on_line(host: ConsoleHost, row: RowView) -> None:
 
 
 def toggle(host: ConsoleHost, row: RowView) -> None:
-    """Space: write the opposite of the value shown, as a typed ``put IO N off``.
+    """Space: write the opposite of the value shown, as ``put IO N off`` typed would
+    (the command made here, shown as that line, never parsed back).
 
     While the row has not shown the effect of the last toggle, another Space is
     refused: it would toggle from a value already being replaced.
     """
     var = row.var
-    line = toggle_line(var, row.variant)
-    if line is None:
+    toggled = toggle_command(var, row.variant)
+    if toggled is None:
         why = "is not an IO row" if var.kind.code != "IO" else "has no value read yet"
         host.show(Message(f"Space toggles an IO bit: {var} {why}; nothing sent"))
         return
@@ -200,8 +202,9 @@ def toggle(host: ConsoleHost, row: RowView) -> None:
         wait = " (polling is paused: F2 resumes it)" if paused else ""
         host.show(Message(f"{var}: the last toggle has not come back yet{wait}; nothing sent"))
         return
+    command, line = toggled
     may_ask = host.may_ask(line)
-    seq = host.submit_line(line)
+    seq = host.submit_line(line, command)
     if may_ask:  # the keys typed after this Space must not answer its question
         host.command_line.hold()
         host.hold_keys(seq, queued=False)
