@@ -42,16 +42,6 @@ def test_io_grid_80x24(snap_compare, tmp_path: Path, utc: None) -> None:
         await type_line(pilot, "pause")
         await until(pilot, lambda: app.status is not None and app.status.paused, "the pause")
         await until(pilot, lambda: app.frames_per_second() == 0, "no frames flowing")
-        now = time.monotonic()
-        for var, view in list(app.rows.items()):
-            app.rows[var] = replace(
-                view,
-                label=LABELS.get(var.index, ""),
-                variant=Variant(IO.vt, var.index in ON_BITS),
-                changed_at=now - 5.5,
-                status="TIMEOUT" if var.index == STALE else "OK",
-                stale=var.index == STALE,
-            )
         assert app.status is not None
         app.status = replace(app.status, rtt=0.00025)
         app.frame_log.clear()
@@ -65,6 +55,17 @@ def test_io_grid_80x24(snap_compare, tmp_path: Path, utc: None) -> None:
         app.flush_log()
         # No frames/s figure (it depends on timing): wait for the staged frames' rate to fall.
         await until(pilot, lambda: app.frames_per_second() == 0, "the rate back to 0")
+        # The rows last: their ages count from now, however long the rate took to fall.
+        now = time.monotonic()
+        for var, view in list(app.rows.items()):
+            app.rows[var] = replace(
+                view,
+                label=LABELS.get(var.index, ""),
+                variant=Variant(IO.vt, var.index in ON_BITS),
+                changed_at=now - 5.5,
+                status="TIMEOUT" if var.index == STALE else "OK",
+                stale=var.index == STALE,
+            )
         app.refresh_table()
         await pilot.pause(0.2)
 
