@@ -312,10 +312,10 @@ def test_no_poll_that_could_outlast_the_deadline_starts_during_a_wait(
         finally:
             deadlines.pop()
 
-    def poll_once(self: Poller) -> None:
+    def poll_once(self: Poller, more: Callable[[], bool] | None = None) -> None:
         if deadlines:
             steps.append((clock.last[threading.get_ident()], deadlines[-1]))
-        real_poll_once(self)
+        real_poll_once(self, more)
 
     monkeypatch.setattr(Poller, "poll_until", poll_until)
     monkeypatch.setattr(Poller, "poll_once", poll_once)

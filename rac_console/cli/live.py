@@ -95,6 +95,7 @@ def run_live(
         frames=False,
         cut_cycles=True,
         max_cycles=count,
+        readings=True,
     )
     try:
         engine = Engine(

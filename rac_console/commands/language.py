@@ -13,6 +13,7 @@ import re
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from enum import Enum
+from functools import cached_property
 from typing import Literal
 
 from ..protocol import (
@@ -40,7 +41,7 @@ class VarRef:
 class Get:
     var: VarRef
 
-    @property
+    @cached_property
     def request(self) -> Request:
         return get_for(self.var.kind, self.var.index)  # made once per variable
 

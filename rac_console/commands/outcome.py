@@ -120,6 +120,42 @@ class Outcome:
         return data
 
 
+#: Every field of an Outcome, and its default.
+_OUTCOME_FIELDS: dict[str, Any] = {
+    name: field.default for name, field in Outcome.__dataclass_fields__.items()
+}
+
+
+def answered(
+    request: str,
+    status: ExitStatus,
+    var: VarRef | None,
+    response_text: str,
+    response: Response,
+    rtt: float,
+    error: str | None,
+    input_line: str | None,
+    written: Variant | None,
+) -> Outcome:
+    """The Outcome of an exchange that got its reply: made on every exchange, so filled
+    in one step (a frozen dataclass's ``__init__`` sets each of its 16 fields through
+    ``object.__setattr__``); equal to ``Outcome(...)`` with the same fields."""
+    outcome = object.__new__(Outcome)
+    outcome.__dict__.update(
+        _OUTCOME_FIELDS,
+        request=request,
+        status=status,
+        var=var,
+        response_text=response_text,
+        response=response,
+        rtt=rtt,
+        error=error,
+        input_line=input_line,
+        written=written,
+    )
+    return outcome
+
+
 def refused(line: str | None, message: str, request: str | None = None) -> Outcome:
     return Outcome(request, ExitStatus.REFUSED, error=message, input_line=line)
 

@@ -62,6 +62,7 @@ class EngineOptions:
     frames: bool = True  # publish every frame (the CLI's watch shows none)
     cut_cycles: bool = False  # a poll cycle ends at its first failed exchange (the CLI)
     max_cycles: int | None = None  # polling pauses after this many cycles (--count N)
+    readings: bool = False  # each Cycle carries how each read went (the CLI's lines)
 
 
 class Engine:
@@ -104,6 +105,7 @@ class Engine:
             publish_status=self.publish_status,
             cut_cycles=options.cut_cycles,
             max_cycles=options.max_cycles,
+            readings=options.readings,
         )
         self._parts = EngineParts(
             self._link, self._poller, self._publisher, self._files, self._csv,
@@ -186,6 +188,11 @@ class Engine:
         with self._jobs_lock:
             self._answers[seq] = yes
 
+    def set_poll_frames(self, shown: bool) -> None:
+        """Whether the front end shows poll frames (any thread). When nobody shows,
+        records or observes them, a poll builds no frame at all."""
+        self._publisher.poll_frames = shown
+
     def add_frame_observer(self, observer: Callable[[Frame], None]) -> None:
         """Call ``observer`` on the engine's thread with every frame, before it is
         published (a sink of one's own; from the next frame on: keep it quick)."""
@@ -223,7 +230,7 @@ class Engine:
                 elif idle:
                     self._link.check_idle()
                 else:
-                    self._poller.poll_once()
+                    self._poller.poll_once(more=self._inbox.empty)
         except Exception as exc:  # a bug must not leave the front end waiting in silence
             self._alert(f"the engine stopped on an internal error: {exc!r}")
         finally:

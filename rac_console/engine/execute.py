@@ -11,8 +11,9 @@ from collections.abc import Callable
 
 from ..commands.language import Exchange, Get, Put, VarRef
 from ..commands.latency import LatencySummary, summarize
-from ..commands.outcome import ExitStatus, Outcome, refused
+from ..commands.outcome import ExitStatus, Outcome, answered, refused
 from ..protocol import describe_hresult, escape_bytes
+from ..protocol.request import Request
 from ..protocol.text import terminal_safe
 from ..session import (
     BadReply,
@@ -82,49 +83,52 @@ def outcome_of(
     """What came of sending ``command``: its reply, or how the exchange failed (the
     engine's poller keeps just that, and a CLI watch makes the outcome of it)."""
     request = command.request
-    wire = request.text
     var = command.var if isinstance(command, Get | Put) else None
-    if isinstance(reply, NotSent):
-        return Outcome(
-            wire, ExitStatus.REFUSED, var, error=str(reply), input_line=line, failure=reply
-        )
-    if isinstance(reply, RequestTimeout):
-        message = str(reply)
-        if request.write:
-            message += ": outcome unknown, the PUT may have been applied or may still arrive"
-        return Outcome(
-            wire, ExitStatus.TRANSPORT, var, error=message, input_line=line, failure=reply
-        )
-    if isinstance(reply, Disconnected):
-        message = str(reply)
-        if request.write and cancelled():  # cut while the PUT was on its way
-            message += ": outcome unknown, the PUT may have been applied"
-        return Outcome(
-            wire, ExitStatus.TRANSPORT, var, error=message, input_line=line, failure=reply
-        )
-    if isinstance(reply, TransportError):
-        raw = reply.raw if isinstance(reply, BadReply) else None
-        return Outcome(
-            wire,
-            ExitStatus.TRANSPORT,
+    if type(reply) is Reply:  # the usual case first: one check
+        response = reply.response
+        ok = response.ok
+        return answered(
+            request.text,
+            ExitStatus.OK if ok else ExitStatus.CONTROLLER_ERROR,
             var,
-            response_text=escape_bytes(raw) if raw is not None else None,
-            error=str(reply),
-            input_line=line,
-            failure=reply,
+            reply.raw.decode("ascii"),
+            response,
+            reply.rtt,
+            None if ok else f"controller answered {describe_hresult(response.code)}",
+            line,
+            command.value if isinstance(command, Put) else None,
         )
-    response = reply.response
-    status = ExitStatus.OK if response.ok else ExitStatus.CONTROLLER_ERROR
+    assert isinstance(reply, TransportError)
+    return _failed(request, var, reply, line, cancelled)
+
+
+def _failed(
+    request: Request,
+    var: VarRef | None,
+    failure: TransportError,
+    line: str | None,
+    cancelled: Callable[[], bool],
+) -> Outcome:
+    """The Outcome of an exchange that got no trustworthy reply."""
+    wire = request.text
+    if isinstance(failure, NotSent):
+        return Outcome(
+            wire, ExitStatus.REFUSED, var, error=str(failure), input_line=line, failure=failure
+        )
+    message = str(failure)
+    if isinstance(failure, RequestTimeout) and request.write:
+        message += ": outcome unknown, the PUT may have been applied or may still arrive"
+    elif isinstance(failure, Disconnected) and request.write and cancelled():
+        message += ": outcome unknown, the PUT may have been applied"  # cut on its way
+    raw = failure.raw if isinstance(failure, BadReply) else None
     return Outcome(
         wire,
-        status,
+        ExitStatus.TRANSPORT,
         var,
-        reply.text,
-        response,
-        reply.rtt,
-        error=None if response.ok else f"controller answered {describe_hresult(response.code)}",
+        response_text=escape_bytes(raw) if raw is not None else None,
+        error=message,
         input_line=line,
-        written=command.value if isinstance(command, Put) else None,
+        failure=failure,
     )
 
 

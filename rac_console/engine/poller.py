@@ -13,7 +13,7 @@ from collections.abc import Callable
 
 from ..commands.language import VarRef
 from ..protocol import Variant, describe_hresult, hresult_name
-from ..session import BadReply, ConnectFailed, RequestTimeout, TransportError
+from ..session import BadReply, ConnectFailed, Reply, RequestTimeout, TransportError
 from .csvsink import CsvSink
 from .events import Connection, Cycle, Reading
 from .link import Link
@@ -34,14 +34,17 @@ class Poller:
         publish_status: Callable[[bool], None],
         cut_cycles: bool = False,
         max_cycles: int | None = None,
+        readings: bool = False,
     ) -> None:
         """``publish_status(force)``: the status now (``force``), or at most every
         tenth of a second while polling flat out. ``cut_cycles``: a cycle ends at its
         first failed exchange (the rest are marked SKIPPED), so a script watching a dead
         controller waits out one timeout a cycle, not one a variable. ``max_cycles``:
-        polling pauses after that many cycles (``watch --count N``)."""
+        polling pauses after that many cycles (``watch --count N``). ``readings``: each
+        Cycle also carries how each read went (the CLI's lines are made of them)."""
         self._link = link
         self._cut_cycles = cut_cycles
+        self._keep_readings = cycles and readings
         self._max_cycles = max_cycles
         self.cycles_done = 0
         self.publish_status = publish_status
@@ -129,8 +132,10 @@ class Poller:
             return 0
         return self._schedule.wait(now)
 
-    def poll_once(self) -> None:
-        """One step: one row polled, or a cycle begun or ended."""
+    def poll_once(self, more: Callable[[], bool] | None = None) -> None:
+        """One step: one row polled, or a cycle begun or ended. With ``more``, the
+        cycle's next rows are polled too while it says yes (the engine's inbox is
+        empty: a typed command still waits for one poll at most)."""
         link = self._link
         now = time.monotonic()
         if link.retry_at is not None:
@@ -159,13 +164,20 @@ class Poller:
             )
             self._retry("dropped")
             return
-        self._cycle.popleft()
+        cycle = self._cycle
+        cycle.popleft()
+        observed = self._publisher.polls_observed()
         try:
-            self._poll_row(row)
+            self._poll_row(row, observed)
+            self._cycle_count += 1
+            while more is not None and cycle and not link.early_drop and more():
+                row = cycle.popleft()
+                if row.watched:
+                    self._poll_row(row, observed)
+                    self._cycle_count += 1
         except ConnectFailed as exc:
             self._unreachable(row.var, exc)
             return
-        self._cycle_count += 1
         self._end_cycle_if_done()
 
     def _unreachable(self, var: VarRef, exc: ConnectFailed) -> None:
@@ -181,7 +193,8 @@ class Poller:
             self.csv.cycle_ended(time.time(), self.watch.rows)
         if self.publish_cycles:  # the cycle ends here: the rest were not read
             self._samples.append((var, None))
-            self._readings.append((var, exc))
+            if self._keep_readings:
+                self._readings.append((var, exc))
             self._publish_cycle(time.time())
         self._count_cycle()
         link.early_drop = False  # this failure has its own wait
@@ -211,24 +224,36 @@ class Poller:
         if self._cycle_count:
             self.cycle_seconds = time.perf_counter() - self._cycle_started
             self._last_cycle = (self._cycle_started, self._cycle_count)
-        if self._samples:
+        if self._cycle_count:
             self._cycle_ended()
         self.publish_status(False)  # at most every STATUS_EVERY while polling flat out
 
-    def _poll_row(self, row: WatchRow) -> None:
+    def _poll_row(self, row: WatchRow, observed: bool) -> None:
+        """Poll one row; ``observed``: its frames go somewhere (else none is made)."""
         session = self._link.session
         assert session is not None
+        outbox = self._publisher.outbox
+        if not observed:  # the status line's "waiting for a reply", with no frame to say it
+            outbox.waiting_since = time.perf_counter()
+        reply: Reply | TransportError
         try:
-            reply = session.exchange(row.request, poll=True)
+            reply = session.exchange(row.request, poll=True, observe=observed)
         except ConnectFailed:
             raise
-        except TransportError as exc:
+        except TransportError as failure:
+            reply = failure
+        finally:
+            if not observed:
+                outbox.waiting_since = None
+        if isinstance(reply, TransportError):
+            exc = reply
             self._link.mark_failure(exc)
             status = {RequestTimeout: "TIMEOUT", BadReply: "BAD REPLY"}.get(type(exc))
             if row.fail(status or "DISCONNECTED", time.monotonic()):
                 self._publisher.show_row(row)
-            self._samples.append((row.var, None))
             if self.publish_cycles:
+                self._samples.append((row.var, None))
+            if self._keep_readings:
                 self._readings.append((row.var, exc))
             if self._cut_cycles:
                 self._skip_the_rest()
@@ -242,8 +267,9 @@ class Poller:
             variant = None
             status = hresult_name(response.code) or describe_hresult(response.code)[:10]
             changed = row.fail(status, time.monotonic())
-        self._samples.append((row.var, variant))
         if self.publish_cycles:
+            self._samples.append((row.var, variant))
+        if self._keep_readings:
             self._readings.append((row.var, reply))
         if changed:
             self._publisher.show_row(row)

@@ -28,6 +28,8 @@ class Publisher:
         self.outbox = outbox
         self.files = files
         self._frames = frames
+        #: A front end shows poll frames (the console's log does; the REPL never does).
+        self.poll_frames = frames
         self.observers: list[Callable[[Frame], None]] = []  # Engine.add_frame_observer
         self._events: list[Event] = []
         self._events_at = 0.0  # perf_counter() of the last flush
@@ -58,6 +60,14 @@ class Publisher:
             )
         if time.perf_counter() - self._events_at > EVENTS_EVERY:
             self.flush()  # while polling, and during a long command (latency)
+
+    def polls_observed(self) -> bool:
+        """Whether a poll's frames go anywhere: shown, recorded, transcribed or observed.
+        When not, the session builds none (two objects a poll that nobody reads)."""
+        files = self.files
+        return bool(
+            self.poll_frames or files.recorder or files.transcript or self.observers
+        )
 
     def note(self, text: str) -> None:
         """A mark in the frame log (and the transcript)."""

@@ -25,9 +25,11 @@ _FALSE_WORDS = ("off", "0", "false")
 _INTEGER_VTS = frozenset(INTEGER_RANGES) | {VT.BOOL}
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class VarKind:
-    """One variable type of the controller."""
+    """One variable type of the controller. There is one of each (:data:`KINDS`), so
+    it is equal only to itself: hashing one (a request cache's key, on every poll) is
+    the object's identity, not its four fields."""
 
     code: str
     title: str

@@ -247,6 +247,7 @@ class Repl:
     async def run(self) -> int:
         loop = asyncio.get_running_loop()
         self.engine.outbox.notify = lambda: self._notify(loop)
+        self.engine.set_poll_frames(False)  # the REPL never shows a poll's frames
         await asyncio.to_thread(self.engine.start)
         self.drain()
         banner = self.banner()

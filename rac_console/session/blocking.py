@@ -160,8 +160,12 @@ class Session:
         *,
         poll: bool = False,
         cancelled: Callable[[], bool] | None = None,
+        observe: bool = True,
     ) -> Reply:
         """Send one request and wait for its reply.
+
+        ``observe`` False: no frame of this request or its reply goes to the frame
+        observers (a poll nobody shows or records); lines nobody asked for always do.
 
         Raises a TransportError when no trustworthy reply came; the connection is then
         gone, and the next request opens a fresh one. ``cancelled`` is the job's: asked
@@ -172,7 +176,7 @@ class Session:
         """
         reused = self._sock is not None
         try:
-            return self._exchange_once(request, poll, cancelled)
+            return self._exchange_once(request, poll, cancelled, observe)
         except Disconnected as exc:
             if not (reused and exc.before_reply and request.read_only_safe):
                 raise
@@ -180,12 +184,16 @@ class Session:
                 raise
             for observer in self._resend_observers:
                 observer(str(exc))
-        return self._exchange_once(request, poll, cancelled)
+        return self._exchange_once(request, poll, cancelled, observe)
 
     def _exchange_once(
-        self, request: Request, poll: bool, cancelled: Callable[[], bool] | None
+        self,
+        request: Request,
+        poll: bool,
+        cancelled: Callable[[], bool] | None,
+        observe: bool = True,
     ) -> Reply:
-        sock = self._connected()
+        sock = self._sock or self._connected()
         if self._settle:
             # This peer has sent lines nobody asked for: leave it a moment after each
             # reply to finish, so a stray lands before the next request, not as its answer.
@@ -203,8 +211,10 @@ class Session:
         data = machine.begin(request)
         # Both clocks read before sendall: after it the thread may run again only once
         # the reply is in (the GIL, the scheduler), and the frame must say when it left.
+        # (The wall clock only when someone keeps frames: they alone are stamped.)
+        observed = observe and bool(self._frame_observers)
         sent_at = time.perf_counter()
-        sent_time = time.time()
+        sent_time = time.time() if observed else 0.0
         try:
             sock.sendall(data)
         except (TimeoutError, BlockingIOError):  # the peer has not read for a timeout
@@ -216,9 +226,9 @@ class Session:
             raise Disconnected(
                 f"the connection failed while sending: {_reason(exc)}", before_reply=True
             ) from None
-        if self._frame_observers:
+        if observed:
             self._publish(Frame(sent_time, "tx", data, poll=poll, request=request.line))
-        return self._await_reply(sock, sent_at, sent_time, poll, request.line)
+        return self._await_reply(sock, sent_at, sent_time, poll, request.line, observed)
 
     def _await_reply(
         self,
@@ -227,6 +237,7 @@ class Session:
         sent_time: float,
         poll: bool,
         asked: RequestLine,
+        observed: bool,
     ) -> Reply:
         """The reply to the request sent at ``sent_at`` (``time.perf_counter()``), which
         is ``sent_time`` (``time.time()``): a reply's frame is stamped ``sent_time + rtt``,
@@ -257,10 +268,17 @@ class Session:
             if not chunk:
                 raise self._lost()
             verdict = machine.feed(chunk)
+            if verdict.usual and not observed:  # the usual reply, with no frame to publish
+                rtt = now - sent_at
+                self._replied_at = now
+                self.last_rtt = rtt
+                return Reply(verdict.answer, verdict.response, rtt)  # type: ignore[arg-type]
             if verdict.answer is None and not verdict.drop:
                 continue
-            arrived = sent_time + now - sent_at
-            return self._conclude(verdict, now - sent_at, poll, now, arrived, asked)
+            # A frame's time: the send's wall clock plus the round trip (read now when
+            # the send had no frame: only lines nobody asked for are published then).
+            arrived = sent_time + now - sent_at if sent_time else time.time()
+            return self._conclude(verdict, now - sent_at, poll, now, arrived, asked, observed)
 
     def _conclude(
         self,
@@ -270,8 +288,8 @@ class Session:
         now: float,
         arrived: float,
         asked: RequestLine,
+        observers: bool,
     ) -> Reply:
-        observers = bool(self._frame_observers)
         answer = verdict.answer
         response = verdict.response
         if answer is not None and observers:

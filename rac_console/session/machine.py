@@ -42,12 +42,14 @@ class Verdict:
     strays: tuple[bytes, ...] = ()
     too_long: bytes | None = None
     drop: bool = False
+    #: The usual read: one good reply line, nothing else (strays, tail, drop, problem).
+    usual: bool = False
 
 
 class SessionMachine:
     """One connection's protocol state: the request in flight and the bytes held."""
 
-    __slots__ = ("_after_cr", "_decoder", "_judged", "_request")
+    __slots__ = ("_after_cr", "_decoder", "_judged", "_request", "_usual")
 
     def __init__(self, max_line: int) -> None:
         self._decoder = LineDecoder(max_line)
@@ -56,6 +58,9 @@ class SessionMachine:
         # Polled replies repeat: a line already judged for the same check is not parsed
         # again (responses are immutable).
         self._judged: dict[tuple[bytes, ReplyCheck | None], Judgement] = {}
+        #: The usual read's verdicts (the reply line whole, and good), made once: a
+        #: verdict is only read, never changed, once the machine returned it.
+        self._usual: dict[tuple[bytes, ReplyCheck | None], Verdict] = {}
 
     @property
     def in_flight(self) -> Request | None:
@@ -93,14 +98,22 @@ class SessionMachine:
             request is not None
             and data.find(b"\r") == len(data) - 1
             and not self._decoder.pending
-            and data[:1] != b"\n"
+            and data[0] != 0x0A  # not an LF: a CRLF peer's, held over from the last
         ):
             # The usual read: exactly the reply line, whole. (The rules below, done fast.)
             self._after_cr = True
             self._request = None
-            line = data[:-1]
-            response, problem = self._judge(request, line)
-            return Verdict(line, response, problem, drop=problem is not None)
+            key = (data, request.check)
+            verdict = self._usual.get(key)
+            if verdict is None:
+                line = data[:-1]
+                response, problem = self._judge(request, line)
+                verdict = Verdict(line, response, problem, drop=problem is not None)
+                verdict.usual = problem is None
+                if len(self._usual) >= JUDGED_KEPT:
+                    self._usual.clear()
+                self._usual[key] = verdict
+            return verdict
         return self._feed(data)
 
     def _feed(self, data: bytes) -> Verdict:

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Literal
+from typing import Literal, NamedTuple
 
 from ..protocol import RacError, RequestLine, Response
 
@@ -85,9 +85,9 @@ class Frame:
     request: RequestLine | None = None
 
 
-@dataclass(frozen=True, slots=True)
-class Reply:
-    """The reply that answered a request, parsed and checked."""
+class Reply(NamedTuple):
+    """The reply that answered a request, parsed and checked. A named tuple: built on
+    every exchange, it costs a third of a frozen dataclass."""
 
     raw: bytes
     response: Response
