@@ -222,6 +222,8 @@ class Engine:
                     self._publisher.flush()
                     if self._publisher.status_dirty:
                         self.publish_status(force=True)
+                else:  # polling flat out: rows, cycles and notes still go out in batches
+                    self._publisher.flush_due()
                 item = self._next(LINK_CHECK_EVERY if idle else wait)
                 if item is None:
                     break  # stop

@@ -46,6 +46,12 @@ class Publisher:
             self._events = []
         self._events_at = time.perf_counter()
 
+    def flush_due(self) -> None:
+        """Flush when the last flush is EVENTS_EVERY old (polling flat out, with no
+        frame to carry the events out)."""
+        if time.perf_counter() - self._events_at > EVENTS_EVERY:
+            self.flush()
+
     def frame(self, frame: Frame) -> None:
         """A frame crossed the wire: to the files, and to the front ends in a batch."""
         self.files.frame(frame)
@@ -59,7 +65,7 @@ class Publisher:
                 time.perf_counter() if frame.direction == "tx" else None
             )
         if time.perf_counter() - self._events_at > EVENTS_EVERY:
-            self.flush()  # while polling, and during a long command (latency)
+            self.flush()  # during a long command (latency)
 
     def polls_observed(self) -> bool:
         """Whether a poll's frames go anywhere: shown, recorded, transcribed or observed.

@@ -16,19 +16,15 @@ class LineDecoder:
     from the start of the next line.
     """
 
-    __slots__ = ("_buffer", "max_line")
+    __slots__ = ("max_line", "pending")
 
     def __init__(self, max_line: int = 64 * 1024) -> None:
         self.max_line = max_line
-        self._buffer = b""
-
-    @property
-    def pending(self) -> bytes:
-        """Bytes received after the last CR."""
-        return self._buffer
+        #: Bytes received after the last CR (read before every request: an attribute).
+        self.pending = b""
 
     def feed(self, data: bytes) -> list[bytes]:
-        buffer = self._buffer + data if self._buffer else data
+        buffer = self.pending + data if self.pending else data
         if CR not in buffer:
             self._hold(buffer)
             return []
@@ -42,10 +38,10 @@ class LineDecoder:
         return lines
 
     def clear(self) -> None:
-        self._buffer = b""
+        self.pending = b""
 
     def _hold(self, rest: bytes) -> None:
         if len(rest) > self.max_line:
-            self._buffer = b""
+            self.pending = b""
             raise FrameTooLong(f"no CR within {self.max_line} bytes")
-        self._buffer = rest
+        self.pending = rest
