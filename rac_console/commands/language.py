@@ -13,7 +13,6 @@ import re
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from enum import Enum
-from functools import cached_property
 from typing import Literal
 
 from ..protocol import (
@@ -41,7 +40,7 @@ class VarRef:
 class Get:
     var: VarRef
 
-    @cached_property
+    @property
     def request(self) -> Request:
         return get_for(self.var.kind, self.var.index)  # made once per variable
 

@@ -141,18 +141,11 @@ def answered(
     in one step (a frozen dataclass's ``__init__`` sets each of its 16 fields through
     ``object.__setattr__``); equal to ``Outcome(...)`` with the same fields."""
     outcome = object.__new__(Outcome)
-    outcome.__dict__.update(
-        _OUTCOME_FIELDS,
-        request=request,
-        status=status,
-        var=var,
-        response_text=response_text,
-        response=response,
-        rtt=rtt,
-        error=error,
-        input_line=input_line,
-        written=written,
-    )
+    fields = _OUTCOME_FIELDS.copy()
+    fields["request"], fields["status"], fields["var"] = request, status, var
+    fields["response_text"], fields["response"], fields["rtt"] = response_text, response, rtt
+    fields["error"], fields["input_line"], fields["written"] = error, input_line, written
+    object.__setattr__(outcome, "__dict__", fields)
     return outcome
 
 

@@ -65,10 +65,13 @@ def execute(
     """Send one command and describe what came of it; never raises for I/O.
 
     ``cancelled`` is the job's cancel, asked right before the request goes out."""
+    request = command.request
     if read_only and (refusal := read_only_refusal(command)) is not None:
-        return refused(line, refusal, command.request.text)
+        return refused(line, refusal, request.text)
     try:
-        reply: Reply | TransportError = session.exchange(command.request, cancelled=cancelled)
+        reply: Reply | TransportError = session.exchange(
+            request, cancelled=None if cancelled is never else cancelled
+        )
     except TransportError as exc:
         reply = exc
     return outcome_of(command, reply, line, cancelled)
@@ -83,7 +86,8 @@ def outcome_of(
     """What came of sending ``command``: its reply, or how the exchange failed (the
     engine's poller keeps just that, and a CLI watch makes the outcome of it)."""
     request = command.request
-    var = command.var if isinstance(command, Get | Put) else None
+    kind = type(command)
+    var = command.var if kind is Get or kind is Put else None  # type: ignore[union-attr]
     if type(reply) is Reply:  # the usual case first: one check
         response = reply.response
         ok = response.ok
@@ -96,7 +100,7 @@ def outcome_of(
             reply.rtt,
             None if ok else f"controller answered {describe_hresult(response.code)}",
             line,
-            command.value if isinstance(command, Put) else None,
+            command.value if kind is Put else None,  # type: ignore[union-attr]
         )
     assert isinstance(reply, TransportError)
     return _failed(request, var, reply, line, cancelled)
@@ -147,6 +151,7 @@ def measure_latency(
     request = Get(var).request
     samples: list[float] = []
     errors = 0
+    exchange = session.exchange
     started = time.perf_counter()
     for n in range(count):
         if cancelled():
@@ -154,7 +159,7 @@ def measure_latency(
         if n and interval:
             time.sleep(interval)
         try:
-            reply = session.exchange(request)
+            reply = exchange(request)
         except ConnectFailed:
             raise
         except TransportError:

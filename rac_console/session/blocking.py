@@ -51,6 +51,7 @@ from .types import (
     RequestTimeout,
     State,
     StateObserver,
+    TransportError,
 )
 
 logger = logging.getLogger(__name__)
@@ -244,25 +245,15 @@ class Session:
         so the log's times and gaps agree with the round trip. ``asked`` is the request's
         line, carried by the frames of its reply."""
         machine = self._machine
-        deadline = sent_at + self.timeout
         first = True
         while True:
-            if not first:
-                remaining = deadline - time.perf_counter()
-                if remaining <= 0:
-                    raise self._timed_out()
-                self._set_timeout(sock, remaining)
-            try:
-                chunk = sock.recv(READ_SIZE)
-            except (TimeoutError, BlockingIOError):  # BlockingIOError: SO_RCVTIMEO ran out
-                raise self._timed_out() from None
-            except ConnectionError:  # a reset: the peer closed it
-                raise self._lost() from None
-            except OSError as exc:
-                raise self._lost(f"the connection failed: {_reason(exc)}") from None
-            finally:
-                if not first and self._sock is sock:
-                    self._set_timeout(sock, self.timeout)
+            if first:  # the usual case: the whole reply in the first read, in time
+                try:
+                    chunk = sock.recv(READ_SIZE)
+                except OSError as exc:
+                    raise self._read_failed(exc) from None
+            else:
+                chunk = self._read_more(sock, sent_at + self.timeout)
             now = time.perf_counter()
             first = False
             if not chunk:
@@ -279,6 +270,29 @@ class Session:
             # the send had no frame: only lines nobody asked for are published then).
             arrived = sent_time + now - sent_at if sent_time else time.time()
             return self._conclude(verdict, now - sent_at, poll, now, arrived, asked, observed)
+
+    def _read_more(self, sock: socket.socket, deadline: float) -> bytes:
+        """A later read of one reply: within what is left of its timeout."""
+        remaining = deadline - time.perf_counter()
+        if remaining <= 0:
+            raise self._timed_out()
+        self._set_timeout(sock, remaining)
+        try:
+            return sock.recv(READ_SIZE)
+        except OSError as exc:
+            raise self._read_failed(exc) from None
+        finally:
+            if self._sock is sock:
+                self._set_timeout(sock, self.timeout)
+
+    def _read_failed(self, exc: OSError) -> TransportError:
+        """What a failed read means: no reply in time (BlockingIOError: SO_RCVTIMEO ran
+        out), the peer closed it (a reset), or the connection failed."""
+        if isinstance(exc, TimeoutError | BlockingIOError):
+            return self._timed_out()
+        if isinstance(exc, ConnectionError):
+            return self._lost()
+        return self._lost(f"the connection failed: {_reason(exc)}")
 
     def _conclude(
         self,
