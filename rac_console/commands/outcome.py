@@ -120,12 +120,6 @@ class Outcome:
         return data
 
 
-#: Every field of an Outcome, and its default.
-_OUTCOME_FIELDS: dict[str, Any] = {
-    name: field.default for name, field in Outcome.__dataclass_fields__.items()
-}
-
-
 def answered(
     request: str,
     status: ExitStatus,
@@ -141,11 +135,27 @@ def answered(
     in one step (a frozen dataclass's ``__init__`` sets each of its 16 fields through
     ``object.__setattr__``); equal to ``Outcome(...)`` with the same fields."""
     outcome = object.__new__(Outcome)
-    fields = _OUTCOME_FIELDS.copy()
-    fields["request"], fields["status"], fields["var"] = request, status, var
-    fields["response_text"], fields["response"], fields["rtt"] = response_text, response, rtt
-    fields["error"], fields["input_line"], fields["written"] = error, input_line, written
-    object.__setattr__(outcome, "__dict__", fields)
+    object.__setattr__(
+        outcome,
+        "__dict__",
+        {  # every field, in order (tests/test_outcome.py holds it to the dataclass)
+            "request": request,
+            "status": status,
+            "var": var,
+            "response_text": response_text,
+            "response": response,
+            "rtt": rtt,
+            "error": error,
+            "input_line": input_line,
+            "written": written,
+            "failure": None,
+            "waited": None,
+            "before": None,
+            "read_back": None,
+            "verified": None,
+            "read_back_error": None,
+        },
+    )
     return outcome
 
 

@@ -13,6 +13,7 @@ from ..commands.language import Exchange, Get, Put, VarRef
 from ..commands.latency import LatencySummary, summarize
 from ..commands.outcome import ExitStatus, Outcome, answered, refused
 from ..protocol import describe_hresult, escape_bytes
+from ..protocol.hresult import S_OK
 from ..protocol.request import Request
 from ..protocol.text import terminal_safe
 from ..session import (
@@ -74,7 +75,7 @@ def execute(
         )
     except TransportError as exc:
         reply = exc
-    return outcome_of(command, reply, line, cancelled)
+    return outcome_of(command, reply, line, cancelled, request)
 
 
 def outcome_of(
@@ -82,10 +83,13 @@ def outcome_of(
     reply: Reply | TransportError,
     line: str | None = None,
     cancelled: Callable[[], bool] = never,
+    request: Request | None = None,
 ) -> Outcome:
-    """What came of sending ``command``: its reply, or how the exchange failed (the
-    engine's poller keeps just that, and a CLI watch makes the outcome of it)."""
-    request = command.request
+    """What came of sending ``command`` (its ``request``, when the caller has it): its
+    reply, or how the exchange failed (the engine's poller keeps just that, and a CLI
+    watch makes the outcome of it)."""
+    if request is None:
+        request = command.request
     kind = type(command)
     var = command.var if kind is Get or kind is Put else None  # type: ignore[union-attr]
     if type(reply) is Reply:  # the usual case first: one check
@@ -141,7 +145,7 @@ def measure_latency(
     var: VarRef,
     count: int,
     interval: float,
-    cancelled: Callable[[], bool] = lambda: False,
+    cancelled: Callable[[], bool] = never,
 ) -> LatencySummary:
     """GET one variable ``count`` times, ``interval`` seconds apart (0: back to back),
     or until ``cancelled()`` says to stop.
@@ -151,12 +155,13 @@ def measure_latency(
     request = Get(var).request
     samples: list[float] = []
     errors = 0
-    exchange = session.exchange
+    exchange, keep = session.exchange, samples.append
+    asks = cancelled is not never  # the job's cancel, asked before every send
     started = time.perf_counter()
     for n in range(count):
-        if cancelled():
+        if asks and cancelled():
             break
-        if n and interval:
+        if interval and n:
             time.sleep(interval)
         try:
             reply = exchange(request)
@@ -165,8 +170,8 @@ def measure_latency(
         except TransportError:
             errors += 1
             continue
-        if reply.response.ok:
-            samples.append(reply.rtt)
+        if reply.response.code == S_OK:
+            keep(reply.rtt)
         else:
             errors += 1
     return summarize(samples, errors, time.perf_counter() - started)
