@@ -9,13 +9,16 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable
+from typing import TYPE_CHECKING
 
 from ..commands.target import Target
 from ..session import ConnectFailed, Disconnected, Session, State, TransportError
-from ..sim.thread import SimulatorThread
 from .backoff import Backoff
 from .events import Connection
 from .publisher import Publisher
+
+if TYPE_CHECKING:  # asyncio and the simulator load only when a target names no host
+    from ..sim.thread import SimulatorThread
 
 
 class Link:
@@ -60,6 +63,8 @@ class Link:
         the target names no host."""
         host, port = target.host, target.port
         if host is None:
+            from ..sim.thread import SimulatorThread
+
             self.simulator = SimulatorThread().start()
             host, port = self.simulator.host, self.simulator.port
         self.host, self.port = host, port
