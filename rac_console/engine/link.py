@@ -21,6 +21,11 @@ if TYPE_CHECKING:  # asyncio and the simulator load only when a target names no 
     from ..sim.thread import SimulatorThread
 
 
+def described(host: str | None, port: int) -> str:
+    """The status line's name of a target that is open: no host is the simulator."""
+    return "SIMULATOR (built-in)" if host is None else f"LIVE {host}:{port}"
+
+
 class Link:
     def __init__(
         self,
@@ -54,9 +59,7 @@ class Link:
         """The status line's target: simulator, live controller, or none."""
         if self.session is None:
             return "NOT CONNECTED"
-        if self.simulator is not None:
-            return "SIMULATOR (built-in)"
-        return f"LIVE {self.host}:{self.port}"
+        return described(None if self.simulator is not None else self.host, self.port)
 
     def open(self, target: Target) -> None:
         """A session to ``target`` (not yet connected); the simulator starts here when
