@@ -250,7 +250,7 @@ def main() -> int:
                             paints[package.label] = seconds
                 for package in packages:
                     package.ratios.append(paints[package.label] / minimal[-1])
-                print(f"round {round_number + 1}/{options.runs}", file=sys.stderr, end="\r")
+                print(f"round {round_number + 1}/{options.runs}", file=sys.stderr)
         finally:
             simulator.terminate()
             simulator.wait(timeout=10)
