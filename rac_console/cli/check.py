@@ -15,7 +15,6 @@ from contextlib import ExitStack
 from ..commands.check import CheckReport, report_json
 from ..commands.outcome import ExitStatus
 from ..commands.target import Target
-from ..engine import SIMULATOR_NOTICE
 from ..engine.recorder import FrameRecorder
 from ..engine.transcript import FrameTranscript
 from ..present.check import check_lines
@@ -40,6 +39,7 @@ def check(args: argparse.Namespace) -> ExitStatus:
     with ExitStack() as stack:
         host, port, simulator = target.host, target.port, target.host is None
         if host is None:
+            from ..engine import SIMULATOR_NOTICE
             from ..sim.thread import SimulatorThread
 
             sim = stack.enter_context(SimulatorThread())

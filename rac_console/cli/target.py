@@ -10,7 +10,6 @@ from contextlib import ExitStack, contextmanager
 
 from ..commands.target import Target
 from ..commands.target import resolve_target as resolve_target_of
-from ..engine import SIMULATOR_NOTICE
 from ..engine.config import load_config
 from ..engine.recorder import FrameRecorder
 from ..engine.transcript import FrameTranscript
@@ -75,6 +74,7 @@ def open_session(
                 unreachable_hint=target.unreachable_hint,
             )
         else:
+            from ..engine import SIMULATOR_NOTICE
             from ..sim.thread import SimulatorThread
 
             sim = stack.enter_context(SimulatorThread())

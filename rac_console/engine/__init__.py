@@ -13,9 +13,13 @@ Thread rules (the only ones; nothing else is shared):
   Row views and the status replace the ones not yet drained.
 - Nothing here imports Textual, prompt-toolkit or rich; the process-wide interpreter
   settings (switch interval, signal handlers) are left alone.
+
+:class:`Engine` and its module load on first use (PEP 562): the one-shot commands use
+the events and the handlers without the engine's thread, so they skip its imports.
 """
 
-from .engine import DEFAULT_INTERVAL, SIMULATOR_NOTICE, Engine, EngineOptions
+from typing import TYPE_CHECKING, Any
+
 from .events import (
     CONFIRM_GUARD_SECONDS,
     Alert,
@@ -31,6 +35,24 @@ from .events import (
     UiStep,
 )
 from .outbox import Batch, Outbox
+
+if TYPE_CHECKING:
+    from .engine import DEFAULT_INTERVAL, SIMULATOR_NOTICE, Engine, EngineOptions
+
+#: Names served from :mod:`.engine` when first asked for.
+_FROM_ENGINE_MODULE = frozenset({"DEFAULT_INTERVAL", "SIMULATOR_NOTICE", "Engine", "EngineOptions"})
+
+
+def __getattr__(name: str) -> Any:
+    """The engine's names, imported when first used rather than with the package."""
+    if name in _FROM_ENGINE_MODULE:
+        from . import engine
+
+        value = getattr(engine, name)
+        globals()[name] = value  # asked once: later uses find it as a plain attribute
+        return value
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
 
 __all__ = [
     "CONFIRM_GUARD_SECONDS",

@@ -16,7 +16,7 @@ import queue
 import threading
 import time
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 from ..commands.check import check_pointer
 from ..commands.language import Command
@@ -30,7 +30,7 @@ from .csvsink import CsvSink
 from .events import ConfirmWrite, Feedback, Message, Result, Status
 from .frame_files import FrameFiles
 from .jobs import run_job
-from .link import Link
+from .link import Link, described
 from .outbox import Outbox
 from .poller import Poller
 from .publisher import Publisher
@@ -344,6 +344,23 @@ class Engine:
             return
         self._status_at, self._publisher.status_dirty = now, False
         self.outbox.put_status(self._status())
+
+    def publish_target(self) -> None:
+        """Before :meth:`start`: publish the status of the target about to be opened,
+        "connecting…", so a front end can paint the truth while the engine (and the
+        built-in simulator) starts; the engine's own first status replaces it."""
+        host, port = self._rules.host, self._rules.port
+        self.outbox.put_status(
+            replace(
+                self._status(),
+                target=described(host, port),
+                is_simulator=host is None,
+                has_session=True,
+                host=host,
+                port=port,
+                connection="connecting",
+            )
+        )
 
     def _status(self) -> Status:
         link, poller, files, rules = self._link, self._poller, self._files, self._rules

@@ -9,13 +9,21 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable
+from typing import TYPE_CHECKING
 
 from ..commands.target import Target
 from ..session import ConnectFailed, Disconnected, Session, State, TransportError
-from ..sim.thread import SimulatorThread
 from .backoff import Backoff
 from .events import Connection
 from .publisher import Publisher
+
+if TYPE_CHECKING:  # asyncio and the simulator load only when a target names no host
+    from ..sim.thread import SimulatorThread
+
+
+def described(host: str | None, port: int) -> str:
+    """The status line's name of a target that is open: no host is the simulator."""
+    return "SIMULATOR (built-in)" if host is None else f"LIVE {host}:{port}"
 
 
 class Link:
@@ -51,15 +59,15 @@ class Link:
         """The status line's target: simulator, live controller, or none."""
         if self.session is None:
             return "NOT CONNECTED"
-        if self.simulator is not None:
-            return "SIMULATOR (built-in)"
-        return f"LIVE {self.host}:{self.port}"
+        return described(None if self.simulator is not None else self.host, self.port)
 
     def open(self, target: Target) -> None:
         """A session to ``target`` (not yet connected); the simulator starts here when
         the target names no host."""
         host, port = target.host, target.port
         if host is None:
+            from ..sim.thread import SimulatorThread
+
             self.simulator = SimulatorThread().start()
             host, port = self.simulator.host, self.simulator.port
         self.host, self.port = host, port

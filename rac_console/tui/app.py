@@ -6,6 +6,7 @@ import asyncio
 import time
 from collections import deque
 from collections.abc import Sequence
+from contextlib import suppress
 from functools import partial
 from typing import ClassVar
 
@@ -73,6 +74,8 @@ MIN_DRAIN_GAP = 1 / 30
 CLOCK_EVERY = 0.2
 #: The frame rate on the status line counts the frames drawn in this many seconds.
 RATE_WINDOW = 2.0
+#: In a terminal the engine starts once the first screen is painted, or after this long.
+FIRST_PAINT_WAIT = 0.5
 
 
 class OutboxWoke(TextualMessage):
@@ -206,6 +209,7 @@ class RacConsoleApp(PaletteActions, TableActions, LogActions, App[int]):
         self._last_drain = 0.0  # time.monotonic() of the last update
         self._drain_due: Timer | None = None  # the put-off update, under a flood
         self._clock: Timer | None = None
+        self._engine_starting: asyncio.Future[None] | None = None  # the start, on a thread
         self._status_line = Text()
         # Kept as attributes: timers and workers never query a DOM being torn down.
         self.status_bar = StatusBar(id="status")
@@ -251,7 +255,29 @@ class RacConsoleApp(PaletteActions, TableActions, LogActions, App[int]):
         self.kept.apply()
         self.watch(self, "theme", self.kept.changed, init=False)
         self.engine.outbox.notify = self._wake  # before the engine publishes anything
-        await asyncio.to_thread(self.engine.start)
+        if not self.is_headless:
+            # The first paint names the target ("connecting…") at once; the engine, and
+            # with it the built-in simulator, starts once that is on screen.
+            self.engine.publish_target()
+            self.drain_outbox()
+            self.refresh_table()
+            self.run_worker(self._start_after_first_paint(), name="engine start")
+            return
+        await self._start_engine()  # no screen to paint first: as the tests see it
+
+    async def _start_after_first_paint(self) -> None:
+        """Start the engine once the screen has been painted (after-refresh callbacks
+        run then), or after FIRST_PAINT_WAIT at most."""
+        painted = asyncio.Event()
+        self.call_after_refresh(painted.set)
+        with suppress(TimeoutError):
+            await asyncio.wait_for(painted.wait(), FIRST_PAINT_WAIT)
+        await self._start_engine()
+
+    async def _start_engine(self) -> None:
+        """Start the engine, then show what it published; the one timer starts."""
+        self._engine_starting = asyncio.ensure_future(asyncio.to_thread(self.engine.start))
+        await asyncio.shield(self._engine_starting)  # a close waits for it: see on_unmount
         self.drain_outbox()
         self._welcome()
         self.kept.say_problems()
@@ -265,6 +291,8 @@ class RacConsoleApp(PaletteActions, TableActions, LogActions, App[int]):
         self.command_line.focus()
 
     async def on_unmount(self) -> None:
+        if self._engine_starting is not None:
+            await self._engine_starting  # a start under way ends before the stop below
         self.engine.outbox.notify = None
         self.kept.save(at_exit=True)
         await self.files.close()  # the last save and history line are on disk
