@@ -190,12 +190,10 @@ def worker_main(port: int) -> None:
 
 
 def callgrind_main(port: int, side: str, count: int) -> None:
-    """One side under callgrind: warm up, then ``count`` requests with instrumentation."""
+    """One side, ``count`` requests after the worker is set up, then exit: run twice
+    under callgrind with two counts, the difference is what the extra requests cost."""
     worker = Worker(port)
-    worker.run(side, count)  # warm (and the engine: a first resume)
-    subprocess.run(["callgrind_control", "-i", "on", str(os.getpid())], capture_output=True)
     worker.run(side, count)
-    subprocess.run(["callgrind_control", "-i", "off", str(os.getpid())], capture_output=True)
     os._exit(0)
 
 
@@ -243,39 +241,36 @@ def quartiles(values: list[float]) -> tuple[float, float, float]:
 
 
 def callgrind_counts(package: Path | None, port: int, count: int) -> dict[str, float]:
-    """Instructions per request for each side, under callgrind (slow: once each)."""
-    counts: dict[str, float] = {}
+    """Instructions per request for each side: callgrind's totals for ``count`` and for
+    ``count`` more requests after the same set-up, the difference divided by ``count``
+    (the set-up, the interpreter's start and the warm-up cancel out)."""
     env = dict(os.environ)
     if package is not None:
         env["PYTHONPATH"] = str(package) + os.pathsep + env.get("PYTHONPATH", "")
-    for side in SIDES:
+
+    def total(side: str, requests: int) -> int:
         with tempfile.TemporaryDirectory() as folder:
             out = Path(folder) / "callgrind.out"
             subprocess.run(
-                [
-                    "valgrind",
-                    "--tool=callgrind",
-                    "--instr-atstart=no",
-                    f"--callgrind-out-file={out}",
-                    sys.executable,
-                    __file__,
-                    "--callgrind-side",
-                    side,
-                    str(port),
-                    str(count),
-                ],
+                ["valgrind", "--tool=callgrind", f"--callgrind-out-file={out}",
+                 sys.executable, __file__, "--callgrind-side", side, str(port), str(requests)],
                 env=env,
                 cwd=str(package) if package is not None else None,
                 capture_output=True,
-                timeout=900,
-            )
-            total = 0
+                timeout=1800,
+            )  # fmt: skip
+            found = 0
             for path in Path(folder).glob("callgrind.out*"):
-                match = re.search(r"^summary:\s+(\d+)", path.read_text(), re.MULTILINE)
+                match = re.search(r"^(?:summary|totals):\s+(\d+)", path.read_text(), re.M)
                 if match:
-                    total += int(match.group(1))
-            polls = count if side != "engine" else max(2, count // 100 + 1) * 100
-            counts[side] = total / polls if total else float("nan")
+                    found += int(match.group(1))
+            return found
+
+    counts: dict[str, float] = {}
+    for side in SIDES:
+        small, large = total(side, count), total(side, 2 * count)
+        extra = count if side != "engine" else (2 * count // 100 - count // 100) * 100
+        counts[side] = (large - small) / extra if small and large else float("nan")
     return counts
 
 
