@@ -16,6 +16,7 @@ simulator under cProfile and prints where its time went.
 from __future__ import annotations
 
 import argparse
+import json
 import os
 import platform
 import pstats
@@ -144,6 +145,7 @@ def main() -> int:
     parser.add_argument("--sessions", type=int, nargs="+", default=[50, 1])
     parser.add_argument("--pythonpath", help="run the simulator with this PYTHONPATH first")
     parser.add_argument("--profile", type=Path, help="run the simulator under cProfile")
+    parser.add_argument("--json", type=Path, help="write each session count's sim/C ratio")
     args = parser.parse_args()
     print("$ " + shlex.join([Path(sys.executable).name, *sys.argv]))
     print(
@@ -180,9 +182,14 @@ def run(args: argparse.Namespace, built: dict[str, Path]) -> int:
             "|---------:|----------|-----------:|---------------------|-----------:|",
         ]
         started = time.monotonic()
+        figures: dict[str, float] = {}
         for sessions in args.sessions:
             results = measure(built["rac_client"], servers, sessions, args.seconds, args.rounds)
             lines += report(sessions, results)
+            sim_c = zip(results["sim"], results["C epoll"], strict=True)
+            figures[f"sim_to_c_{sessions}"] = statistics.median(s / c for (s, _), (c, _) in sim_c)
+        if args.json is not None:
+            args.json.write_text(json.dumps(figures) + "\n", encoding="utf-8")
         print("\n".join(lines))
         print(f"# {time.monotonic() - started:.0f} s; CPU µs/req: the server's user+system time")
         if sim.stderr().strip():

@@ -23,6 +23,7 @@ checkout is written to and none recompiles on every start.
 from __future__ import annotations
 
 import argparse
+import json
 import os
 import pty
 import select
@@ -202,6 +203,7 @@ def main() -> int:
     parser.add_argument(
         "--package", type=Path, help="another checkout to time beside this one (read only)"
     )
+    parser.add_argument("--json", type=Path, help="write the medians here too")
     options = parser.parse_args()
 
     with tempfile.TemporaryDirectory() as scratch:
@@ -255,6 +257,16 @@ def main() -> int:
             simulator.terminate()
             simulator.wait(timeout=10)
     report(packages, minimal, options.runs)
+    if options.json is not None:
+        figures: dict[str, object] = {}
+        for package in packages:
+            key = "old" if package.root != THIS_CHECKOUT else "new"
+            for name, values in package.times.items():
+                figures[f"{key}.{name}_ms"] = statistics.median(values) * 1000
+            figures[f"{key}.paint_ratio"] = statistics.median(package.ratios)
+            figures[f"{key}.get_imports"] = package.probe.split(" ", 4)[3]
+        figures["minimal_paint_ms"] = statistics.median(minimal) * 1000
+        options.json.write_text(json.dumps(figures, indent=2) + "\n", encoding="utf-8")
     return 0
 
 

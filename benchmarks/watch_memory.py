@@ -1,6 +1,6 @@
 """The CLI's ``watch`` memory over a long run: RSS sampled while it polls flat out.
 
-    python benchmarks/watch_memory.py [SECONDS] [EVERY]
+    python benchmarks/watch_memory.py [SECONDS] [EVERY] [--json=FILE]
 
 Starts the built-in simulator (``rac-console sim``) in a process of its own, then
 ``rac-console -H 127.0.0.1 -p PORT watch I 0-99 --every 0 --json`` with its lines
@@ -12,11 +12,13 @@ of the 10 s figure after 10 minutes (SECONDS=600, the default).
 
 from __future__ import annotations
 
+import json
 import re
 import subprocess
 import sys
 import threading
 import time
+from pathlib import Path
 
 
 def rss_kib(pid: int) -> int:
@@ -26,8 +28,10 @@ def rss_kib(pid: int) -> int:
 
 
 def main() -> None:
-    seconds = float(sys.argv[1]) if len(sys.argv) > 1 else 600.0
-    every = float(sys.argv[2]) if len(sys.argv) > 2 else 30.0
+    words = [w for w in sys.argv[1:] if not w.startswith("--json=")]
+    out = next((w[7:] for w in sys.argv[1:] if w.startswith("--json=")), None)
+    seconds = float(words[0]) if words else 600.0
+    every = float(words[1]) if len(words) > 1 else 30.0
     python = sys.executable
     sim = subprocess.Popen(
         [python, "-m", "rac_console", "sim", "--port", "0"],
@@ -92,6 +96,9 @@ def main() -> None:
             f"after 10 s {at_10 / 1024:.1f} MiB, after {seconds:.0f} s {last / 1024:.1f} MiB: "
             f"{last / at_10:.3f}x, {cycles} cycles ({cycles * 100} reads)"
         )
+        if out is not None:
+            figures = {"rss_10s_mib": at_10 / 1024, "rss_end_mib": last / 1024}
+            Path(out).write_text(json.dumps(figures | {"ratio": last / at_10}) + "\n")
     finally:
         sim.terminate()
         sim.wait(10)
