@@ -94,3 +94,20 @@ def test_the_write_benchmark_reports_the_three_rates() -> None:
     (line,) = [text for text in result.stdout.splitlines() if text.startswith("round 0:")]
     for figure in ("bare PUT", "--no-verify", "verified"):
         assert figure in line, line
+
+
+def test_the_floor_benchmark_reports_every_side_against_the_bare_loop(tmp_path: Path) -> None:
+    out = tmp_path / "floor.json"
+    result = subprocess.run(
+        [sys.executable, "floor.py", "--rounds", "1", "--requests", "200", "--json", str(out)],
+        cwd=BENCHMARKS,
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+    assert result.returncode == 0, result.stderr[-2000:]
+    figures = json.loads(out.read_text())
+    for side in ("get", "exchange", "latency", "execute", "engine"):
+        assert figures[f"new.{side}.rate_to_bare"] > 0, side
+        assert f"{side} " in result.stdout
+    assert figures["new.bare.rate_to_bare"] == 1.0
