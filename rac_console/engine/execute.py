@@ -27,6 +27,8 @@ from ..session import (
     TransportError,
 )
 
+_OK, _CONTROLLER_ERROR = ExitStatus.OK, ExitStatus.CONTROLLER_ERROR
+
 #: Characters of a refused raw line quoted in its refusal.
 QUOTED_LINE = 40
 
@@ -70,9 +72,10 @@ def execute(
     if read_only and (refusal := read_only_refusal(command)) is not None:
         return refused(line, refusal, request.text)
     try:
-        reply: Reply | TransportError = session.exchange(
-            request, cancelled=None if cancelled is never else cancelled
-        )
+        if cancelled is never:
+            reply: Reply | TransportError = session.exchange(request)
+        else:
+            reply = session.exchange(request, cancelled=cancelled)
     except TransportError as exc:
         reply = exc
     return outcome_of(command, reply, line, cancelled, request)
@@ -97,7 +100,7 @@ def outcome_of(
         ok = response.ok
         return answered(
             request.text,
-            ExitStatus.OK if ok else ExitStatus.CONTROLLER_ERROR,
+            _OK if ok else _CONTROLLER_ERROR,
             var,
             reply.raw.decode("ascii"),
             response,

@@ -56,6 +56,10 @@ from .types import (
 
 logger = logging.getLogger(__name__)
 
+#: A Reply made straight from its fields' tuple (the named tuple's own ``__new__`` is
+#: one more Python call, on every exchange).
+_new_reply = tuple.__new__
+
 _POLL = getattr(select, "poll", None)  # POSIX; select.select serves where it is missing
 READ_SIZE = 65536
 
@@ -229,6 +233,20 @@ class Session:
             ) from None
         if observed:
             self._publish(Frame(sent_time, "tx", data, poll=poll, request=request.line))
+        else:  # the usual case, inlined: the whole good reply in the first read
+            try:
+                chunk = sock.recv(READ_SIZE)
+            except OSError as exc:
+                raise self._read_failed(exc) from None
+            verdict = machine.feed(chunk) if chunk else None
+            if verdict is not None and verdict.usual:
+                now = time.perf_counter()
+                rtt = now - sent_at
+                self._replied_at, self.last_rtt = now, rtt
+                return _new_reply(Reply, (verdict.answer, verdict.response, rtt))
+            return self._await_reply(
+                sock, sent_at, sent_time, poll, request.line, observed, chunk, verdict
+            )
         return self._await_reply(sock, sent_at, sent_time, poll, request.line, observed)
 
     def _await_reply(
@@ -239,32 +257,32 @@ class Session:
         poll: bool,
         asked: RequestLine,
         observed: bool,
+        chunk: bytes | None = None,
+        verdict: Verdict | None = None,
     ) -> Reply:
         """The reply to the request sent at ``sent_at`` (``time.perf_counter()``), which
         is ``sent_time`` (``time.time()``): a reply's frame is stamped ``sent_time + rtt``,
         so the log's times and gaps agree with the round trip. ``asked`` is the request's
-        line, carried by the frames of its reply."""
+        line, carried by the frames of its reply. ``chunk``: the first read, when the caller
+        made it already (with its ``verdict``, when fed; empty: the peer closed)."""
         machine = self._machine
-        first = True
+        if chunk is None:
+            try:
+                chunk = sock.recv(READ_SIZE)
+            except OSError as exc:
+                raise self._read_failed(exc) from None
         while True:
-            if first:  # the usual case: the whole reply in the first read, in time
-                try:
-                    chunk = sock.recv(READ_SIZE)
-                except OSError as exc:
-                    raise self._read_failed(exc) from None
-            else:
-                chunk = self._read_more(sock, sent_at + self.timeout)
             now = time.perf_counter()
-            first = False
             if not chunk:
                 raise self._lost()
-            verdict = machine.feed(chunk)
+            if verdict is None:
+                verdict = machine.feed(chunk)
             if verdict.usual and not observed:  # the usual reply, with no frame to publish
                 rtt = now - sent_at
-                self._replied_at = now
-                self.last_rtt = rtt
-                return Reply(verdict.answer, verdict.response, rtt)  # type: ignore[arg-type]
+                self._replied_at, self.last_rtt = now, rtt
+                return _new_reply(Reply, (verdict.answer, verdict.response, rtt))
             if verdict.answer is None and not verdict.drop:
+                chunk, verdict = self._read_more(sock, sent_at + self.timeout), None
                 continue
             # A frame's time: the send's wall clock plus the round trip (read now when
             # the send had no frame: only lines nobody asked for are published then).
