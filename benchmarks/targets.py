@@ -73,6 +73,7 @@ TARGETS: list[Target] = [
     ("get I 1, one-shot", "get_ms", "<= 120 ms", at_most(120), MS),
     ("--version", "version_ms", "<= 60 ms", at_most(60), MS),
     ("simulator / C epoll, 50 sessions", "sim_to_c_50", ">= 0.70", at_least(0.7), R),
+    ("  the same with uvloop (the [fast] extra)", "uvloop.sim_to_c_50", "reported", shown, R),
     ("console memory: end / 10k frames", "console_memory_ratio", "<= 1.10", at_most(1.1), R),
     ("CLI watch memory: end / 10 s", "watch_memory_ratio", "<= 1.10", at_most(1.1), R),
 ]
@@ -100,6 +101,7 @@ def main() -> None:
     parser.add_argument("--memory-seconds", type=float, default=600.0)
     parser.add_argument("--frames", type=int, default=1_000_000)
     parser.add_argument("--callgrind", action="store_true")
+    parser.add_argument("--uvloop", type=Path, help="a folder with uvloop: the simulator on it too")
     parser.add_argument("--smoke", action="store_true", help="tiny sizes: checks it runs")
     parser.add_argument("--json", type=Path, help="write every figure here too")
     args = parser.parse_args()
@@ -142,6 +144,10 @@ def main() -> None:
         sim = [python, "sim_throughput.py", "--sessions", "50", "--seconds", seconds]
         sim += ["--rounds", "1" if args.smoke else "7", "--json", str(out("sim"))]
         figures |= {f"new.{k}": v for k, v in step("simulator", sim, out("sim"), 1800).items()}
+        if args.uvloop:
+            sim_uv = [*sim[:-1], str(out("sim-uv")), "--pythonpath", str(args.uvloop)]
+            found = step("simulator on uvloop", sim_uv, out("sim-uv"), 1800)
+            figures |= {f"new.uvloop.{k}": v for k, v in found.items()}
         if args.old:
             sim_old = [*sim[:-1], str(out("sim-old")), "--pythonpath", str(args.old)]
             found = step("simulator (old package)", sim_old, out("sim-old"), 1800)
