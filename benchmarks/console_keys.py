@@ -25,6 +25,7 @@ Targets: key-to-screen p95 <= 50 ms, console polls >= 0.5x the session client's 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import os
 import re
@@ -154,9 +155,7 @@ def type_line(control: Control, name: str, line: str) -> None:
     control.command(f"send-keys -t {name} Enter")
 
 
-def start_console(
-    control: Control, socket: str, console: Console, port: int, home: Path
-) -> None:
+def start_console(control: Control, socket: str, console: Console, port: int, home: Path) -> None:
     env = {
         "HOME": home,
         "XDG_CONFIG_HOME": home,
@@ -286,9 +285,7 @@ def main() -> None:
     args = parser.parse_args()
 
     socket = f"rac-keys-{os.getpid()}"
-    packages = [("this", HERE.parent)] + [
-        (Path(p).name, Path(p).resolve()) for p in args.package
-    ]
+    packages = [("this", HERE.parent)] + [(Path(p).name, Path(p).resolve()) for p in args.package]
     consoles = [
         Console(label, package, f"console{n}") for n, (label, package) in enumerate(packages)
     ]
@@ -326,19 +323,15 @@ def main() -> None:
         finally:
             for console in consoles:
                 if console.pid:
-                    try:
+                    with contextlib.suppress(ProcessLookupError):
                         os.kill(console.pid, signal.SIGCONT)
-                    except ProcessLookupError:
-                        pass
             subprocess.run(["tmux", "-L", socket, "kill-server"], capture_output=True, check=False)
             if control is not None:
                 control.close()
             for console in consoles:
                 if console.pid:
-                    try:
+                    with contextlib.suppress(ProcessLookupError):
                         os.kill(console.pid, signal.SIGKILL)  # gone with its terminal, or now
-                    except ProcessLookupError:
-                        pass
             if server is not None:
                 server.stop()
             programs.cleanup()
@@ -354,7 +347,8 @@ def main() -> None:
     print(f"session client (Session.get loop): {session:,.0f} GETs/s, "
           f"{statistics.median(session_cpu):.0f}% CPU")  # fmt: skip
     header = (f"{'console':<10} {'keys':>5} {'median ms':>9} {'p95 ms':>7} {'max ms':>7} "
-              f"{'late':>4} {'polls/s':>9} {'status':>9} {'x session':>9} {'CPU %':>6}  targets")  # fmt: skip
+              f"{'late':>4} {'polls/s':>9} {'status':>9} {'x session':>9} {'CPU %':>6}"
+              "  targets")  # fmt: skip
     print(header)
     for console in consoles:
         keys = console.keys_ms
