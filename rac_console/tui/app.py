@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import asyncio
+import signal
+import sys
 import time
 from collections import deque
 from collections.abc import Sequence
@@ -54,6 +56,7 @@ from .confirm_screen import ConfirmWriteScreen, border_colour
 from .file_writes import FileWrites
 from .footer import FittingFooter
 from .frame_log import FrameLog, log_filter_line
+from .hangup import HANGUP_STATUS, TerminalWatch
 from .help_screen import key_of
 from .io_panel import IoPanel, WatchArea
 from .log_actions import LogActions
@@ -236,6 +239,7 @@ class RacConsoleApp(PaletteActions, TableActions, LogActions, App[int]):
         self.command_line.may_ask = self.may_ask
         #: The line whose question keys typed ahead must not answer (see CommandLine).
         self._held_seq: int | None = None
+        self.terminal_watch: TerminalWatch | None = None  # in a terminal: see hangup.py
 
     def compose(self) -> ComposeResult:
         yield self.status_bar
@@ -256,6 +260,7 @@ class RacConsoleApp(PaletteActions, TableActions, LogActions, App[int]):
         self.watch(self, "theme", self.kept.changed, init=False)
         self.engine.outbox.notify = self._wake  # before the engine publishes anything
         if not self.is_headless:
+            self._watch_terminal()
             # The first paint names the target ("connecting…") at once; the engine, and
             # with it the built-in simulator, starts once that is on screen.
             self.engine.publish_target()
@@ -264,6 +269,26 @@ class RacConsoleApp(PaletteActions, TableActions, LogActions, App[int]):
             self.run_worker(self._start_after_first_paint(), name="engine start")
             return
         await self._start_engine()  # no screen to paint first: as the tests see it
+
+    def _watch_terminal(self) -> None:
+        """The console ends when its terminal goes: a SIGHUP (a controlling terminal
+        closed), or the terminal hanging up with no signal sent (see hangup.py)."""
+        loop = asyncio.get_running_loop()
+
+        def gone() -> None:
+            loop.call_soon_threadsafe(self.exit, HANGUP_STATUS)
+
+        with suppress(NotImplementedError, AttributeError, ValueError):  # Windows: none
+            loop.add_signal_handler(signal.SIGHUP, self._hung_up)
+        stdin = sys.__stdin__
+        if stdin is not None and stdin.isatty():
+            self.terminal_watch = TerminalWatch(stdin.fileno(), gone).start()
+
+    def _hung_up(self) -> None:
+        if self.terminal_watch is not None:
+            self.terminal_watch.hung_up()
+        else:
+            self.exit(HANGUP_STATUS)
 
     async def _start_after_first_paint(self) -> None:
         """Start the engine once the screen has been painted (after-refresh callbacks
@@ -729,4 +754,9 @@ def run_console(
     )
     if ascii_wanted():  # RAC_CONSOLE_ASCII=1, or Windows' old console host
         app.driver_class = ascii_driver(app.driver_class)
-    return app.exit_status(app.run() or 0)
+    try:
+        status = app.run() or 0
+    finally:
+        if app.terminal_watch is not None:
+            app.terminal_watch.stop()
+    return app.exit_status(status)

@@ -36,8 +36,13 @@ class StatusBar(Static):
         )
         if line != self.line:  # an unchanged line costs no repaint
             self.line = line
-            self.update(line)
+            # A repaint, not a layout: one line high whatever it says (app.tcss), and a
+            # layout of the whole screen 30 times a second under a flood cost keys.
+            self.refresh()
         return line
+
+    def render(self) -> Text:
+        return self.line
 
     def on_resize(self, event: events.Resize) -> None:
         if self._figures is not None:

@@ -9,6 +9,7 @@ controller without going through the same path as a typed line).
 from __future__ import annotations
 
 import itertools
+import math
 from collections.abc import Callable
 from typing import ClassVar
 
@@ -48,6 +49,14 @@ REVEAL_TRIES = 5
 #: Bars in a trend cell; a field's label (``Rz``, ``Fig``) takes the first 4 cells.
 SPARK_WIDTH = 16
 FIELD_WIDTH = 4
+
+
+#: Rows out of view are brought up to date this often (seconds); the rows in view at
+#: every refresh.
+ALL_ROWS_EVERY = 0.5
+#: Rows either side of the view refreshed with it (a scroll of a line or two shows
+#: them at once).
+VIEW_MARGIN = 2
 
 
 class WatchTable(DataTable[object]):
@@ -169,6 +178,9 @@ class WatchTable(DataTable[object]):
         self.sort_mode = SortMode.ADDED
         self._title: Text | None = None
         self._now = 0.0  # the clock of the last refresh, for a re-filter between two
+        #: Rows out of view not brought up to date by the last refreshes (see refresh_rows).
+        self._stale: set[str] = set()
+        self._all_rows_at = -math.inf  # the clock of the last refresh of every row
 
     def on_mount(self) -> None:
         for key, label in COLUMNS:
@@ -242,19 +254,26 @@ class WatchTable(DataTable[object]):
     # ------------------------------------------------------------- refresh
 
     def refresh_rows(self, rows: dict[VarRef, RowView], removed: set[VarRef], now: float) -> None:
-        """Bring the table in line with the rows (every row, each time: ages, trends and
-        the change highlight move with the clock); untouched cells are not redrawn."""
+        """Bring the table in line with the rows (ages, trends and the change highlight
+        move with the clock); untouched cells are not redrawn. The rows in view are
+        brought up to date each time, the others at most every ALL_ROWS_EVERY (and as
+        they scroll into view): under a flood, 200 rows' cells built 30 times a second
+        took most of the UI's time, for a dozen rows seen."""
         for var in removed:
             key = str(var)
             self._added.pop(key, None)
             self._views.pop(key, None)
+            self._stale.discard(key)
             self.fields.pop(var, None)
         for row in rows.values():
             if row.key not in self._added:
                 self._added[row.key] = next(self._count)
                 self._new.append(row.key)
             self._views[row.key] = row
-        self._apply(now)
+        every_row = now - self._all_rows_at >= ALL_ROWS_EVERY
+        if every_row:
+            self._all_rows_at = now
+        self._apply(now, every_row=every_row)
         self._say_cut()
         new, self._new = self._new, []
         shown = [n for n, key in enumerate(self._order) if key in set(new)]
@@ -271,6 +290,30 @@ class WatchTable(DataTable[object]):
 
     def on_resize(self) -> None:
         self._say_cut()
+        self._show_stale()
+
+    def watch_scroll_y(self, old_value: float, new_value: float) -> None:
+        super().watch_scroll_y(old_value, new_value)
+        self._show_stale()
+
+    def _in_view(self) -> range:
+        """The indices of the rows in view (and a few either side)."""
+        top = int(self.scroll_y)
+        room = max(self.scrollable_content_region.height, 0) + 2 * VIEW_MARGIN
+        return range(max(top - VIEW_MARGIN, 0), top - VIEW_MARGIN + room)
+
+    def _show_stale(self) -> None:
+        """Rows come into view up to date (the view moved, or grew)."""
+        if not self._stale:
+            return
+        order = self._order
+        for n in self._in_view():
+            if n >= len(order):
+                break
+            key = order[n]
+            if key in self._stale:
+                self._stale.discard(key)
+                self._show(key, self._views[key], self._now)
 
     def reveal_rows(self, first: int, last: int, tries: int = REVEAL_TRIES) -> None:
         """Bring rows just added into view (``watch I 0-99`` below the rows there): all
@@ -290,8 +333,9 @@ class WatchTable(DataTable[object]):
         elif target != top:
             self.scroll_to(y=target, animate=False, immediate=True)
 
-    def _apply(self, now: float | None = None) -> None:
-        """Show the rows that pass the filter, in order, keeping the cursor on its variable."""
+    def _apply(self, now: float | None = None, *, every_row: bool = True) -> None:
+        """Show the rows that pass the filter, in order, keeping the cursor on its
+        variable; ``every_row`` False: the rows out of view are only marked stale."""
         if now is None:
             now = self._now
         self._now = now
@@ -304,8 +348,19 @@ class WatchTable(DataTable[object]):
             self.remove_row(key)
             del self._shown[key]
         self._order = [key for key in self._order if key in keep]
-        for key in wanted:
-            self._show(key, self._views[key], now)
+        if every_row:
+            self._stale.clear()
+            for key in wanted:
+                self._show(key, self._views[key], now)
+        else:
+            in_view = self._in_view()
+            shown, stale = self._shown, self._stale
+            for n, key in enumerate(wanted):
+                if n in in_view or key not in shown:  # a new row is added at once
+                    stale.discard(key)
+                    self._show(key, self._views[key], now)
+                else:
+                    stale.add(key)
         if self._order != wanted:  # only a real change of order costs a sort
             rank = {key: n for n, key in enumerate(wanted)}
             self.sort("var", key=lambda key: rank[key])
