@@ -72,6 +72,12 @@ from .watch_table import TableFilter, WatchTable, writes_refused
 #: Under a flood of frames the screen is brought up to date at most this often; the
 #: drains in between are put off by a one-shot timer, so keys are answered meanwhile.
 MIN_DRAIN_GAP = 1 / 30
+#: Under a flood (updates back to back), the costly parts wait their turn: the log is
+#: written at most this often, and the table's rows rebuilt at most this often, so
+#: the keys typed meanwhile are answered (the repaint budget). The last state always
+#: shows: an update put off is made when its turn comes.
+LOG_EVERY_UNDER_FLOOD = 1 / 10
+TABLE_EVERY_UNDER_FLOOD = 1 / 5
 #: The clock's tick: what changes with time alone (row ages, the retry countdown, how
 #: long a reply or a line has been waited for, the frame rate) is shown in tenths.
 CLOCK_EVERY = 0.2
@@ -210,6 +216,7 @@ class RacConsoleApp(PaletteActions, TableActions, LogActions, App[int]):
         self.lines_pending: dict[int, tuple[str, float]] = {}
         self._flushes: deque[tuple[float, int]] = deque()  # (when, frames) in RATE_WINDOW
         self._last_drain = 0.0  # time.monotonic() of the last update
+        self._log_at = self._table_at = 0.0  # of the last log write and table refresh
         self._drain_due: Timer | None = None  # the put-off update, under a flood
         self._clock: Timer | None = None
         self._engine_starting: asyncio.Future[None] | None = None  # the start, on a thread
@@ -373,11 +380,24 @@ class RacConsoleApp(PaletteActions, TableActions, LogActions, App[int]):
         self.update_screen()
 
     def update_screen(self) -> None:
-        """Everything the engine published, on screen: results, frames, rows, status."""
-        self._last_drain = time.monotonic()
+        """Everything the engine published, on screen: results, frames, rows, status.
+        Under a flood the log and the table wait their turn (see LOG_EVERY_UNDER_FLOOD)."""
+        now = time.monotonic()
+        flooded = now - self._last_drain < LOG_EVERY_UNDER_FLOOD
+        self._last_drain = now
         self.drain_outbox()
-        self.flush_log()
-        self.refresh_table()
+        put_off: list[float] = []
+        if not flooded or now - self._log_at >= LOG_EVERY_UNDER_FLOOD:
+            self._log_at = now
+            self.flush_log()
+        else:
+            put_off.append(self._log_at + LOG_EVERY_UNDER_FLOOD - now)
+        if not flooded or now - self._table_at >= TABLE_EVERY_UNDER_FLOOD:
+            self.refresh_table()
+        else:
+            put_off.append(self._table_at + TABLE_EVERY_UNDER_FLOOD - now)
+        if put_off and self._drain_due is None:
+            self._drain_due = self.set_timer(min(put_off), self._drain_when_due)
 
     def tick_clock(self) -> None:
         """The clock timer: what changes with time alone. It pauses itself when nothing
@@ -469,6 +489,7 @@ class RacConsoleApp(PaletteActions, TableActions, LogActions, App[int]):
         return sum(count for _, count in flushes) / RATE_WINDOW
 
     def refresh_table(self) -> None:
+        self._table_at = time.monotonic()
         if self._clock is not None and self._clock_shown():
             self._clock.resume()
         removed, self._removed = self._removed, set()
