@@ -12,7 +12,7 @@ import threading
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Protocol
+from typing import TYPE_CHECKING, Protocol
 
 from ..commands.language import Command, Put, Raw, VarRef
 from ..commands.outcome import Outcome
@@ -20,14 +20,16 @@ from ..commands.policy import WritePolicy
 from ..commands.target import Target
 from ..protocol import Variant
 from ..session import ConnectFailed, Session, TransportError
-from .csvsink import CsvSink
 from .events import OK, ConfirmWrite
-from .frame_files import FrameFiles
-from .link import Link
-from .poller import Poller
-from .publisher import Publisher
-from .registry import Registry
 from .writes import Confirm, plain_value
+
+if TYPE_CHECKING:  # the engine's parts, named here; a one-shot command loads none of them
+    from .csvsink import CsvSink
+    from .frame_files import FrameFiles
+    from .link import Link
+    from .poller import Poller
+    from .publisher import Publisher
+    from .registry import Registry
 
 
 @dataclass

@@ -23,7 +23,6 @@ from ...commands.language import (
 )
 from ...protocol import InputError
 from ...protocol.text import counted
-from .. import watchlist
 from ..context import CommandContext
 from ..events import Feedback, Message
 from ..registry import (
@@ -82,6 +81,8 @@ def run_pause(context: CommandContext, command: Simple, line: str | None) -> lis
 
 
 def run_watch_file(context: CommandContext, command: WatchFile, line: str | None) -> list[Feedback]:
+    from .. import watchlist  # TOML: loaded by the console's save and load alone
+
     poller = context.parts.poller
     try:
         if command.action == "save":
