@@ -64,13 +64,17 @@ class Outbox:
         if woke:
             self._notify()
 
-    def put_many(self, events: list[Event]) -> None:
-        """Several events at once, in order: one lock for a batch of frames."""
+    def put_many(self, events: list[Event], rows: dict[VarRef, RowView] | None = None) -> None:
+        """Several events at once, in order, and the row views that follow them: one
+        lock for a batch of frames."""
         with self._lock:
             batch = self._batch.events
             batch.extend(events)
             if len(batch) > MAX_EVENTS:
                 self._shed_frames()
+            if rows:
+                self._batch.rows.update(rows)
+                self._batch.removed.difference_update(rows)
             woke = self._wake()
         if woke:
             self._notify()

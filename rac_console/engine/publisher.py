@@ -9,8 +9,9 @@ from __future__ import annotations
 import time
 from collections.abc import Callable
 
+from ..commands.language import VarRef
 from ..session import Frame
-from .events import Alert, Event, Note
+from .events import Alert, Event, Note, RowView
 from .frame_files import FrameFiles
 from .outbox import Outbox
 from .watch import WatchRow
@@ -32,6 +33,9 @@ class Publisher:
         self.poll_frames = frames
         self.observers: list[Callable[[Frame], None]] = []  # Engine.add_frame_observer
         self._events: list[Event] = []
+        #: Row views since the last flush, handed over with the events: a front end
+        #: never sees a row change before the frames and notes that came before it.
+        self._rows: dict[VarRef, RowView] = {}
         self._events_at = 0.0  # perf_counter() of the last flush
         #: Something the status line shows changed: published when the loop next idles.
         self.status_dirty = True
@@ -41,9 +45,9 @@ class Publisher:
         self._events.append(event)
 
     def flush(self) -> None:
-        if self._events:
-            self.outbox.put_many(self._events)
-            self._events = []
+        if self._events or self._rows:
+            self.outbox.put_many(self._events, self._rows)
+            self._events, self._rows = [], {}
         self._events_at = time.perf_counter()
 
     def flush_due(self) -> None:
@@ -88,4 +92,12 @@ class Publisher:
         self.flush()
 
     def show_row(self, row: WatchRow) -> None:
-        self.outbox.put_row(row.view())
+        """The row as it stands now, handed over at the next flush (the last view wins)."""
+        self._rows[row.var] = row.view()
+
+    def remove_rows(self, variables: list[VarRef]) -> None:
+        """Rows unwatched: none of their views still to go out may bring them back."""
+        for var in variables:
+            self._rows.pop(var, None)
+        self.flush()
+        self.outbox.put_removed(variables)

@@ -198,6 +198,7 @@ class Session:
         cancelled: Callable[[], bool] | None,
         observe: bool = True,
     ) -> Reply:
+        fresh = self._sock is None
         sock = self._sock or self._connected()
         if self._settle:
             # This peer has sent lines nobody asked for: leave it a moment after each
@@ -209,8 +210,17 @@ class Session:
         machine = self._machine
         # The stray check (the usual case, inlined: nothing held, one poll that says no).
         quiet = self._poll is not None and not machine.pending and not self._poll.poll(0)
-        if not quiet and self._peer_spoke(sock) and self._discard_waiting(sock):
-            sock = self._connected()
+        if not quiet and self._peer_spoke(sock):
+            dropped = self._discard_waiting(sock)
+            if dropped is not None:
+                if fresh and not dropped.strays:
+                    # Closed as soon as it opened: no second connection in this one
+                    # exchange (the caller's backoff decides when to try again).
+                    raise Disconnected(
+                        "the controller closed the connection as soon as it opened",
+                        before_reply=True,
+                    )
+                sock = self._connected()
         if cancelled is not None and cancelled():
             raise NotSent("not sent: cancelled")
         data = machine.begin(request)
@@ -415,19 +425,20 @@ class Session:
         """A line nobody asked for: settle before each request from now on, longer each time."""
         self._settle = min(self._settle * 2, MAX_SETTLE) if self._settle else SETTLE
 
-    def _discard_waiting(self, sock: socket.socket) -> bool:
-        """Log what waits as unsolicited and drop the connection; False when it was only
-        the LF of a CRLF peer's last reply, consumed here, and the connection is kept."""
+    def _discard_waiting(self, sock: socket.socket) -> Verdict | None:
+        """Log what waits as unsolicited and drop the connection: what waited (strays
+        empty: the peer closed it, with nothing said); None when it was only the LF of a
+        CRLF peer's last reply, consumed here, and the connection is kept."""
         data, still_open = _read_waiting(sock)
         verdict = self._machine.waiting_verdict(data, still_open)
         if not verdict.drop:
-            return False
+            return None
         if verdict.strays:
             self._saw_stray()
         for line in verdict.strays:
             self._publish(Frame(time.time(), "rx", line, unsolicited=True))
         self._drop()
-        return True
+        return verdict
 
     # ---------------------------------------------------------- connection
 

@@ -386,18 +386,22 @@ class RacConsoleApp(PaletteActions, TableActions, LogActions, App[int]):
         flooded = now - self._last_drain < LOG_EVERY_UNDER_FLOOD
         self._last_drain = now
         self.drain_outbox()
-        put_off: list[float] = []
-        if not flooded or now - self._log_at >= LOG_EVERY_UNDER_FLOOD:
+        # The table is refreshed only with the log: a row never shows what the log has
+        # not said yet (a reconnect's row before the note of it).
+        log_turn = self._log_at + LOG_EVERY_UNDER_FLOOD
+        table_turn = self._table_at + TABLE_EVERY_UNDER_FLOOD
+        if flooded and now < log_turn:
+            put_off = log_turn - now
+        else:
             self._log_at = now
             self.flush_log()
-        else:
-            put_off.append(self._log_at + LOG_EVERY_UNDER_FLOOD - now)
-        if not flooded or now - self._table_at >= TABLE_EVERY_UNDER_FLOOD:
-            self.refresh_table()
-        else:
-            put_off.append(self._table_at + TABLE_EVERY_UNDER_FLOOD - now)
+            if flooded and now < table_turn:
+                put_off = table_turn - now
+            else:
+                put_off = 0.0
+                self.refresh_table()
         if put_off and self._drain_due is None:
-            self._drain_due = self.set_timer(min(put_off), self._drain_when_due)
+            self._drain_due = self.set_timer(put_off, self._drain_when_due)
 
     def tick_clock(self) -> None:
         """The clock timer: what changes with time alone. It pauses itself when nothing

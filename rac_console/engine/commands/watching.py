@@ -60,7 +60,7 @@ def run_unwatch(context: CommandContext, command: Unwatch, line: str | None) -> 
     if variables and len(absent) == len(variables):
         return [Message(f"{names_text(variables)} not watched: nothing to stop", "error")]
     removed = watch.remove(variables)
-    context.parts.publisher.outbox.put_removed(removed)
+    context.parts.publisher.remove_rows(removed)
     text = f"stopped watching {counted(len(removed), 'variable')}"
     if absent:
         verb = "was" if len(absent) == 1 else "were"
