@@ -9,8 +9,8 @@ controller without going through the same path as a typed line).
 from __future__ import annotations
 
 import itertools
-import math
 from collections.abc import Callable
+from itertools import islice
 from typing import ClassVar
 
 from rich.text import Text
@@ -53,7 +53,9 @@ FIELD_WIDTH = 4
 
 #: Rows out of view are brought up to date this often (seconds); the rows in view at
 #: every refresh.
-ALL_ROWS_EVERY = 0.5
+#: Rows out of view brought up to date per refresh (the rest wait their turn, or their
+#: scroll into view): a constant cost per refresh, whatever the table holds.
+OFF_VIEW_PER_REFRESH = 16
 #: Rows either side of the view refreshed with it (a scroll of a line or two shows
 #: them at once).
 VIEW_MARGIN = 2
@@ -180,7 +182,6 @@ class WatchTable(DataTable[object]):
         self._now = 0.0  # the clock of the last refresh, for a re-filter between two
         #: Rows out of view not brought up to date by the last refreshes (see refresh_rows).
         self._stale: set[str] = set()
-        self._all_rows_at = -math.inf  # the clock of the last refresh of every row
 
     def on_mount(self) -> None:
         for key, label in COLUMNS:
@@ -256,9 +257,10 @@ class WatchTable(DataTable[object]):
     def refresh_rows(self, rows: dict[VarRef, RowView], removed: set[VarRef], now: float) -> None:
         """Bring the table in line with the rows (ages, trends and the change highlight
         move with the clock); untouched cells are not redrawn. The rows in view are
-        brought up to date each time, the others at most every ALL_ROWS_EVERY (and as
-        they scroll into view): under a flood, 200 rows' cells built 30 times a second
-        took most of the UI's time, for a dozen rows seen."""
+        brought up to date each time, the others OFF_VIEW_PER_REFRESH at a time, in turn
+        (and as they scroll into view): under a flood, 200 rows' cells built 30 times a
+        second took most of the UI's time, for a dozen rows seen; built all at once every
+        half second, they made the keys typed then wait."""
         for var in removed:
             key = str(var)
             self._added.pop(key, None)
@@ -270,10 +272,7 @@ class WatchTable(DataTable[object]):
                 self._added[row.key] = next(self._count)
                 self._new.append(row.key)
             self._views[row.key] = row
-        every_row = now - self._all_rows_at >= ALL_ROWS_EVERY
-        if every_row:
-            self._all_rows_at = now
-        self._apply(now, every_row=every_row)
+        self._apply(now, every_row=False)
         self._say_cut()
         new, self._new = self._new, []
         shown = [n for n, key in enumerate(self._order) if key in set(new)]
@@ -361,6 +360,9 @@ class WatchTable(DataTable[object]):
                     self._show(key, self._views[key], now)
                 else:
                     stale.add(key)
+            for key in list(islice(stale, OFF_VIEW_PER_REFRESH)):  # the rest, in turn
+                stale.discard(key)
+                self._show(key, self._views[key], now)
         if self._order != wanted:  # only a real change of order costs a sort
             rank = {key: n for n, key in enumerate(wanted)}
             self.sort("var", key=lambda key: rank[key])
