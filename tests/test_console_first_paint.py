@@ -8,7 +8,6 @@ only seen in a pty.
 from __future__ import annotations
 
 import os
-import pty
 import select
 import subprocess
 import sys
@@ -17,6 +16,7 @@ from pathlib import Path
 
 import pytest
 
+pty = pytest.importorskip("pty")  # POSIX: a pty
 #: A terminal app in a subprocess: `pytest -m "not slow"` skips it.
 pytestmark = pytest.mark.slow
 

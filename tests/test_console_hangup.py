@@ -8,13 +8,10 @@ under a console that has no controlling terminal, and a SIGHUP from the one it h
 
 from __future__ import annotations
 
-import fcntl
 import os
-import pty
 import select
 import subprocess
 import sys
-import termios
 import time
 from collections.abc import Callable
 from pathlib import Path
@@ -22,6 +19,10 @@ from pathlib import Path
 import pytest
 
 from rac_console.tui.hangup import HANGUP_STATUS
+
+fcntl = pytest.importorskip("fcntl")  # POSIX
+pty = pytest.importorskip("pty")  # POSIX: a pty
+termios = pytest.importorskip("termios")  # POSIX
 
 #: A terminal app in a subprocess: `pytest -m "not slow"` skips it.
 pytestmark = pytest.mark.slow

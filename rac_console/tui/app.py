@@ -288,7 +288,7 @@ class RacConsoleApp(PaletteActions, TableActions, LogActions, App[int]):
         with suppress(NotImplementedError, AttributeError, ValueError):  # Windows: none
             loop.add_signal_handler(signal.SIGHUP, self._hung_up)
         stdin = sys.__stdin__
-        if stdin is not None and stdin.isatty():
+        if stdin is not None and stdin.isatty() and sys.platform != "win32":  # poll(): POSIX
             self.terminal_watch = TerminalWatch(stdin.fileno(), gone).start()
 
     def _hung_up(self) -> None:
