@@ -347,3 +347,13 @@ def test_a_refused_toggle_is_free_at_once() -> None:
     assert not toggles.result(Result(2, (Message("other"),)))
     assert toggles.result(Result(3, (Message("PUT refused: read-only", "error"),)))
     assert not toggles.busy(IO130)
+
+
+def test_a_toggle_answered_no_frees_its_row_at_once() -> None:
+    """No write went out: the next Space on the row must not wait for the refusal."""
+    toggles = PendingToggles()
+    toggles.start(IO130, 7, False)
+    toggles.start(I0, 8, True)
+    toggles.declined(7)
+    assert not toggles.busy(IO130)
+    assert toggles.busy(I0)  # another row's write still on its way

@@ -139,6 +139,13 @@ class PendingToggles:
     def forget(self, var: VarRef) -> None:
         self._rows.pop(var, None)
 
+    def declined(self, seq: int) -> None:
+        """The user answered No to the toggle ``seq``'s question: nothing is sent, so
+        its row is free at once (not when the refusal comes back from the engine)."""
+        for var, pending in list(self._rows.items()):
+            if pending.seq == seq:
+                del self._rows[var]
+
     def result(self, result: Result) -> bool:
         """The reply to a toggle: True when that row is free again (the write failed)."""
         for var, pending in self._rows.items():

@@ -741,6 +741,8 @@ class RacConsoleApp(PaletteActions, TableActions, LogActions, App[int]):
 
         def answered(yes: bool | None) -> None:
             self.engine.answer_confirm(question.seq, bool(yes))
+            if not yes:  # no write: the row's next Space need not wait for the refusal
+                self.toggles.declined(question.seq)
             if held and self._held_seq == question.seq:
                 self.command_line.post_message(CommandLine.Answered())
 
