@@ -1,4 +1,10 @@
-"""The Textual console: status line, watch table, frame log, results, command line."""
+"""The Textual console: status line, watch table, frame log, results, command line.
+
+Over 450 lines on purpose: this is the console's composition root, where the footer's
+bindings are declared and every message between the panes and the engine is routed
+(the engine's wake, a typed line, a result, a confirm question, the terminal going
+away); what each pane does lives in its own module and in the mixins.
+"""
 
 from __future__ import annotations
 

@@ -6,7 +6,9 @@ carries its request), so the hex view (F7), the frame times, the filter (``/``) 
 frames (F3) redraw what is on screen, not only what comes; a fast poll cannot push the
 typed exchanges out (with polls hidden they would vanish at the next redraw).
 Lines are plain strings (cheap to write at thousands a second); the few on screen are
-styled as they are drawn, by :class:`FrameHighlighter`.
+styled as they are drawn, by :class:`FrameHighlighter`. Over 450 lines on purpose: the
+kept frames, their redraw and the batched writing share the log's one view of what is
+on screen (the formatting of a line is :mod:`rac_console.present.frames`').
 """
 
 from __future__ import annotations
