@@ -8,15 +8,13 @@ only seen in a pty.
 from __future__ import annotations
 
 import os
-import select
-import subprocess
-import sys
-import time
 from pathlib import Path
 
 import pytest
 
-pty = pytest.importorskip("pty")  # POSIX: a pty
+pytest.importorskip("pty")  # POSIX: a pty
+from pty_console import read_until, spawn_console, stop
+
 #: A terminal app in a subprocess: `pytest -m "not slow"` skips it.
 pytestmark = pytest.mark.slow
 
@@ -24,47 +22,24 @@ DEADLINE = 20.0
 
 
 def test_the_first_screen_names_the_target_then_the_engine_starts(tmp_path: Path) -> None:
-    env = os.environ | {
-        "HOME": str(tmp_path),
-        "XDG_STATE_HOME": str(tmp_path),
-        "XDG_CONFIG_HOME": str(tmp_path),
-        "TERM": "xterm-256color",
-        "COLUMNS": "120",
-        "LINES": "40",
-    }
-    master, slave = pty.openpty()
-    process = subprocess.Popen(
-        [sys.executable, "-m", "rac_console"],
-        stdin=slave,
-        stdout=slave,
-        stderr=slave,
-        env=env,
-        close_fds=True,
-    )
-    os.close(slave)
-    seen = b""
-    first_screen: bytes | None = None
+    master, process = spawn_console(tmp_path)
+    first: list[bytes] = []  # what was on screen when it first named the simulator
+
+    def note_first_screen(seen: bytes) -> None:
+        if not first and b"SIMULATOR" in seen:
+            first.append(seen)
+
     try:
-        started = time.monotonic()
-        while b"built-in RC8 simulator" not in seen or b"connected" not in seen:
-            assert time.monotonic() - started < DEADLINE, seen[-2000:]
-            ready, _, _ = select.select([master], [], [], 0.2)
-            if not ready:
-                continue
-            try:
-                seen += os.read(master, 65536)
-            except OSError:
-                break
-            if first_screen is None and b"SIMULATOR" in seen:
-                first_screen = seen
+        seen = read_until(
+            master,
+            lambda seen: b"built-in RC8 simulator" in seen and b"connected" in seen,
+            DEADLINE,
+            note_first_screen,
+        )
     finally:
-        process.terminate()
-        try:
-            process.wait(timeout=10)
-        except subprocess.TimeoutExpired:
-            process.kill()
-            process.wait(timeout=10)
+        stop(process)
         os.close(master)
+    first_screen = first[0] if first else None
     assert first_screen is not None
     assert b"built-in RC8 simulator" in seen  # the welcome, once the engine started
     assert b"connected" in seen

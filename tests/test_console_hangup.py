@@ -9,10 +9,7 @@ under a console that has no controlling terminal, and a SIGHUP from the one it h
 from __future__ import annotations
 
 import os
-import select
 import subprocess
-import sys
-import time
 from collections.abc import Callable
 from pathlib import Path
 
@@ -21,8 +18,8 @@ import pytest
 from rac_console.tui.hangup import HANGUP_STATUS
 
 fcntl = pytest.importorskip("fcntl")  # POSIX
-pty = pytest.importorskip("pty")  # POSIX: a pty
 termios = pytest.importorskip("termios")  # POSIX
+from pty_console import read_until, spawn_console, stop  # noqa: E402
 
 #: A terminal app in a subprocess: `pytest -m "not slow"` skips it.
 pytestmark = pytest.mark.slow
@@ -40,36 +37,14 @@ def start_console(
     tmp_path: Path, preexec: Callable[[], None] | None
 ) -> tuple[int, subprocess.Popen[bytes]]:
     """The console on the built-in simulator in a 120x40 pty, once it has connected."""
-    env = os.environ | {
-        "HOME": str(tmp_path),
-        "XDG_STATE_HOME": str(tmp_path),
-        "XDG_CONFIG_HOME": str(tmp_path),
-        "TERM": "xterm-256color",
-        "COLUMNS": "120",
-        "LINES": "40",
-    }
-    master, slave = pty.openpty()
-    process = subprocess.Popen(
-        [sys.executable, "-m", "rac_console"],
-        stdin=slave,
-        stdout=slave,
-        stderr=slave,
-        env=env,
-        close_fds=True,
-        preexec_fn=preexec,
-    )
-    os.close(slave)
-    seen = b""
-    started = time.monotonic()
-    while b"connected" not in seen:
-        if time.monotonic() - started > DEADLINE:
-            process.kill()
-            process.wait(10)
-            os.close(master)
-            raise AssertionError(seen[-2000:])
-        ready, _, _ = select.select([master], [], [], 0.2)
-        if ready:
-            seen += os.read(master, 65536)
+    master, process = spawn_console(tmp_path, preexec)
+    try:
+        seen = read_until(master, lambda seen: b"connected" in seen, DEADLINE)
+        assert b"connected" in seen, seen[-2000:]  # not a terminal gone before it
+    except AssertionError:
+        stop(process)
+        os.close(master)
+        raise
     return master, process
 
 

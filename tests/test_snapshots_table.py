@@ -99,6 +99,6 @@ def test_row_detail_small_terminal(snap_compare, tmp_path: Path) -> None:
         await pilot.press("f6", "d")
         await until(pilot, lambda: "Fig" in app.row_detail.shown_text, "the detail")
         hold_ages(app)
-        await pilot.pause(0.1)
+        await pilot.pause()  # the held ages drawn (messages processed, no time waited)
 
     assert snap_compare(app, terminal_size=(80, 24), run_before=run_before)

@@ -75,9 +75,11 @@ def test_a_filter_counts_what_it_shows_and_forgets_the_oldest() -> None:
 
 
 async def hex_lines_fit(pilot: Pilot, app: RacConsoleApp) -> list[str]:
-    """The log's lines once settled; every hex line checked against the width."""
-    await pilot.pause(0.2)
+    """The log's lines once laid out for its width (waited for, with a deadline); every
+    hex line checked against the width."""
     log = app.frame_log
+
+    await until(pilot, lambda: log.hex_laid_out, "the hex lines laid out for the log's width")
     width = log.scrollable_content_region.width
     for line in log.lines:
         if HEX_SEPARATOR in line:
@@ -149,7 +151,7 @@ async def test_at_160_columns_the_grid_leaves_a_position_row_its_width(tmp_path:
         await watch_rows(pilot, ("watch P 1 pick", "watch IO 128-143"), 17)
         await pilot.press("f5")
         await until(pilot, lambda: app.io_panel.grid is not None, "the grid")
-        await pilot.pause(0.3)
+        await until(pilot, lambda: not table_cut(app), "the table's columns laid out to fit")
         assert not table_cut(app), (app.table.virtual_size, app.table.size)
         grid = app.io_panel.grid
         assert grid is not None and grid.layout.per_line == 16

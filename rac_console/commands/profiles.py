@@ -253,16 +253,6 @@ def match_profile(
     return ProfileMatch(strictest, tuple(unresolved))
 
 
-def find_profile(
-    profiles: Mapping[str, TargetProfile],
-    name_or_host: str,
-    port: int | None = None,
-    addresses: Addresses | None = None,
-) -> TargetProfile | None:
-    """:func:`match_profile`'s profile."""
-    return match_profile(profiles, name_or_host, port, addresses).profile
-
-
 def could_be_profile_name(host: str) -> bool:
     """A word that could be a misspelt profile (said so when it cannot be reached): no
     dot, no colon, not localhost."""

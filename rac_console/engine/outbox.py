@@ -1,8 +1,9 @@
 """The one way from the engine's thread to a front end.
 
-The engine puts events; a front end drains them all at once on its own schedule (the
-console on its refresh tick, the REPL in its loop). Row views and the status replace
-the ones not yet drained, so a slow reader gets the latest state, not a backlog.
+The engine puts events; a front end drains them all at once when it is woken (its
+``notify``): the console brings its screen up to date, the REPL prints. Row views and
+the status replace the ones not yet drained, so a slow reader gets the latest state, not
+a backlog.
 """
 
 from __future__ import annotations
@@ -75,14 +76,6 @@ class Outbox:
             if rows:
                 self._batch.rows.update(rows)
                 self._batch.removed.difference_update(rows)
-            woke = self._wake()
-        if woke:
-            self._notify()
-
-    def put_row(self, view: RowView) -> None:
-        with self._lock:
-            self._batch.rows[view.var] = view
-            self._batch.removed.discard(view.var)
             woke = self._wake()
         if woke:
             self._notify()

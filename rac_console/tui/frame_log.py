@@ -133,6 +133,12 @@ class FrameLog(InlineWidthLog):
             self.post_message(self.OptionsChanged())
 
     @property
+    def hex_laid_out(self) -> bool:
+        """The hex view's lines are laid out for the log's width now (after a resize,
+        once the log has drawn them again)."""
+        return self._hex_width == self._width_now()
+
+    @property
     def hex_placement(self) -> str:
         """Where the hex view draws the bytes of the frames on screen: ``beside``,
         ``under``, ``mixed`` (under the lines too long), or ``none`` (no frame yet)."""
