@@ -8,7 +8,7 @@ import dataclasses
 import pytest
 
 from rac_console.commands.language import Get, VarRef
-from rac_console.commands.outcome import ExitStatus, Outcome, answered
+from rac_console.commands.outcome import ExitStatus, Outcome
 from rac_console.engine.execute import execute
 from rac_console.protocol import kind_of
 from rac_console.session import Session
@@ -22,7 +22,7 @@ def test_an_answered_outcome_is_the_outcome_built_field_by_field() -> None:
             outcome = execute(session, Get(VarRef(kind_of("I"), 3)), line="get I 3")
         finally:
             session.close()
-    assert set(vars(outcome)) == {f.name for f in dataclasses.fields(Outcome)}
+    assert all(hasattr(outcome, f.name) for f in dataclasses.fields(Outcome))
     built = Outcome(
         outcome.request,
         outcome.status,
@@ -41,6 +41,23 @@ def test_an_answered_outcome_is_the_outcome_built_field_by_field() -> None:
     assert dataclasses.replace(outcome, error="x").error == "x"
 
 
-def test_answered_sets_every_field() -> None:
-    made = answered("GET:RC8:1:I:", ExitStatus.OK, None, "0,3,1", None, 0.1, None, None, None)  # type: ignore[arg-type]
-    assert list(vars(made)) == [f.name for f in dataclasses.fields(Outcome)]
+def test_an_outcome_with_a_controller_error_is_the_outcome_built_field_by_field() -> None:
+    with SimulatorThread() as sim:
+        session = Session(sim.host, sim.port, timeout=2.0)
+        try:
+            outcome = execute(session, Get(VarRef(kind_of("I"), 99999)))
+        finally:
+            session.close()
+    assert outcome.status is ExitStatus.CONTROLLER_ERROR and outcome.error
+    built = Outcome(
+        outcome.request,
+        outcome.status,
+        outcome.var,
+        outcome.response_text,
+        outcome.response,
+        outcome.rtt,
+        outcome.error,
+    )
+    fields = {f.name: getattr(outcome, f.name) for f in dataclasses.fields(Outcome)}
+    assert fields == {f.name: getattr(built, f.name) for f in dataclasses.fields(Outcome)}
+    assert outcome == built and outcome.to_json() == built.to_json()

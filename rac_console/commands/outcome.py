@@ -120,45 +120,6 @@ class Outcome:
         return data
 
 
-def answered(
-    request: str,
-    status: ExitStatus,
-    var: VarRef | None,
-    response_text: str,
-    response: Response,
-    rtt: float,
-    error: str | None,
-    input_line: str | None,
-    written: Variant | None,
-) -> Outcome:
-    """The Outcome of an exchange that got its reply: made on every exchange, so filled
-    in one step (a frozen dataclass's ``__init__`` sets each of its 16 fields through
-    ``object.__setattr__``); equal to ``Outcome(...)`` with the same fields."""
-    outcome = object.__new__(Outcome)
-    object.__setattr__(
-        outcome,
-        "__dict__",
-        {  # every field, in order (tests/test_outcome.py holds it to the dataclass)
-            "request": request,
-            "status": status,
-            "var": var,
-            "response_text": response_text,
-            "response": response,
-            "rtt": rtt,
-            "error": error,
-            "input_line": input_line,
-            "written": written,
-            "failure": None,
-            "waited": None,
-            "before": None,
-            "read_back": None,
-            "verified": None,
-            "read_back_error": None,
-        },
-    )
-    return outcome
-
-
 def refused(line: str | None, message: str, request: str | None = None) -> Outcome:
     return Outcome(request, ExitStatus.REFUSED, error=message, input_line=line)
 

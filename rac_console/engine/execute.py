@@ -11,7 +11,7 @@ from collections.abc import Callable
 
 from ..commands.language import Exchange, Get, Put, VarRef
 from ..commands.latency import LatencySummary, summarize
-from ..commands.outcome import ExitStatus, Outcome, answered, refused
+from ..commands.outcome import ExitStatus, Outcome, refused
 from ..protocol import describe_hresult, escape_bytes
 from ..protocol.hresult import S_OK
 from ..protocol.request import Request
@@ -28,6 +28,7 @@ from ..session import (
 )
 
 _OK, _CONTROLLER_ERROR = ExitStatus.OK, ExitStatus.CONTROLLER_ERROR
+_new, _set = object.__new__, object.__setattr__
 
 #: Characters of a refused raw line quoted in its refusal.
 QUOTED_LINE = 40
@@ -97,18 +98,28 @@ def outcome_of(
     var = command.var if kind is Get or kind is Put else None  # type: ignore[union-attr]
     if type(reply) is Reply:  # the usual case first: one check
         response = reply.response
-        ok = response.ok
-        return answered(
-            request.text,
-            _OK if ok else _CONTROLLER_ERROR,
-            var,
-            reply.raw.decode("ascii"),
-            response,
-            reply.rtt,
-            None if ok else f"controller answered {describe_hresult(response.code)}",
-            line,
-            command.value if kind is Put else None,  # type: ignore[union-attr]
+        ok = response.code == S_OK
+        # Filled in one step, not by the frozen dataclass's ``__init__`` (made on every
+        # exchange): the fields an answer sets; the rest (failure, waited, the
+        # read-back's) are None from the class's defaults. tests/test_outcome.py holds
+        # it equal to ``Outcome(...)`` with the same fields.
+        outcome = _new(Outcome)
+        _set(
+            outcome,
+            "__dict__",
+            {
+                "request": request.text,
+                "status": _OK if ok else _CONTROLLER_ERROR,
+                "var": var,
+                "response_text": reply.raw.decode("ascii"),
+                "response": response,
+                "rtt": reply.rtt,
+                "error": None if ok else f"controller answered {describe_hresult(response.code)}",
+                "input_line": line,
+                "written": command.value if kind is Put else None,  # type: ignore[union-attr]
+            },
         )
+        return outcome
     assert isinstance(reply, TransportError)
     return _failed(request, var, reply, line, cancelled)
 
