@@ -108,8 +108,14 @@ class Engine:
             readings=options.readings,
         )
         self._parts = EngineParts(
-            self._link, self._poller, self._publisher, self._files, self._csv,
-            self._switch_target, self._plain_policy, self._ask_confirm,
+            self._link,
+            self._poller,
+            self._publisher,
+            self._files,
+            self._csv,
+            self._switch_target,
+            self._plain_policy,
+            self._ask_confirm,
         )
         self._inbox: queue.SimpleQueue[Job | None] = queue.SimpleQueue()
         self._seq = itertools.count(1)
@@ -271,9 +277,7 @@ class Engine:
                     self.options.verify,
                     self._stopping.is_set,
                 )
-                command, feedback = run_job(
-                    self.registry, context, job.what, self.where, job.line
-                )
+                command, feedback = run_job(self.registry, context, job.what, self.where, job.line)
         finally:
             with self._jobs_lock:
                 self._running = None

@@ -43,8 +43,5 @@ def not_here(registry: Registry, name: str, where: Where) -> str:
     """Why ``name`` does not run ``where``, and what does."""
     if where is Where.RUN:
         takes = ", ".join(registry.runs_in(Where.RUN))
-        return (
-            f"{name!r} works in the console and the REPL; "
-            f"run takes {takes} and GET:/PUT: lines"
-        )
+        return f"{name!r} works in the console and the REPL; run takes {takes} and GET:/PUT: lines"
     return f"{name!r} does not run in the {where.value}"

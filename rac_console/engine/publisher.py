@@ -65,9 +65,7 @@ class Publisher:
             self._events.append(frame)
             # The request in flight, for the status line's "waiting for a reply": set as
             # a request leaves, cleared by its reply or by the connection's end.
-            self.outbox.waiting_since = (
-                time.perf_counter() if frame.direction == "tx" else None
-            )
+            self.outbox.waiting_since = time.perf_counter() if frame.direction == "tx" else None
         if time.perf_counter() - self._events_at > EVENTS_EVERY:
             self.flush()  # during a long command (latency)
 
@@ -75,9 +73,7 @@ class Publisher:
         """Whether a poll's frames go anywhere: shown, recorded, transcribed or observed.
         When not, the session builds none (two objects a poll that nobody reads)."""
         files = self.files
-        return bool(
-            self.poll_frames or files.recorder or files.transcript or self.observers
-        )
+        return bool(self.poll_frames or files.recorder or files.transcript or self.observers)
 
     def note(self, text: str) -> None:
         """A mark in the frame log (and the transcript)."""

@@ -41,6 +41,7 @@ from ..present.banner import live_banner
 from ..present.cells import age_text, status_cell, value_cell
 from ..present.completion import WHOLE_LIST, hint
 from ..present.frames import frame_line
+from ..present.heap import keep_full_collections_rare
 from ..present.history import History, is_refused
 from ..present.render import error_text, make_console, notice_text, outcome_text
 from ..present.status import connect_targets
@@ -437,4 +438,5 @@ def _failed(result: Result) -> bool:
 def run_repl(engine: Engine, history: History) -> int:
     """``rac-console repl`` on a terminal."""
     repl = Repl(engine, history, make_console())
+    keep_full_collections_rare()  # the start-up's objects frozen: no line waits on a full pass
     return repl.exit_status(asyncio.run(repl.run()))

@@ -49,6 +49,7 @@ from ..engine.settings import SettingsFile
 from ..present.banner import live_banner
 from ..present.completion import shown_candidates
 from ..present.glyphs import ascii_wanted
+from ..present.heap import keep_full_collections_rare
 from ..present.history import History, is_refused
 from ..present.render import error_text, notice_text, outcome_text
 from ..present.row_actions import PendingToggles
@@ -787,6 +788,7 @@ def run_console(
     )
     if ascii_wanted():  # RAC_CONSOLE_ASCII=1, or Windows' old console host
         app.driver_class = ascii_driver(app.driver_class)
+    keep_full_collections_rare()  # the start-up's objects frozen: no key waits on a full pass
     try:
         status = app.run() or 0
     finally:

@@ -244,8 +244,7 @@ LOG_SPEC = CommandSpec(
     run_csv_log,
     "log cell3.csv",
     notes=(
-        "columns: time, then one per field (P10.X, P10.Y, ..., IO128), "
-        "taken when logging starts",
+        "columns: time, then one per field (P10.X, P10.Y, ..., IO128), taken when logging starts",
         "an existing file is appended to if its columns are the same; log alone "
         "says where the log goes",
     ),
