@@ -114,6 +114,20 @@ class Connect:
 
 
 @dataclass(frozen=True)
+class Use:
+    """``use NAME``: the cell's current target, where lines without ``@NAME`` run."""
+
+    name: str
+
+
+def parse_use(text: str) -> Use:
+    name = text.strip()
+    if not name or " " in name:
+        raise InputError("use needs one target's name: use cell4")
+    return Use(name)
+
+
+@dataclass(frozen=True)
 class WatchFile:
     action: str  # "save" or "load"
     path: str
@@ -228,6 +242,7 @@ Command = (
     | Unwatch
     | SetInterval
     | Connect
+    | Use
     | WatchFile
     | Help
     | Frames

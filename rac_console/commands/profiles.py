@@ -23,6 +23,7 @@ from dataclasses import dataclass, field
 
 from ..protocol import InputError
 from ..protocol.text import terminal_safe
+from .cells import CellSpec, parse_cells
 from .policy import AllowRange, TargetProfile, WritePolicy, Writes, parse_allow
 
 DEFAULT_PORT = 5006
@@ -31,7 +32,7 @@ SIMULATOR_NAME = "sim"
 
 _PROFILE_KEYS = ("host", "port", "label", "colour", "color", "writes", "allow")
 _KEYS_TEXT = "host, port, label, colour (or color), writes, allow"
-_TOP_KEYS = ("target", "settings")
+_TOP_KEYS = ("target", "settings", "cell")
 _NAME = re.compile(r"[A-Za-z0-9_][A-Za-z0-9_-]*", re.ASCII)
 _BARE_KEY = re.compile(r"[A-Za-z0-9_-]+", re.ASCII)
 _COLOUR_NAME = re.compile(r"[A-Za-z][A-Za-z0-9_]*", re.ASCII)
@@ -48,6 +49,7 @@ class ParsedConfig:
 
     profiles: dict[str, TargetProfile] = field(default_factory=dict)
     settings: dict[str, object] = field(default_factory=dict)
+    cells: dict[str, CellSpec] = field(default_factory=dict)
 
 
 def completion_targets(profiles: Mapping[str, TargetProfile]) -> list[tuple[str, str]]:
@@ -89,7 +91,7 @@ def parse_config(data: Mapping[str, object], source: str) -> ParsedConfig:
         if key not in _TOP_KEYS:
             raise fail(
                 f"unknown table or key {_shown(key)}: use [target.NAME] tables "
-                "(one per target) and [settings]"
+                "(one per target), [cell.NAME] tables and [settings]"
             )
     settings = data.get("settings", {})
     if not isinstance(settings, dict):
@@ -108,7 +110,7 @@ def parse_config(data: Mapping[str, object], source: str) -> ParsedConfig:
                 'line of its own, then host = "..." under it'
             )
         found[name] = _profile(name, table, fail)
-    return ParsedConfig(found, dict(settings))
+    return ParsedConfig(found, dict(settings), parse_cells(data.get("cell"), found, fail))
 
 
 def _profile(name: str, table: dict[str, object], fail: _Fail) -> TargetProfile:

@@ -13,6 +13,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from ..commands.cells import CellSpec
 from ..commands.policy import TargetProfile
 from ..commands.profiles import parse_config
 from ..commands.tomltext import parse_toml
@@ -45,6 +46,7 @@ class Config:
     found: bool = False  # False: no file there (no profiles)
     profiles: Mapping[str, TargetProfile] = field(default_factory=dict)
     settings: Mapping[str, object] = field(default_factory=dict)
+    cells: Mapping[str, CellSpec] = field(default_factory=dict)
 
 
 def load_config(path: Path | None = None) -> Config:
@@ -62,4 +64,4 @@ def load_config(path: Path | None = None) -> Config:
         return Config(path)
     text = read_text_file(path, "a config file")
     parsed = parse_config(parse_toml(text, str(path)), str(path))
-    return Config(path, True, parsed.profiles, parsed.settings)
+    return Config(path, True, parsed.profiles, parsed.settings, parsed.cells)

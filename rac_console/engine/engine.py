@@ -15,7 +15,7 @@ import itertools
 import queue
 import threading
 import time
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass, replace
 
 from ..commands.check import check_pointer
@@ -78,13 +78,15 @@ class Engine:
         outbox: Outbox | None = None,
         where: Where = Where.CONSOLE,
         registry: Registry = BUILTIN,
+        numbers: Iterator[int] | None = None,
         **words: object,
     ) -> None:
         """The target is ``target``, or made of ``host``, ``port`` and the words
         ``read_only``, ``policy``, ``profile``, ``profiles``; the options are ``options``
         or the words ``timeout``, ``interval``, ``verify``, ``cycles``, ``record``,
         ``transcript``, ``log_csv``. Raises InputError when a file cannot be opened
-        (before any thread starts)."""
+        (before any thread starts). ``numbers`` gives submitted jobs their numbers:
+        the engines of a cell share one, so a number names one job in the cell."""
         self._rules, self._plain_policy = _target_of(host, port, target, words)
         self.options = options if options is not None else _options_of(words)
         self.outbox = outbox if outbox is not None else Outbox()
@@ -118,7 +120,7 @@ class Engine:
             self._ask_confirm,
         )
         self._inbox: queue.SimpleQueue[Job | None] = queue.SimpleQueue()
-        self._seq = itertools.count(1)
+        self._seq = numbers if numbers is not None else itertools.count(1)
         self._jobs_lock = threading.Lock()
         self._queued: dict[int, Job] = {}  # submitted, not started
         self._running: Job | None = None

@@ -54,6 +54,7 @@ class Sources:
     seen: Iterable[tuple[str, int]] = ()
     targets: Iterable[Option] = ()
     commands: Sequence[Option] = ()  # every command and its summary (help TOPIC)
+    cell: Sequence[Option] = ()  # the open targets of a cell (use, @NAME), with their labels
 
 
 #: The options for the argument being typed, given the arguments before it (``P 10``

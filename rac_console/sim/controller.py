@@ -168,6 +168,12 @@ class SimulatedController:
             and cls.variant is SimulatedController.variant
         )
 
+    def set(self, code: str, index: int, value: Any) -> None:
+        """Change a variable from outside RAC (a simulated cell's handshake), as a PUT
+        would: the kept replies go."""
+        self._store[code][index] = value
+        self.forget()
+
     def forget(self) -> None:
         """Drop the kept replies: call it after changing the store other than by PUT."""
         self._replies.clear()

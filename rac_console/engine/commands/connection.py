@@ -5,13 +5,13 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 from ...commands.check import check_pointer
-from ...commands.language import Connect, Simple, Step, parse_connect
+from ...commands.language import Connect, Simple, Step, Use, parse_connect, parse_use
 from ...commands.target import Target, resolve_target
 from ...session import ConnectFailed, Disconnected
 from ...session.endpoints import addresses
 from ..context import CommandContext
 from ..events import Feedback, Message, shown_label
-from ..registry import CommandSpec, Option, Sources, no_argument
+from ..registry import CommandSpec, Option, Sources, Where, no_argument
 
 
 def run_connect(context: CommandContext, command: Connect, line: str | None) -> list[Feedback]:
@@ -84,6 +84,21 @@ def _targets(args: list[str], sources: Sources) -> Sequence[Option]:
     return [("sim", "the built-in simulator"), *sources.targets] if not args else ()
 
 
+def run_use(context: CommandContext, command: Use, line: str | None) -> list[Feedback]:
+    """``use`` run by one engine: it has one target (a cell runs ``use`` itself)."""
+    return [
+        Message(
+            "use picks the current target of a cell, and one target is open here: open "
+            "several with -H cell3,cell4 or --cell NAME",
+            "error",
+        )
+    ]
+
+
+def _cell_targets(args: list[str], sources: Sources) -> Sequence[Option]:
+    return list(sources.cell) if not args else ()
+
+
 SPECS = (
     CommandSpec(
         "connect",
@@ -100,6 +115,21 @@ SPECS = (
         ),
         complete=_targets,
         types=(Connect,),
+    ),
+    CommandSpec(
+        "use",
+        "NAME",
+        "make a target of the cell the current one (lines without @NAME run there)",
+        parse_use,
+        run_use,
+        "use cell4",
+        (
+            "@NAME LINE runs one line on another target: @cell4 get I 10",
+            "with several targets open, a write goes to the current one or to its @NAME",
+        ),
+        where=frozenset({Where.CONSOLE, Where.REPL, Where.RUN}),
+        complete=_cell_targets,
+        types=(Use,),
     ),
     CommandSpec(
         "disconnect",

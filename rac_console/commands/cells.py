@@ -1,0 +1,131 @@
+"""A cell: several controllers opened together, one session and one engine each.
+
+Named once in the config file::
+
+    [cell.line2]
+    targets = ["cell3", "cell4"]                 # profile names, two to six
+    watch = ["cell3 IO 128 part placed",          # optional: TARGET TYPE INDEX [label]
+             "cell4 IO 64 go"]
+
+or ad hoc: ``-H cell3,cell4`` (profile names or addresses). A line that starts with
+``@NAME `` runs on that target; the others run on the current one (``use NAME``).
+Pure: text in, names and lines out.
+"""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass
+
+from ..protocol import InputError
+from ..protocol.text import terminal_safe
+
+#: A cell holds at most this many targets (a robot cell has two to six controllers).
+MOST_TARGETS = 8
+#: ``--cell demo`` with no [cell.demo] in the config: simulators playing a handshake.
+DEMO_CELL = "demo"
+_NAME = re.compile(r"[A-Za-z0-9_][A-Za-z0-9_.:-]*", re.ASCII)
+_CELL_KEYS = ("targets", "watch")
+
+
+@dataclass(frozen=True)
+class CellSpec:
+    """A ``[cell.NAME]`` table: its targets (profile names) and its watch lines."""
+
+    name: str
+    targets: tuple[str, ...]
+    watch: tuple[str, ...] = ()
+
+
+def split_hosts(text: str | None) -> list[str] | None:
+    """``-H cell3,cell4``: the names, in order; None for one name (a single target,
+    exactly as before). InputError for an empty name or one named twice."""
+    if text is None or "," not in text:
+        return None
+    names = [name.strip() for name in text.split(",")]
+    if any(not name for name in names):
+        raise InputError(
+            f"-H {terminal_safe(text)}: a name is missing between commas; write -H cell3,cell4"
+        )
+    _no_repeats(names, "-H")
+    if len(names) > MOST_TARGETS:
+        raise InputError(f"-H names {len(names)} targets; a cell holds at most {MOST_TARGETS}")
+    return names
+
+
+def _no_repeats(names: Sequence[str], where: str) -> None:
+    seen: set[str] = set()
+    for name in names:
+        if name in seen:
+            raise InputError(
+                f"{where} names {terminal_safe(name)} twice: one session per controller"
+            )
+        seen.add(name)
+
+
+def split_address(line: str) -> tuple[str | None, str]:
+    """``@cell4 get I 10`` -> ``("cell4", "get I 10")``; a line without ``@`` -> (None,
+    line). InputError when the name or the command after it is missing."""
+    stripped = line.lstrip()
+    if not stripped.startswith("@"):
+        return None, line
+    name, _, rest = stripped[1:].partition(" ")
+    if not name:
+        raise InputError("@ needs a target's name right after it: @cell4 get I 10")
+    if not rest.strip():
+        raise InputError(
+            f"@{terminal_safe(name)} needs a command after it: @{terminal_safe(name)} get I 10"
+        )
+    return name, rest.strip()
+
+
+def parse_cells(
+    data: object, profiles: Mapping[str, object], fail: Callable[[str], InputError]
+) -> dict[str, CellSpec]:
+    """The ``[cell.NAME]`` tables of a config file; ``fail`` makes a problem's error."""
+    if data is None:
+        return {}
+    example = '[cell.line2] then targets = ["cell3", "cell4"] on the next line'
+    if not isinstance(data, dict):
+        raise fail(f"[cell] holds one table per cell: write {example}")
+    cells: dict[str, CellSpec] = {}
+    for name, table in data.items():
+        where = f"[cell.{name}]" if _NAME.fullmatch(str(name)) else f"[cell.{name!r}]"
+        if not isinstance(table, dict):
+            raise fail(f"{where} is not a table: write {example}")
+        if not _NAME.fullmatch(name):
+            raise fail(f"cell name {name!r}: use letters, digits, - and _, e.g. [cell.line2]")
+        for key in table:
+            if key not in _CELL_KEYS:
+                raise fail(f"{where} unknown key {key!r}: use targets and watch")
+        targets = table.get("targets")
+        if not isinstance(targets, list) or not all(isinstance(t, str) for t in targets):
+            raise fail(f'{where} targets: write targets = ["cell3", "cell4"] (profile names)')
+        if not targets:
+            raise fail(f'{where} targets is empty: name its profiles, targets = ["cell3", "cell4"]')
+        if len(targets) > MOST_TARGETS:
+            raise fail(f"{where} names {len(targets)} targets; a cell holds at most {MOST_TARGETS}")
+        for target in targets:
+            if target not in profiles:
+                known = ", ".join(sorted(profiles)) or "none yet"
+                raise fail(
+                    f"{where} targets: no profile named {terminal_safe(target)} "
+                    f"(a [target.NAME] table; profiles: {known})"
+                )
+        try:
+            _no_repeats(targets, where)
+        except InputError as exc:
+            raise fail(str(exc)) from None
+        watch = table.get("watch", [])
+        if not isinstance(watch, list) or not all(isinstance(w, str) for w in watch):
+            raise fail(f'{where} watch: write watch = ["cell3 IO 128 part placed"]')
+        for line in watch:
+            first = line.split(maxsplit=1)[0] if line.strip() else ""
+            if first not in targets:
+                raise fail(
+                    f"{where} watch {terminal_safe(line)!r}: start with one of its targets "
+                    f'({", ".join(targets)}), e.g. "{targets[0]} IO 128 part placed"'
+                )
+        cells[name] = CellSpec(name, tuple(targets), tuple(watch))
+    return cells

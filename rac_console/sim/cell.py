@@ -1,0 +1,121 @@
+"""A simulated cell: several simulators in one process, playing a handshake.
+
+So that a cell can be tried and tested with no robot (``rac-console --cell demo``,
+``rac-console sim --cell N``): robotA places a part every CYCLE seconds (its IO 128,
+"part placed", on for HOLD seconds); robotB answers REACTION seconds after it sees the
+part (its IO 64, "go", on) and lets go when robotA's output goes off. Further
+simulators (robotC, ...) run as the plain simulator does (I 0 counts, IO 0-7 blink).
+The handshake changes the simulators' values directly, not over RAC.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import threading
+
+from .controller import SimulatedController
+from .server import SimulatorServer
+
+#: The simulators' names, in order (a cell's target names).
+NAMES = tuple(f"robot{letter}" for letter in "ABCDEFGH")
+PART_PLACED = ("IO", 128)  # robotA's output
+GO = ("IO", 64)  # robotB's answer
+CYCLE = 4.0
+HOLD = 1.5
+REACTION = 0.35
+
+
+class SimulatedCell:
+    """``count`` simulators on one event loop; ``start()`` returns once all listen."""
+
+    def __init__(
+        self,
+        count: int = 2,
+        *,
+        cycle: float = CYCLE,
+        hold: float = HOLD,
+        reaction: float = REACTION,
+        host: str = "127.0.0.1",
+        ports: tuple[int, ...] = (),
+    ) -> None:
+        if not 1 <= count <= len(NAMES):
+            raise ValueError(f"a simulated cell has 1 to {len(NAMES)} simulators, not {count}")
+        self.cycle, self.hold, self.reaction = cycle, hold, reaction
+        wanted = ports or (0,) * count
+        self.servers = tuple(
+            SimulatorServer(host, port, controller=SimulatedController()) for port in wanted
+        )
+        self._handshake: asyncio.Task[None] | None = None
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        return NAMES[: len(self.servers)]
+
+    @property
+    def addresses(self) -> list[tuple[str, str, int]]:
+        """(name, host, port) of each simulator, in order."""
+        return [(n, s.host, s.port) for n, s in zip(self.names, self.servers, strict=True)]
+
+    async def start(self) -> SimulatedCell:
+        for server in self.servers:
+            await server.start()
+        if len(self.servers) > 1:
+            self._handshake = asyncio.create_task(self._play())
+        return self
+
+    async def stop(self) -> None:
+        if self._handshake is not None:
+            self._handshake.cancel()
+            with contextlib.suppress(asyncio.CancelledError):
+                await self._handshake
+        for server in self.servers:
+            await server.stop()
+
+    async def _play(self) -> None:
+        """robotA places a part, robotB answers a moment later; again every cycle."""
+        placer, answerer = (s.controller for s in self.servers[:2])
+        assert isinstance(placer, SimulatedController)
+        assert isinstance(answerer, SimulatedController)
+        while True:
+            await asyncio.sleep(self.cycle - self.hold)
+            placer.set(*PART_PLACED, True)
+            await asyncio.sleep(self.reaction)
+            answerer.set(*GO, True)
+            await asyncio.sleep(self.hold - self.reaction)
+            placer.set(*PART_PLACED, False)
+            await asyncio.sleep(self.reaction)
+            answerer.set(*GO, False)
+
+
+class SimulatedCellThread:
+    """A simulated cell on a thread of its own (the console's ``--cell demo``)."""
+
+    def __init__(self, count: int = 2, **options: float) -> None:
+        self.cell = SimulatedCell(count, **options)  # type: ignore[arg-type]
+        self._loop = asyncio.new_event_loop()
+        self._thread = threading.Thread(
+            target=self._loop.run_forever, name="rac-sim-cell", daemon=True
+        )
+
+    def start(self) -> SimulatedCellThread:
+        self._thread.start()
+        asyncio.run_coroutine_threadsafe(self.cell.start(), self._loop).result(10)
+        return self
+
+    def stop(self) -> None:
+        if not self._thread.is_alive():
+            return
+        try:
+            asyncio.run_coroutine_threadsafe(self.cell.stop(), self._loop).result(5)
+        finally:
+            self._loop.call_soon_threadsafe(self._loop.stop)
+            self._thread.join(5)
+            if not self._thread.is_alive():
+                self._loop.close()
+
+    def __enter__(self) -> SimulatedCellThread:
+        return self.start()
+
+    def __exit__(self, *exc_info: object) -> None:
+        self.stop()
