@@ -25,6 +25,7 @@ COMMAND_NAMES = [
     "pause",
     "resume",
     "connect",
+    "use",
     "disconnect",
     "save",
     "load",
