@@ -16,7 +16,7 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 from ..commands.cells import split_address
-from ..commands.language import Command, Use
+from ..commands.language import Command, Connect, Use
 from ..commands.target import Target
 from ..protocol import InputError
 from ..protocol.text import terminal_safe
@@ -125,6 +125,8 @@ class Cell:
             if self.where not in self.registry.spec_of(command).where:
                 return member.engine.submit_command(command, line)  # the engine says why
             return self._use(command, line)
+        if isinstance(command, Connect) and len(self.members) > 1:
+            return self._answer(line, Message(self._fixed(), "error"))
         if command is None:
             return member.engine.submit(rest)
         return member.engine.submit_command(command, line)
@@ -135,7 +137,15 @@ class Cell:
         """Queue a command a front end made (Space on a row of ``name``'s table)."""
         if isinstance(command, Use):
             return self._use(command, line)
+        if isinstance(command, Connect) and len(self.members) > 1:
+            return self._answer(line, Message(self._fixed(), "error"))
         return self.member(name).engine.submit_command(command, line)
+
+    def _fixed(self) -> str:
+        return (
+            f"a cell's targets are fixed ({', '.join(self.names)}): use NAME picks one; "
+            "to open others, start rac-console with -H a,b or --cell NAME"
+        )
 
     def _use(self, command: Use, line: str | None) -> int:
         try:
