@@ -251,6 +251,7 @@ OPTIONS = {
     "--help": Option("--help", None),
     "-H": Option("--host", "HOST"),
     "--host": Option("--host", "HOST"),
+    "--cell": Option("--cell", "NAME"),
     "-p": Option("--port", "PORT"),
     "--port": Option("--port", "PORT"),
     "--timeout": Option("--timeout", "SECONDS"),

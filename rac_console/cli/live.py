@@ -37,15 +37,16 @@ from ..engine import (
     Engine,
     EngineOptions,
     Message,
-    Outbox,
     Result,
 )
+from ..engine.cell import Cell, member_name
 from ..engine.csvlog import timestamp
 from ..engine.execute import outcome_of
 from ..engine.registry import Where
 from ..present.render import error_text, outcome_text, print_error
 from ..protocol import InputError, hresult_name
 from ..session import BadReply, ConnectFailed, RequestTimeout
+from .cell import pick_member
 from .oneshot import Output
 from .pipes import reader_gone, stderr_may_close, write_line
 
@@ -62,8 +63,9 @@ WAKE_EVERY = 0.5
 #: What a cycle read: each variable's outcome, None when it was not read (the
 #: connection failed earlier in that cycle).
 Results = dict[VarRef, Outcome | None]
-#: Shows one cycle (its number from 1, its wall-clock time, its results).
-Show = Callable[[int, float, Results], None]
+#: Shows one cycle of a target (its name when a cell is open, else None; the cycle's
+#: number from 1; its wall-clock time; its results).
+Show = Callable[[str | None, int, float, Results], None]
 
 
 def run_live(
@@ -86,6 +88,7 @@ def run_live(
     to ``main`` (status 130: fewer results than asked for).
     """
     woke = threading.Event()
+    members = getattr(args, "cell_targets", None) or [(member_name(args.target), args.target)]
     options = EngineOptions(
         timeout=args.timeout,
         interval=interval,
@@ -98,18 +101,34 @@ def run_live(
         readings=True,
     )
     try:
-        engine = Engine(
-            target=args.target, options=options, outbox=Outbox(woke.set), where=Where.COMMAND_LINE
-        )
+        cell = Cell(members, options=options, notify=woke.set, where=Where.COMMAND_LINE)
     except InputError as exc:  # --record cannot open its file
         print_error(output.err, str(exc))
         return ExitStatus.REFUSED
-    run = _LiveRun(engine, woke, output, variables, show, line)
-    engine.start(connect=False)
+    runs = [
+        _LiveRun(m.engine, None if cell.single else m.name, output, variables, show, line)
+        for m in cell.members
+    ]
+    cell.start(connect=False)
+
+    def wait() -> None:
+        woke.wait(WAKE_EVERY)
+        woke.clear()
+        for run in runs:
+            run.take(run.engine.outbox.drain())
+
     try:
-        if not run.set_up(log_csv):
+        for run in runs:
+            run.submit_set_up(log_csv)
+        while not all(run.set_up_done() for run in runs):
+            wait()
+        if not all(run.set_up_ok() for run in runs):
+            cell.stop()
             return ExitStatus.REFUSED
-        run.cycles(count)
+        for run in runs:
+            run.engine.submit_command(Simple(Step.RESUME))
+        while count is None or any(run.shown < count for run in runs):
+            wait()
     except KeyboardInterrupt:
         if not until_ctrl_c:
             raise
@@ -117,45 +136,51 @@ def run_live(
         if not reader_gone(exc):
             raise
     finally:
-        engine.stop()
-    run.ended = True
-    run.take(engine.outbox.drain())  # the last alerts (a file that failed at the end)
-    return output.status(run.worst)
+        cell.stop()
+    for run in runs:
+        run.ended = True
+        run.take(run.engine.outbox.drain())  # the last alerts (a file that failed at the end)
+    return output.status(worst([run.worst for run in runs]))
 
 
 class _LiveRun:
-    """The CLI's side of the engine: what it said, and the worst status seen."""
+    """The CLI's side of one target's engine: what it said, and the worst status seen."""
 
     def __init__(
         self,
         engine: Engine,
-        woke: threading.Event,
+        name: str | None,
         output: Output,
         variables: tuple[VarRef, ...],
         show: Show,
         line: str | None,
     ) -> None:
-        self.engine, self.woke, self.output = engine, woke, output
+        self.engine, self.name, self.output = engine, name, output
         self.variables, self.show, self.line = variables, show, line
         self.worst = ExitStatus.OK
         self.shown = 0  # cycles shown
         self._results: list[Result] = []
+        self._set_up_steps = 0
         self._told_simulator = False
         self.ended = False  # stopped: a cycle the stop cut short is no result
         self.csv_failure: str | None = None  # why the CSV log failed once it was open
 
-    def set_up(self, log_csv: str | None) -> bool:
-        """The variables watched (and the CSV log started), as the console would: False
-        when the log was refused (said on stderr; nothing was sent)."""
-        engine = self.engine
-        # Paused until the log is known good: a refused log sends nothing.
+    def submit_set_up(self, log_csv: str | None) -> None:
+        """The variables watched (and the CSV log started), as the console would, with
+        polling paused until the log is known good: a refused log sends nothing."""
         commands: list[Command] = [Simple(Step.PAUSE), Watch(self.variables)]
         if log_csv is not None:
             commands.append(CsvLog(log_csv))
         for command in commands:
-            engine.submit_command(command)
-        while len(self._results) < len(commands):
-            self._wait()
+            self.engine.submit_command(command)
+        self._set_up_steps = len(commands)
+
+    def set_up_done(self) -> bool:
+        return len(self._results) >= self._set_up_steps
+
+    def set_up_ok(self) -> bool:
+        """False when the set-up was refused (said on stderr; nothing was sent)."""
+        engine = self.engine
         for result in self._results:
             errors = [
                 f.text for f in result.feedback if isinstance(f, Message) and f.level == "error"
@@ -168,17 +193,7 @@ class _LiveRun:
                 for error in errors:
                     print_error(self.output.err, error)
                 return False
-        engine.submit_command(Simple(Step.RESUME))
         return True
-
-    def cycles(self, count: int | None) -> None:
-        while count is None or self.shown < count:
-            self._wait()
-
-    def _wait(self) -> None:
-        self.woke.wait(WAKE_EVERY)
-        self.woke.clear()
-        self.take(self.engine.outbox.drain())
 
     def take(self, batch: Batch) -> None:
         status = batch.status
@@ -203,7 +218,7 @@ class _LiveRun:
         statuses = [o.status for o in results.values() if o is not None]
         self.worst = worst([self.worst, *statuses])
         self.shown += 1
-        self.show(self.shown, cycle.time, results)
+        self.show(self.name, self.shown, cycle.time, results)
 
 
 # ------------------------------------------------------------------ get -r N
@@ -217,6 +232,7 @@ def repeat_get(args: argparse.Namespace) -> ExitStatus:
     try:
         if args.words_problem is not None:
             raise InputError(args.words_problem)
+        target = pick_member(args)  # a cell: get @cell3 I 10 -r 5
         if args.repeat is None:
             raise InputError(
                 "-i needs -r N, how many times to read: "
@@ -227,8 +243,9 @@ def repeat_get(args: argparse.Namespace) -> ExitStatus:
         output.show(refused(line, str(exc)))
         return ExitStatus.REFUSED
     assert isinstance(command, Get)  # get's words make a Get
+    output.target = target
 
-    def repetition(number: int, wall: float, results: Results) -> None:
+    def repetition(_: str | None, number: int, wall: float, results: Results) -> None:
         outcome = results[command.var]
         if outcome is not None:
             _show_repetition(output, outcome, number, timestamp(wall))
@@ -289,15 +306,17 @@ def watch(args: argparse.Namespace) -> ExitStatus:
     except InputError as exc:
         print_error(output.err, str(exc))
         return ExitStatus.REFUSED
-    reported: dict[VarRef, str] = {}  # each variable's failure, said on stderr once
+    # Each variable's failure (by target), said on stderr once.
+    reported: dict[tuple[str | None, VarRef], str] = {}
 
-    def cycle(number: int, wall: float, results: Results) -> None:
-        _report_failures(output, results, reported)
+    def cycle(name: str | None, number: int, wall: float, results: Results) -> None:
+        _report_failures(output, name, results, reported)
         started = timestamp(wall)
         if output.as_json:
-            write_line(json.dumps(_cycle_json(number, started, results)))
+            data = _cycle_json(number, started, results)
+            write_line(json.dumps(data if name is None else {"target": name} | data))
         else:
-            write_line(_cycle_text(started, results))
+            write_line(_cycle_text(started, results, name))
 
     return run_live(
         args,
@@ -312,7 +331,10 @@ def watch(args: argparse.Namespace) -> ExitStatus:
 
 
 def _report_failures(
-    output: Output, results: dict[VarRef, Outcome | None], reported: dict[VarRef, str]
+    output: Output,
+    name: str | None,
+    results: dict[VarRef, Outcome | None],
+    reported: dict[tuple[str | None, VarRef], str],
 ) -> None:
     """A failure on stderr when it starts or changes, not every cycle (the cycle's
     line shows it each time)."""
@@ -320,22 +342,25 @@ def _report_failures(
         if outcome is None:
             continue
         if outcome.ok:
-            reported.pop(var, None)
+            reported.pop((name, var), None)
             continue
-        message = error_text(outcome, f"{var}: ")
-        if reported.get(var) != message:
-            reported[var] = message
+        message = error_text(outcome, f"{var}: " if name is None else f"{name}.{var}: ")
+        if reported.get((name, var)) != message:
+            reported[name, var] = message
             print_error(output.err, message)
 
 
-def _cycle_text(started: str, results: dict[VarRef, Outcome | None]) -> str:
+def _cycle_text(
+    started: str, results: dict[VarRef, Outcome | None], name: str | None = None
+) -> str:
     """``TIME<TAB>NAME=VALUE<TAB>...``: fields for ``cut -f``/``awk -F'\\t'`` and
     self-describing for ``grep 'IO130=ON'``, with no header line to skip. A value is
     never split by a tab (tabs in strings are escaped); array elements are joined
     with commas; a failure is ``NAME=!REASON``."""
     fields = [started]
+    lead = "" if name is None else f"{name}."  # a cell: cell3.IO128=ON
     for var, outcome in results.items():
-        fields.append(f"{var}={_field(outcome)}")
+        fields.append(f"{lead}{var}={_field(outcome)}")
     return "\t".join(fields)
 
 

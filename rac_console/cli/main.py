@@ -10,8 +10,12 @@ import argparse
 import os
 import sys
 from collections.abc import Sequence
+from typing import TYPE_CHECKING
 
 from .parser import LOG_CSV_COMMANDS, ONE_SHOT, CliParser, build_cli, build_parser
+
+if TYPE_CHECKING:
+    from ..engine.cell import Cell
 
 __all__ = ["CliParser", "build_cli", "build_parser", "main", "parse_args"]
 
@@ -56,9 +60,19 @@ def _dispatch(args: argparse.Namespace) -> int:
 
         return paths()
     if args.command != "sim":
+        from .cell import settle_cell
         from .target import settle_target
 
-        if not settle_target(args):  # a broken config file: one line, exit 2
+        in_cell = settle_cell(args)  # -H a,b or --cell NAME: several targets
+        if in_cell is False:
+            return 2
+        if in_cell is None and not settle_target(args):  # a broken config: one line, exit 2
+            return 2
+        if in_cell and args.command in ("latency", "check"):
+            print(
+                f"rac-console: {args.command} measures one target: name it with -H NAME",
+                file=sys.stderr,
+            )
             return 2
     if args.command == "get" and (args.repeat, args.repeat_interval) != (None, None):
         from .live import repeat_get
@@ -101,7 +115,8 @@ def _dispatch(args: argparse.Namespace) -> int:
 
 def _interactive(args: argparse.Namespace) -> int:
     """The full-screen console, or the REPL: one engine and history file for both."""
-    from ..engine import DEFAULT_INTERVAL, Engine, EngineOptions
+    from ..engine import DEFAULT_INTERVAL, EngineOptions
+    from ..engine.cell import Cell, member_name
     from ..engine.registry import Where
     from ..present.history import History, default_history_path
     from ..protocol import InputError
@@ -117,14 +132,16 @@ def _interactive(args: argparse.Namespace) -> int:
         log_csv=getattr(args, "log_csv", None),
     )
     where = Where.CONSOLE if args.command is None else Where.REPL
+    members = getattr(args, "cell_targets", None) or [(member_name(args.target), args.target)]
     try:
-        engine = Engine(target=args.target, options=options, where=where)
+        cell = Cell(members, options=options, where=where)
     except InputError as exc:
         print(f"rac-console: {terminal_safe(str(exc))}", file=sys.stderr)
         return 2
     if args.command is None:  # the REPL had them on stderr; the console shows them here
-        for notice in args.target.notices:
-            engine.alert(notice)
+        for member in cell.members:
+            for notice in member.target.notices:
+                member.engine.alert(notice)
     if args.watch:
         from ..engine.watchlist import load
 
@@ -146,11 +163,20 @@ def _interactive(args: argparse.Namespace) -> int:
         from ..repl.repl import run_repl
 
         if args.watch:  # run first, its result printed as the REPL starts
-            engine.submit_command(WatchFile("load", args.watch))
-        return run_repl(engine, history)
+            cell.submit_command(WatchFile("load", args.watch))
+        watch_cell(cell, getattr(args, "cell_watch", ()))
+        return run_repl(cell, history)
     from ..tui.app import run_console
 
-    return run_console(engine, history, args.watch, sorted(args.target.profiles))
+    watch_cell(cell, getattr(args, "cell_watch", ()))
+    return run_console(cell.members[0].engine, history, args.watch, sorted(args.target.profiles))
+
+
+def watch_cell(cell: Cell, lines: Sequence[str]) -> None:
+    """A ``[cell.NAME]``'s watch list (``cell3 IO 128 part placed``), each on its target."""
+    for line in lines:
+        name, _, rest = line.partition(" ")
+        cell.submit(f"@{name} watch {rest}")
 
 
 def parse_args(words: Sequence[str]) -> argparse.Namespace:

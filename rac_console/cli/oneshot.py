@@ -8,10 +8,12 @@ import itertools
 import json
 import sys
 from collections.abc import Iterator
+from contextlib import ExitStack
 from dataclasses import replace
 
 from ..commands.argv import exchange_from_words, input_line
-from ..commands.language import Command, Latency
+from ..commands.cells import route
+from ..commands.language import Command, Latency, Use
 from ..commands.outcome import ExitStatus, Outcome, refused, worst
 from ..commands.policy import Writes
 from ..commands.target import Target
@@ -20,9 +22,18 @@ from ..engine.commands import BUILTIN
 from ..engine.jobs import run_job
 from ..engine.registry import Where
 from ..engine.session_context import SessionContext
-from ..present.render import error_text, make_console, notice_text, print_error, print_outcome
+from ..present.cell_view import by_target
+from ..present.render import (
+    error_text,
+    make_console,
+    notice_text,
+    outcome_text,
+    print_error,
+    print_outcome,
+)
 from ..protocol import InputError
 from ..session import Session
+from .cell import pick_member
 from .target import open_session
 
 
@@ -31,6 +42,8 @@ class Output:
 
     def __init__(self, as_json: bool) -> None:
         self.as_json = as_json
+        #: The target the results came from, when a cell is open: named in each of them.
+        self.target: str | None = None
         self.out = make_console()
         self.err = make_console(stderr=True)
         self.local_failed = False
@@ -46,23 +59,31 @@ class Output:
         connection failure keeps its own status (the file's failure was said already)."""
         return ExitStatus.LOCAL_IO if self.local_failed and status == ExitStatus.OK else status
 
+    def _extra(self, extra: dict[str, object] | None) -> dict[str, object]:
+        return (extra or {}) | ({"target": self.target} if self.target is not None else {})
+
     def say(self, text: str, extra: dict[str, object] | None = None) -> None:
         """What a command said that is no exchange (a line of ``run``)."""
         if self.as_json:
-            sys.stdout.write(json.dumps({"ok": True, "message": text} | (extra or {})) + "\n")
+            data = {"ok": True, "message": text} | self._extra(extra)
+            sys.stdout.write(json.dumps(data) + "\n")
             sys.stdout.flush()
         else:
-            self.out.print(notice_text(text))
+            self.out.print(by_target(self.target, notice_text(text)))
 
     def show(
         self, outcome: Outcome, extra: dict[str, object] | None = None, prefix: str = ""
     ) -> None:
+        if self.target is not None:
+            prefix = f"{self.target}: {prefix}"
         if self.as_json:
-            data = outcome.to_json() | (extra or {})
+            data = outcome.to_json() | self._extra(extra)
             sys.stdout.write(json.dumps(data) + "\n")
             sys.stdout.flush()
             if not outcome.ok:
                 print_error(self.err, error_text(outcome, prefix))
+        elif outcome.ok and self.target is not None:
+            self.out.print(by_target(self.target, outcome_text(outcome)), soft_wrap=True)
         else:
             print_outcome(self.out, self.err, outcome, prefix)
 
@@ -83,6 +104,7 @@ def one_command(args: argparse.Namespace) -> ExitStatus:
     try:
         if args.words_problem is not None:
             raise InputError(args.words_problem)
+        output.target = pick_member(args)  # a cell: get @cell3 I 10
         command = exchange_from_words(args.command, args.words)
         with open_session(args, output.local_failure) as session:
             results = _results(session, command, args, line, Where.COMMAND_LINE)
@@ -121,20 +143,80 @@ def run_script(args: argparse.Namespace) -> ExitStatus:
     except OSError as exc:
         print_error(output.err, f"cannot read {args.file}: {exc.strerror}")
         return ExitStatus.REFUSED
+    members = getattr(args, "cell_targets", None)
+    numbered = enumerate(itertools.chain([first] if first else [], lines), 1)
     try:
+        if members:
+            return output.status(_run_on_cell(args, output, members, numbered))
         with open_session(args, output.local_failure) as session:
-            for number, raw_line in enumerate(itertools.chain([first] if first else [], lines), 1):
+            for number, raw_line in numbered:
                 line = raw_line.rstrip("\r\n")
-                for result in _results(session, line, args, line, Where.RUN):
-                    if isinstance(result, Outcome):
-                        output.show(result, {"line": number}, prefix=f"line {number}: ")
-                        status = worst([status, result.status])
-                    else:
-                        output.say(result.text, {"line": number})
+                status = worst(
+                    [
+                        status,
+                        _show_line(output, _results(session, line, args, line, Where.RUN), number),
+                    ]
+                )
     except InputError as exc:
         print_error(output.err, str(exc))
         return ExitStatus.REFUSED
     return output.status(status)
+
+
+def _show_line(output: Output, results: list[Outcome | Message], number: int) -> ExitStatus:
+    """A script line's results shown; their worst status."""
+    status = ExitStatus.OK
+    for result in results:
+        if isinstance(result, Outcome):
+            output.show(result, {"line": number}, prefix=f"line {number}: ")
+            status = worst([status, result.status])
+        else:
+            output.say(result.text, {"line": number})
+    return status
+
+
+def _run_on_cell(
+    args: argparse.Namespace,
+    output: Output,
+    members: list[tuple[str, Target]],
+    numbered: Iterator[tuple[int, str]],
+) -> ExitStatus:
+    """``run`` on a cell: each line on its ``@NAME`` or the current target (``use NAME``
+    changes it), each target's session opened when a line first needs it."""
+    targets = dict(members)
+    names = list(targets)
+    current = names[0]
+    status = ExitStatus.OK
+    with ExitStack() as stack:
+        sessions: dict[str, Session] = {}
+        for number, raw_line in numbered:
+            line = raw_line.rstrip("\r\n")
+            try:
+                name, rest = route(line, names, current)
+                command = BUILTIN.parse(rest)
+            except InputError as exc:
+                output.target = None
+                output.show(refused(line, str(exc)), {"line": number}, prefix=f"line {number}: ")
+                status = worst([status, ExitStatus.REFUSED])
+                continue
+            output.target = name
+            if isinstance(command, Use):
+                if command.name not in targets:
+                    text = f"no target named {command.name} is open here; open: {', '.join(names)}"
+                    output.show(refused(line, text), {"line": number}, prefix=f"line {number}: ")
+                    status = worst([status, ExitStatus.REFUSED])
+                else:
+                    current = output.target = command.name
+                    output.say(f"current target: {current}", {"line": number})
+                continue
+            if name not in sessions:
+                sessions[name] = stack.enter_context(
+                    open_session(args, output.local_failure, targets[name])
+                )
+            member_args = argparse.Namespace(**{**vars(args), "target": targets[name]})
+            results = _results(sessions[name], command or rest, member_args, line, Where.RUN)
+            status = worst([status, _show_line(output, results, number)])
+    return status
 
 
 def _context(session: Session, args: argparse.Namespace) -> SessionContext:

@@ -62,6 +62,7 @@ def refusal(args: argparse.Namespace) -> str | None:
 #: The top-level options and their defaults: any other value before ``sim`` was given.
 _TOP_DEFAULTS = {
     "host": None,
+    "cell": None,
     "port": None,
     "timeout": 2.0,
     "json": False,

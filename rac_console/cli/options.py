@@ -86,6 +86,14 @@ def global_options(parser: argparse.ArgumentParser, suppress: bool) -> list[argp
             "(default: the built-in simulator)",
         ),
         parser.add_argument(
+            "--cell",
+            metavar="NAME",
+            default=default(None),
+            help="open the targets of a [cell.NAME] of the config file together, one session "
+            "each (--cell demo: simulators playing a handshake); -H cell3,cell4 opens a set "
+            "by hand",
+        ),
+        parser.add_argument(
             "-p",
             "--port",
             type=port_number,

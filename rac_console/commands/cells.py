@@ -80,6 +80,19 @@ def split_address(line: str) -> tuple[str | None, str]:
     return name, rest.strip()
 
 
+def route(line: str, names: Sequence[str], current: str) -> tuple[str, str]:
+    """The target a line runs on and the line without its ``@NAME``: the named one, or
+    ``current``. InputError naming the open targets for a name that is not one."""
+    name, rest = split_address(line)
+    if name is None:
+        return current, line
+    if name not in names:
+        raise InputError(
+            f"no target named {terminal_safe(name)} is open here; open: {', '.join(names)}"
+        )
+    return name, rest
+
+
 def parse_cells(
     data: object, profiles: Mapping[str, object], fail: Callable[[str], InputError]
 ) -> dict[str, CellSpec]:

@@ -12,10 +12,10 @@ number names one job whichever engine runs it.
 from __future__ import annotations
 
 import itertools
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
 
-from ..commands.cells import split_address
+from ..commands.cells import route
 from ..commands.language import Command, Connect, Use
 from ..commands.target import Target
 from ..protocol import InputError
@@ -63,7 +63,7 @@ class Cell:
         if not targets:
             raise InputError("a cell needs at least one target")
         self.registry, self.where = registry, where
-        self._numbers = itertools.count(1)
+        self._numbers: Iterator[int] = itertools.count(1)
         #: The cell's own results (``use``, a line for a target it does not have).
         self.outbox = Outbox(notify)
         self.members: tuple[Member, ...] = tuple(
@@ -83,6 +83,30 @@ class Cell:
         )
         self._by_name = {member.name: member for member in self.members}
         self.current = self.members[0].name
+
+    @classmethod
+    def of(cls, engine: Engine, name: str | None = None) -> Cell:
+        """A cell of one engine made already (a single target, exactly as before)."""
+        cell = cls.__new__(cls)
+        cell.registry, cell.where = engine.registry, engine.where
+        cell._numbers = engine.numbers
+        cell.outbox = Outbox(engine.outbox.notify)
+        member = Member(name or member_name(engine.target), engine.target, engine)
+        cell.members = (member,)
+        cell._by_name = {member.name: member}
+        cell.current = member.name
+        return cell
+
+    @property
+    def single(self) -> bool:
+        """One target: every front end looks and behaves exactly as without a cell."""
+        return len(self.members) == 1
+
+    def set_notify(self, notify: Callable[[], None] | None) -> None:
+        """Who is woken when anything is published (the front end's loop)."""
+        self.outbox.notify = notify
+        for member in self.members:
+            member.engine.outbox.notify = notify
 
     # ------------------------------------------------------------------ members
 
@@ -116,7 +140,7 @@ class Cell:
         (from the target's outbox, or the cell's for ``use`` and a problem with the
         line's ``@NAME``)."""
         try:
-            name, rest = split_address(line)
+            name, rest = route(line, self.names, self.current)
             member = self.member(name)
             command = self.registry.parse(rest)
         except InputError as exc:
@@ -127,7 +151,7 @@ class Cell:
             return self._use(command, line)
         if isinstance(command, Connect) and len(self.members) > 1:
             return self._answer(line, Message(self._fixed(), "error"))
-        if command is None:
+        if command is None:  # a blank line, a comment
             return member.engine.submit(rest)
         return member.engine.submit_command(command, line)
 

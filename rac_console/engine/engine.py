@@ -120,7 +120,8 @@ class Engine:
             self._ask_confirm,
         )
         self._inbox: queue.SimpleQueue[Job | None] = queue.SimpleQueue()
-        self._seq = numbers if numbers is not None else itertools.count(1)
+        #: Where submitted jobs get their numbers (shared by the engines of a cell).
+        self.numbers = numbers if numbers is not None else itertools.count(1)
         self._jobs_lock = threading.Lock()
         self._queued: dict[int, Job] = {}  # submitted, not started
         self._running: Job | None = None
@@ -134,6 +135,11 @@ class Engine:
             self._csv.wait_for_rows(options.log_csv)
 
     # ------------------------------------------------------- any thread
+
+    @property
+    def target(self) -> Target:
+        """The target open now (``connect`` changes it)."""
+        return self._rules
 
     @property
     def profiles(self) -> Mapping[str, TargetProfile]:
@@ -159,7 +165,7 @@ class Engine:
 
     def _queue(self, what: str | Command, line: str | None = None) -> int:
         with self._jobs_lock:
-            job = Job(next(self._seq), what, line)
+            job = Job(next(self.numbers), what, line)
             self._queued[job.seq] = job
         self._inbox.put(job)
         return job.seq

@@ -49,13 +49,24 @@ def complete(
     seen: Iterable[tuple[str, int]] = (),
     targets: Iterable[tuple[str, str]] = (),
     registry: Registry = BUILTIN,
+    cell: Sequence[tuple[str, str]] = (),
 ) -> list[Candidate]:
     """Candidates for the word at the end of ``text``: a command name, or what the
     command's entry offers for the argument being typed.
 
     ``seen`` holds (TYPE, index) pairs already used or watched, offered as indices;
-    ``targets`` the config file's profiles (name, label or host), offered after connect.
+    ``targets`` the config file's profiles (name, label or host), offered after connect;
+    ``cell`` the open targets of a cell (name, label), offered after ``use`` and as the
+    ``@NAME`` a line may start with.
     """
+    if cell and text.lstrip().startswith("@"):
+        name, space, rest = text.lstrip()[1:].partition(" ")
+        if not space:  # the @NAME itself
+            low = name.lower()
+            return [
+                Candidate(f"@{n}", h, len(name) + 1) for n, h in cell if n.lower().startswith(low)
+            ]
+        text = rest.lstrip()
     if is_raw_line(text):
         return []
     done, partial = _tokens(text)
@@ -69,7 +80,7 @@ def complete(
         spec = registry.get(done[0].lower())
         if spec is None:
             return []
-        options = spec.complete(done[1:], Sources(seen, targets, names))
+        options = spec.complete(done[1:], Sources(seen, targets, names, cell))
     return [Candidate(o, h, start) for o, h in options if o.lower().startswith(low)]
 
 

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterable, Iterator
+from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 
 from prompt_toolkit.auto_suggest import AutoSuggest, Suggestion
 from prompt_toolkit.buffer import Buffer
@@ -19,6 +19,7 @@ from prompt_toolkit.lexers import Lexer
 from prompt_toolkit.styles import Style
 
 from ..engine import ConfirmWrite, Status
+from ..present.cell_view import target_badge
 from ..present.completion import complete, hint
 from ..present.history import History
 from ..present.status import ink_on, label_text, profile_colour, target_label
@@ -61,9 +62,18 @@ def label_fragment_style(colour: str | None) -> str:
     return f"bold bg:#{red:02x}{green:02x}{blue:02x} {ink}"
 
 
-def prompt_fragments(status: Status | None, lost: bool) -> FormattedText:
+def prompt_fragments(
+    status: Status | None, lost: bool, current: str | None = None
+) -> FormattedText:
     """``sim> ``, ``HOST:PORT> ``, `` Cell 3 — welding > `` (a profile's label in its
-    colour) or ``not connected> ``."""
+    colour) or ``not connected> ``; in a cell, the current target's name: ``cell3 › ``."""
+    if current is not None:
+        style = (
+            label_fragment_style(status.colour)
+            if status is not None and status.colour
+            else "class:prompt.live"
+        )
+        return FormattedText([(style, terminal_safe(current)), ("", " › ")])
     if status is None or not status.has_session or (lost and status.connection != "connected"):
         return FormattedText([("class:prompt.off", "not connected"), ("", "> ")])
     label = target_label(status)
@@ -94,10 +104,28 @@ def toolbar_fragments(status: Status) -> FormattedText:
     return FormattedText(parts)
 
 
-def confirm_message(question: ConfirmWrite) -> FormattedText:
-    """``Write I10: 14 → 15 on Cell 3 — welding? [y/N] `` (default No)."""
+def cell_toolbar_fragments(
+    names: Sequence[str], statuses: Mapping[str, Status], current: str
+) -> list[tuple[str, str]]:
+    """A cell's toolbar: one badge per target (its name, then how its connection
+    stands), the current one marked, so one controller down never looks like the cell
+    down."""
+    parts: list[tuple[str, str]] = []
+    for name in names:
+        badge = target_badge(name, statuses.get(name))
+        style = "class:toolbar.open" if badge.ok else "class:toolbar.readonly"
+        mark = "›" if name == current else " "
+        parts.append((style, f"{mark}{badge.text} "))
+    return parts
+
+
+def confirm_message(question: ConfirmWrite, member: str | None = None) -> FormattedText:
+    """``Write I10: 14 → 15 on Cell 3 — welding? [y/N] `` (default No); in a cell, led
+    by the target's name: ``Write I10: 14 → 15 on cell3 (Cell 3 — welding)?``."""
     before = question.before
     where = label_text(question.label) if question.label else terminal_safe(question.target)
+    if member is not None:
+        where = f"{terminal_safe(member)} ({where})"
     return FormattedText(
         [
             ("class:confirm", f"Write {terminal_safe(question.var)}: "),
@@ -120,14 +148,17 @@ class RacCompleter(Completer):
         self,
         seen: Callable[[], Iterable[tuple[str, int]]],
         targets: Iterable[tuple[str, str]] = (),
+        cell: Iterable[tuple[str, str]] = (),
     ) -> None:
         self._seen = seen
         self._targets = tuple(targets)  # the profiles connect completes to
+        self._cell = tuple(cell)  # a cell's open targets: use NAME, @NAME
 
     def get_completions(
         self, document: Document, complete_event: CompleteEvent
     ) -> Iterator[Completion]:
-        for candidate in complete(document.text_before_cursor, self._seen(), self._targets):
+        text = document.text_before_cursor
+        for candidate in complete(text, self._seen(), self._targets, cell=self._cell):
             yield Completion(
                 candidate.text, start_position=-candidate.start, display_meta=candidate.help
             )

@@ -7,6 +7,7 @@ import contextlib
 import signal
 import time
 from collections.abc import Callable
+from typing import Any
 
 from prompt_toolkit import PromptSession
 from prompt_toolkit.application import get_app_or_none, run_in_terminal
@@ -36,8 +37,10 @@ from ..engine import (
     Status,
     UiStep,
 )
+from ..engine.cell import Cell
 from ..engine.events import Event
 from ..present.banner import live_banner
+from ..present.cell_view import by_target, cell_targets
 from ..present.cells import age_text, status_cell, value_cell
 from ..present.completion import WHOLE_LIST, hint
 from ..present.frames import frame_line
@@ -54,6 +57,7 @@ from .prompt_parts import (
     RacLexer,
     SharedHistory,
     SharedSuggest,
+    cell_toolbar_fragments,
     confirm_message,
     prompt_fragments,
     toolbar_fragments,
@@ -71,20 +75,21 @@ class Repl:
 
     def __init__(
         self,
-        engine: Engine,
+        cell: Cell | Engine,
         history: History,
         console: Console,
         *,
         input: Input | None = None,
         output: Output | None = None,
     ) -> None:
-        self.engine = engine
+        self.cell = cell if isinstance(cell, Cell) else Cell.of(cell)
         self.history = history
         self.console = console
         self.frames = False
         self.lost = False
-        self.status: Status | None = None
-        self.rows: dict[VarRef, RowView] = {}
+        self.statuses: dict[str, Status] = {}  # each target's, by name
+        self.rows_of: dict[str, dict[VarRef, RowView]] = {m.name: {} for m in self.cell.members}
+        self._ran_on: dict[int, str] = {}  # the target each awaited Result came from
         self._waiting: dict[int, asyncio.Future[Result]] = {}
         self._wake = asyncio.Event()
         self._closing = False
@@ -97,7 +102,11 @@ class Repl:
             message=self.prompt_message,
             history=SharedHistory(history),
             auto_suggest=SharedSuggest(history),
-            completer=RacCompleter(self._seen, connect_targets(engine.profiles)),
+            completer=RacCompleter(
+                self._seen,
+                connect_targets(self.cell.members[0].engine.profiles),
+                cell_targets(self.cell),
+            ),
             complete_while_typing=False,
             # The menu's room: a short list (the 9 types) whole, as the console lists it;
             # a longer one scrolls.
@@ -113,18 +122,34 @@ class Repl:
 
     # ------------------------------------------------------------- prompt
 
+    @property
+    def status(self) -> Status | None:
+        """The current target's status (the prompt's and the toolbar's)."""
+        return self.statuses.get(self.cell.current)
+
+    @property
+    def rows(self) -> dict[VarRef, RowView]:
+        """The current target's watched rows."""
+        return self.rows_of[self.cell.current]
+
     def _seen(self) -> frozenset[tuple[str, int]]:
         """Indices used or watched (the engine counts watched ones as used)."""
         return self.status.seen if self.status is not None else frozenset()
 
     def prompt_message(self) -> FormattedText:
-        return prompt_fragments(self.status, self.lost)
+        current = None if self.cell.single else self.cell.current
+        return prompt_fragments(self.status, self.lost, current)
 
     def toolbar(self) -> FormattedText:
         status = self.status
         rtt = status.rtt if status is not None else None
         rtt_text = f"rtt {rtt * 1000:.2f} ms" if rtt is not None else "rtt –"
-        parts = list(toolbar_fragments(status) if status is not None else [("", " starting ")])
+        if self.cell.single:
+            parts: list[Any] = list(
+                toolbar_fragments(status) if status is not None else [("", " starting ")]
+            )
+        else:
+            parts = list(cell_toolbar_fragments(self.cell.names, self.statuses, self.cell.current))
         parts.append(("", f" {rtt_text} "))
         if self.frames:
             parts.append(("", " frames on "))
@@ -155,24 +180,30 @@ class Repl:
     # ------------------------------------------------------------- outbox
 
     def drain(self) -> None:
-        """Take everything the engine published: state first, then events in order."""
-        batch: Batch = self.engine.outbox.drain()
-        if batch.status is not None:
-            self.status = batch.status
-        batch.apply_rows(self.rows)
+        """Take everything the targets published: state first, then events in order."""
+        for name, batch in self.cell.drain():
+            self._take(name, batch)
+
+    def _take(self, name: str | None, batch: Batch) -> None:
+        if name is not None:
+            if batch.status is not None:
+                self.statuses[name] = batch.status
+            batch.apply_rows(self.rows_of[name])
         for event in batch.events:
             if isinstance(event, Result):
                 waiter = self._waiting.pop(event.seq, None)
+                if name is not None:
+                    self._ran_on[event.seq] = name
                 if waiter is not None and not waiter.done():
                     waiter.set_result(event)
                 else:
-                    self._show_result(event)
+                    self._show_result(event, name)
             elif isinstance(event, ConfirmWrite):
                 task = asyncio.get_running_loop().create_task(self.confirm(event))
                 self._questions.add(task)
                 task.add_done_callback(self._questions.discard)
             else:
-                self._echo(event)
+                self._echo(event, name)
 
     async def confirm(self, question: ConfirmWrite) -> None:
         """A write on a ``confirm`` target: ``Write I10: 14 → 15 on Cell 3? [y/N]``; only
@@ -188,7 +219,9 @@ class Repl:
             while True:
                 clear_typeahead(self.prompt.input)
                 asked_at = time.monotonic()
-                answer = await self._confirm_prompt.prompt_async(confirm_message(question))
+                answer = await self._confirm_prompt.prompt_async(
+                    confirm_message(question, self._member_of(question.seq))
+                )
                 yes = answer.strip().lower() in ("y", "yes")
                 if not yes or time.monotonic() - asked_at >= CONFIRM_GUARD_SECONDS:
                     break
@@ -203,7 +236,7 @@ class Repl:
             yes = False
         finally:
             self.asking = None
-            self.engine.answer_confirm(question.seq, yes)
+            self.cell.answer_confirm(question.seq, yes)
 
     async def _drain_forever(self) -> None:
         """Drain when the engine says there is something: nothing wakes an idle REPL.
@@ -223,17 +256,18 @@ class Repl:
         """Called on the engine's thread when its outbox stops being empty."""
         loop.call_soon_threadsafe(self._wake.set)
 
-    async def submit(self, line: str | Watch | Unwatch) -> Result:
-        """Run a line (or a command of the REPL's own) and wait for its result."""
+    async def submit(self, line: str | Watch | Unwatch, name: str | None = None) -> Result:
+        """Run a line (or a command of the REPL's own, on target ``name``) and wait
+        for its result."""
         loop = asyncio.get_running_loop()
         future: asyncio.Future[Result] = loop.create_future()
-        engine = self.engine
+        cell = self.cell
         # Ctrl-C while a command runs cancels that command, not the REPL (where the loop
         # can take signals: not on Windows, where Ctrl-C keeps its default meaning);
         # taken before the line is submitted, so no Ctrl-C falls between the two.
         with contextlib.suppress(NotImplementedError, RuntimeError, ValueError):
-            loop.add_signal_handler(signal.SIGINT, engine.cancel)
-        seq = engine.submit(line) if isinstance(line, str) else engine.submit_command(line)
+            loop.add_signal_handler(signal.SIGINT, cell.cancel)
+        seq = cell.submit(line) if isinstance(line, str) else cell.submit_command(line, name=name)
         self._waiting[seq] = future
         self._wake.set()
         self._submitted.set()
@@ -247,9 +281,9 @@ class Repl:
 
     async def run(self) -> int:
         loop = asyncio.get_running_loop()
-        self.engine.outbox.notify = lambda: self._notify(loop)
-        self.engine.set_poll_frames(False)  # the REPL never shows a poll's frames
-        await asyncio.to_thread(self.engine.start)
+        self.cell.set_notify(lambda: self._notify(loop))
+        self.cell.set_poll_frames(False)  # the REPL never shows a poll's frames
+        await asyncio.to_thread(self.cell.start)
         self.drain()
         banner = self.banner()
         if banner is not None:
@@ -270,7 +304,7 @@ class Repl:
             self._closing = True
             drainer.cancel()
             await asyncio.gather(drainer, *self._printing, return_exceptions=True)
-            await asyncio.to_thread(self.engine.stop)
+            await asyncio.to_thread(self.cell.stop)
             self.drain()
         return 0
 
@@ -288,7 +322,9 @@ class Repl:
         return Text.assemble(live_banner(status), " help lists the commands; Ctrl-D leaves.")
 
     def exit_status(self, status: int) -> int:
-        return self.status.exit_status(status) if self.status is not None else status
+        for known in self.statuses.values():
+            status = known.exit_status(status)
+        return status
 
     async def handle(self, text: str) -> bool:
         """Run what was entered, line by line (a paste may hold several); False when a
@@ -301,24 +337,33 @@ class Repl:
     async def _handle_line(self, line: str) -> bool:
         """Run one line; False when it asks to leave. The history keeps it once its
         result says it was not refused."""
-        watched_before = set(self.rows)
+        watched_before = {var for rows in self.rows_of.values() for var in rows}
         self.history.enter(line)
         result = await self.submit(line)
         self.history.settle(line, refused=is_refused(result))
-        if isinstance(result.command, Watch) and not _failed(result):
-            if self.status is not None and self.status.csv_log is not None:
-                self._show_result(result)  # whether the CSV log has these columns
-            await self.live_watch(result.command, watched_before)
+        name = self._ran_on.pop(result.seq, None)
+        if isinstance(result.command, Watch) and not _failed(result) and name is not None:
+            status = self.statuses.get(name)
+            if status is not None and status.csv_log is not None:
+                self._show_result(result, name)  # whether the CSV log has these columns
+            await self.live_watch(result.command, name, watched_before)
             return True
-        return self._show_result(result)
+        return self._show_result(result, name)
 
-    def _show_result(self, result: Result) -> bool:
-        """Print a result; False when it asks to leave."""
+    def _member_of(self, seq: int) -> str | None:
+        """The target a job ran on, when several are open (None: one is)."""
+        return None if self.cell.single else self._ran_on.get(seq)
+
+    def _show_result(self, result: Result, name: str | None = None) -> bool:
+        """Print a result (named by its target when several are open); False when it
+        asks to leave."""
+        by = None if self.cell.single else name
         for feedback in result.feedback:
             if isinstance(feedback, Outcome):
-                self._show_outcome(feedback)
+                self._show_outcome(feedback, by)
             elif isinstance(feedback, Message):
-                self._print(notice_text(feedback.text, error=feedback.level == "error"))
+                text = notice_text(feedback.text, error=feedback.level == "error")
+                self._print(by_target(by, text))
             elif feedback is UiStep.QUIT:
                 return False
             elif feedback is UiStep.CLEAR:
@@ -328,37 +373,38 @@ class Repl:
                 self._print(f"frames {'on' if self.frames else 'off'}")
         return True
 
-    def _show_outcome(self, outcome: Outcome) -> None:
-        status = self.status
+    def _show_outcome(self, outcome: Outcome, by: str | None = None) -> None:
+        status = self.statuses.get(by) if by is not None else self.status
         if outcome.status == ExitStatus.TRANSPORT and status is not None and status.has_session:
             self.lost = status.connection != "connected"
             if self.lost:
-                self._print(
-                    notice_text(f"{error_text(outcome)}: the next command reconnects", error=True)
-                )
+                text = f"{error_text(outcome)}: the next command reconnects"
+                self._print(by_target(by, notice_text(text, error=True)))
                 return
         elif outcome.response is not None:
             self.lost = False
         if outcome.ok:
-            self._print(outcome_text(outcome), soft_wrap=True)
+            self._print(by_target(by, outcome_text(outcome)), soft_wrap=True)
         else:
-            self._print(notice_text(error_text(outcome), error=True), soft_wrap=True)
+            self._print(by_target(by, notice_text(error_text(outcome), error=True)), soft_wrap=True)
 
-    def _echo(self, event: Event) -> None:
+    def _echo(self, event: Event, name: str | None = None) -> None:
         """``frames on``: every frame, dimmed, as it crosses the wire (not during a watch);
-        an alert (a recording stopped) always."""
+        an alert (a recording stopped) always. Named by its target when several are open."""
+        by = None if self.cell.single else name
         if isinstance(event, Alert):
-            self._print(notice_text(event.text, error=True))
+            self._print(by_target(by, notice_text(event.text, error=True)))
         elif self.frames and isinstance(event, Note):  # a gap or a failed request, marked
-            self._print(notice_text(f"── {event.text} ──", style="dim"), soft_wrap=True)
+            text = notice_text(f"── {event.text} ──", style="dim")
+            self._print(by_target(by, text), soft_wrap=True)
         elif self.frames and isinstance(event, Frame) and not event.poll:
-            self._print(Text(frame_line(event), style="dim"), soft_wrap=True)
+            self._print(by_target(by, Text(frame_line(event), style="dim")), soft_wrap=True)
 
     # ------------------------------------------------------------- watch
 
-    async def live_watch(self, command: Watch, watched_before: set[VarRef]) -> None:
-        """A table updating in place until Enter, q or Ctrl-C; then back to the prompt
-        (the rows this watch added go again)."""
+    async def live_watch(self, command: Watch, name: str, watched_before: set[VarRef]) -> None:
+        """A table (of target ``name``'s rows) updating in place until Enter, q or
+        Ctrl-C; then back to the prompt (the rows this watch added go again)."""
         added = [v for v in command.vars if v not in watched_before]
         stop = asyncio.Event()
         keys = self.prompt.input
@@ -367,8 +413,9 @@ class Repl:
             if any(press.key in STOP_KEYS for press in keys.read_keys()):
                 stop.set()
 
-        period = self.status.period if self.status is not None else 0.0
-        if self._paused():
+        status = self.statuses.get(name)
+        period = status.period if status is not None else 0.0
+        if self._paused(name):
             self._print(
                 notice_text(
                     "polling is paused: these rows wait for resume (Enter, q or Ctrl-C "
@@ -388,7 +435,7 @@ class Repl:
                 keys.raw_mode(),
                 keys.attach(key_pressed),
                 Live(
-                    self._watch_table(command),
+                    self._watch_table(command, name),
                     console=self.console,
                     auto_refresh=False,
                     transient=False,
@@ -399,24 +446,28 @@ class Repl:
                         async with asyncio.timeout(LIVE_REFRESH_SECONDS):
                             await stop.wait()
                     self.drain()
-                    live.update(self._watch_table(command), refresh=True)
+                    live.update(self._watch_table(command, name), refresh=True)
         finally:
             if added:
-                await self.submit(Unwatch(tuple(added)))
+                await self.submit(Unwatch(tuple(added)), name)
 
-    def _paused(self) -> bool:
-        return self.status is not None and self.status.paused
+    def _paused(self, name: str) -> bool:
+        status = self.statuses.get(name)
+        return status is not None and status.paused
 
-    def _watch_table(self, command: Watch) -> Table:
+    def _watch_table(self, command: Watch, name: str) -> Table:
         """The watched rows; while polling is paused each says so (a row never read
         says "not polled", not a blank that never fills)."""
         table = Table(box=None, pad_edge=False, header_style="bold")
         for title in ("Variable", "Label", "Status", "Changed", "Value"):
             table.add_column(title)
         now = time.monotonic()
-        paused = self._paused()
+        paused = self._paused(name)
+        rows = self.rows_of[name]
+        if not self.cell.single:
+            table.title = name
         for var in command.vars:
-            row = self.rows.get(var)
+            row = rows.get(var)
             if row is not None:
                 value = value_cell(row, now)
                 if paused and row.variant is None:
@@ -435,8 +486,8 @@ def _failed(result: Result) -> bool:
     return any(isinstance(f, Message) and f.level == "error" for f in result.feedback)
 
 
-def run_repl(engine: Engine, history: History) -> int:
+def run_repl(cell: Cell | Engine, history: History) -> int:
     """``rac-console repl`` on a terminal."""
-    repl = Repl(engine, history, make_console())
+    repl = Repl(cell, history, make_console())
     keep_full_collections_rare()  # the start-up's objects frozen: no line waits on a full pass
     return repl.exit_status(asyncio.run(repl.run()))

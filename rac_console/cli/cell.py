@@ -1,0 +1,132 @@
+"""Which controllers a command talks to when it is several: ``-H cell3,cell4`` or
+``--cell NAME``; each target resolved by the one resolver ``-H`` uses alone.
+
+``--cell demo`` (with no ``[cell.demo]`` in the config) opens simulators playing a
+handshake, started here, on a thread of this process, for as long as the command runs.
+"""
+
+from __future__ import annotations
+
+import argparse
+import atexit
+import sys
+
+from ..commands.cells import DEMO_CELL, split_hosts
+from ..commands.target import Target
+from ..commands.target import resolve_target as resolve_target_of
+from ..engine.config import load_config
+from ..protocol import InputError
+from ..protocol.text import terminal_safe
+from ..session.endpoints import addresses
+
+#: Simulators of ``--cell demo``.
+DEMO_TARGETS = 2
+
+Members = list[tuple[str, Target]]
+
+
+def settle_cell(args: argparse.Namespace) -> bool | None:
+    """``args.cell_targets`` set to the cell's (name, target) pairs, and ``args.target``
+    to the first (so what reads one target reads the current one); None when the
+    command names one target (nothing changes); False after one line on stderr."""
+    try:
+        members = _members(args)
+    except InputError as exc:
+        print(f"rac-console: {terminal_safe(str(exc))}", file=sys.stderr)
+        return False
+    if members is None:
+        args.cell_targets = None
+        return None
+    args.cell_targets = members
+    args.target = members[0][1]
+    args.host, args.port, args.read_only = args.target.host, args.target.port, args.target.read_only
+    return True
+
+
+def pick_member(args: argparse.Namespace) -> str | None:
+    """``get``/``put``/``send`` on a cell: the first word names the target (``get @cell3
+    I 10``), which becomes the command's one target. Its name; InputError when the
+    first word names none. None when no cell is open (nothing changes)."""
+    members = getattr(args, "cell_targets", None)
+    if not members:
+        return None
+    names = [name for name, _ in members]
+    first = args.words[0] if args.words else ""
+    example = f"rac-console {args.command} @{names[0]} I 10"
+    if not first.startswith("@"):
+        raise InputError(
+            f"several targets are open ({', '.join(names)}): name the one to "
+            f"{'write' if args.command == 'put' else 'ask'} first, e.g. {example}"
+        )
+    found = dict(members).get(first[1:])
+    if found is None:
+        raise InputError(
+            f"no target named {terminal_safe(first[1:])} is open here; open: {', '.join(names)}"
+        )
+    args.words = args.words[1:]
+    args.target, args.cell_targets = found, None
+    args.host, args.port, args.read_only = found.host, found.port, found.read_only
+    return first[1:]
+
+
+def _members(args: argparse.Namespace) -> Members | None:
+    hosts = split_hosts(args.host)
+    cell = getattr(args, "cell", None)
+    if cell is None and hosts is None:
+        return None
+    if cell is not None and args.host is not None:
+        raise InputError(f"--cell {cell} and -H {args.host}: give one (a cell names its targets)")
+    if args.port is not None:
+        raise InputError("-p applies to one target; in a cell each profile has its port")
+    config = load_config()
+    where = str(config.path) if config.found else f"{config.path} (no such file)"
+
+    def resolved(name: str) -> Target:
+        return resolve_target_of(
+            name,
+            None,
+            profiles=config.profiles,
+            read_only_flag=bool(args.read_only),
+            resolve=addresses,
+            config_where=where,
+        )
+
+    args.cell_watch = ()
+    if hosts is not None:
+        return [_named(name, resolved(name)) for name in hosts]
+    assert cell is not None
+    spec = config.cells.get(cell)
+    if spec is None and cell == DEMO_CELL:
+        return _demo(args)
+    if spec is None:
+        known = ", ".join(sorted(config.cells)) or f"none in {where}"
+        raise InputError(
+            f"no cell named {cell} (cells: {known}); name one with [cell.{cell}] and "
+            f'targets = ["cell3", "cell4"], or try --cell {DEMO_CELL}'
+        )
+    args.cell_watch = spec.watch
+    return [_named(name, resolved(name)) for name in spec.targets]
+
+
+def _named(typed: str, target: Target) -> tuple[str, Target]:
+    """A member's name: its profile's, else the address as typed."""
+    return (target.profile.name if target.profile is not None else typed), target
+
+
+def _demo(args: argparse.Namespace) -> Members:
+    from ..sim.cell import SimulatedCellThread
+
+    simulated = SimulatedCellThread(DEMO_TARGETS).start()
+    atexit.register(simulated.stop)
+    if args.command is not None:
+        print(
+            "rac-console: --cell demo: simulators playing a handshake, not controllers",
+            file=sys.stderr,
+        )
+    return [
+        (
+            name,
+            Target(host, port, read_only=bool(args.read_only), read_only_flag=bool(args.read_only)),
+        )
+        for name, host, port in simulated.cell.addresses
+    ]
