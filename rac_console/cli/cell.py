@@ -12,6 +12,7 @@ import atexit
 import sys
 
 from ..commands.cells import DEMO_CELL, split_hosts
+from ..commands.language import parse_connect
 from ..commands.target import Target
 from ..commands.target import resolve_target as resolve_target_of
 from ..engine.config import load_config
@@ -82,9 +83,12 @@ def _members(args: argparse.Namespace) -> Members | None:
     where = str(config.path) if config.found else f"{config.path} (no such file)"
 
     def resolved(name: str) -> Target:
+        address = parse_connect(name)  # a profile, HOST, HOST:PORT or [v6]:PORT
+        if address.host is None:
+            raise InputError("-H names controllers; sim is not one (try --cell demo)")
         return resolve_target_of(
-            name,
-            None,
+            address.host,
+            address.port if address.port_given else None,
             profiles=config.profiles,
             read_only_flag=bool(args.read_only),
             resolve=addresses,

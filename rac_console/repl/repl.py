@@ -312,6 +312,13 @@ class Repl:
         """The first line: the simulator, or the live controller with its profile and
         write rules (as the console's welcome says it), then how to get help and out."""
         status = self.status
+        if not self.cell.single:
+            return Text.assemble(
+                ("cell", "bold"),
+                f" of {len(self.cell.members)} targets: {', '.join(self.cell.names)}. Lines run "
+                "on the one the prompt names; @NAME LINE runs one elsewhere, use NAME changes "
+                "it. help lists the commands; Ctrl-D leaves.",
+            )
         if status is None or not status.has_session:
             return None
         if status.is_simulator:

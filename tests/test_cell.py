@@ -1,0 +1,207 @@
+"""A cell: one engine per controller behind one front end. Lines go to ``@NAME`` or to
+the current target (``use NAME``), each write to one controller under its own rules;
+one controller down leaves the others polling. Real simulators over real sockets; the
+REPL driven through prompt-toolkit's pipe input."""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Iterator
+from pathlib import Path
+
+import pytest
+from test_repl import Driver
+
+from rac_console.commands.cells import parse_cells, route, split_address, split_hosts
+from rac_console.commands.policy import WritePolicy, Writes
+from rac_console.commands.target import Target
+from rac_console.engine import Result
+from rac_console.engine.cell import Cell
+from rac_console.engine.outbox import Batch
+from rac_console.protocol import InputError, kind_of
+from rac_console.sim.thread import SimulatorThread
+
+I = kind_of("I")  # noqa: E741
+
+
+@pytest.fixture
+def sims() -> Iterator[list[SimulatorThread]]:
+    with SimulatorThread() as a, SimulatorThread() as b, SimulatorThread() as c:
+        yield [a, b, c]
+
+
+def open_cell(sims: list[SimulatorThread], **rules: Target) -> Cell:
+    names = ["robotA", "robotB", "robotC"][: len(sims)]
+    targets = [rules.get(n) or Target(s.host, s.port) for n, s in zip(names, sims, strict=True)]
+    cell = Cell(list(zip(names, targets, strict=True)))
+    cell.start()
+    return cell
+
+
+class Drained:
+    """What a cell published, by target, gathered until a condition holds."""
+
+    def __init__(self, cell: Cell) -> None:
+        self.cell = cell
+        self.results: dict[int, tuple[str | None, Result]] = {}
+        self.batches: dict[str | None, list[Batch]] = {}
+
+    def until(self, holds: Callable[[Drained], bool], what: str, timeout: float = 10) -> None:
+        deadline = time.monotonic() + timeout
+        while not holds(self):
+            if time.monotonic() > deadline:
+                raise AssertionError(f"timed out waiting for {what}")
+            for name, batch in self.cell.drain():
+                self.batches.setdefault(name, []).append(batch)
+                for event in batch.events:
+                    if isinstance(event, Result):
+                        self.results[event.seq] = (name, event)
+            time.sleep(0.01)
+
+    def result(self, seq: int) -> tuple[str | None, Result]:
+        self.until(lambda d: seq in d.results, f"result {seq}")
+        return self.results[seq]
+
+
+def text(result: Result) -> str:
+    return " ".join(str(getattr(f, "text", f)) for f in result.feedback)
+
+
+def test_lines_go_to_their_at_name_or_to_the_current_target(sims: list[SimulatorThread]) -> None:
+    cell = open_cell(sims)
+    drained = Drained(cell)
+    try:
+        put_b = cell.submit("@robotB put I 10 7")
+        put_current = cell.submit("put I 11 8")
+        use = cell.submit("use robotC")
+        put_c = cell.submit("put I 12 9")
+        assert drained.result(put_b)[0] == "robotB"
+        assert drained.result(put_current)[0] == "robotA"
+        assert drained.result(use)[0] is None and "current target: robotC" in text(
+            drained.result(use)[1]
+        )
+        assert drained.result(put_c)[0] == "robotC"
+        assert len({put_b, put_current, use, put_c}) == 4  # one number, one job in the cell
+    finally:
+        cell.stop()
+    values = [[s.server.controller.value(I, n) for n in (10, 11, 12)] for s in sims]
+    assert values[0][1] == 8 and values[1][0] == 7 and values[2][2] == 9
+    assert values[0][0] != 7 and values[2][0] != 7 and values[1][1] != 8 and values[1][2] != 9
+
+
+def test_a_line_for_a_target_that_is_not_open_is_refused_and_nothing_is_sent(
+    sims: list[SimulatorThread],
+) -> None:
+    cell = open_cell(sims[:2])
+    drained = Drained(cell)
+    try:
+        before = [s.server.controller.requests for s in sims[:2]]
+        seq = cell.submit("@robotZ put I 10 7")
+        name, result = drained.result(seq)
+        assert name is None and "no target named robotZ" in text(result)
+        assert "open: robotA, robotB" in text(result)
+        refused = cell.submit("connect 127.0.0.1")
+        assert "a cell's targets are fixed" in text(drained.result(refused)[1])
+    finally:
+        cell.stop()
+    assert [s.server.controller.requests for s in sims[:2]] == before
+
+
+def test_each_targets_rules_apply_to_it_alone(sims: list[SimulatorThread]) -> None:
+    read_only = Target(
+        sims[1].host, sims[1].port, policy=WritePolicy(Writes.READ_ONLY), read_only=True
+    )
+    cell = open_cell(sims[:2], robotB=read_only)
+    drained = Drained(cell)
+    try:
+        refused = cell.submit("@robotB put I 10 7")
+        written = cell.submit("@robotA put I 10 7")
+        assert "read-only" in text(drained.result(refused)[1])
+        drained.result(written)
+    finally:
+        cell.stop()
+    assert sims[0].server.controller.value(I, 10) == 7
+    assert sims[1].server.controller.value(I, 10) != 7
+
+
+def test_one_controller_down_leaves_the_others_polling(sims: list[SimulatorThread]) -> None:
+    cell = open_cell(sims[:2])
+    drained = Drained(cell)
+    try:
+        for name in ("robotA", "robotB"):
+            drained.result(cell.submit(f"@{name} watch I 0"))  # I 0 counts at 10 Hz
+        drained.result(cell.submit("@robotA interval 0.05"))
+        drained.result(cell.submit("@robotB interval 0.05"))
+        sims[1].stop()
+
+        def row(name: str):  # type: ignore[no-untyped-def]
+            rows = [b.rows for b in drained.batches.get(name, []) if b.rows]
+            return next((r for batch in reversed(rows) for r in batch.values()), None)
+
+        drained.until(lambda d: (r := row("robotB")) is not None and r.stale, "robotB's row stale")
+        seen = row("robotA")
+        assert seen is not None and not seen.stale
+        drained.until(
+            lambda d: (r := row("robotA")) is not None and r.variant != seen.variant,
+            "robotA's value still moving",
+        )
+    finally:
+        cell.stop()
+
+
+def test_the_pure_parts() -> None:
+    assert split_hosts("cell3") is None and split_hosts("cell3,cell4") == ["cell3", "cell4"]
+    with pytest.raises(InputError, match="twice"):
+        split_hosts("cell3,cell3")
+    with pytest.raises(InputError, match="missing between commas"):
+        split_hosts("cell3,,cell4")
+    assert split_address("@cell4 get I 10") == ("cell4", "get I 10")
+    assert split_address("get I 10") == (None, "get I 10")
+    with pytest.raises(InputError, match="needs a command"):
+        split_address("@cell4")
+    assert route("get I 1", ["a", "b"], "b") == ("b", "get I 1")
+    with pytest.raises(InputError, match="open: a, b"):
+        route("@c get I 1", ["a", "b"], "a")
+
+    def fail(text: str) -> InputError:
+        return InputError(text)
+
+    cells = parse_cells(
+        {"l2": {"targets": ["a", "b"], "watch": ["a IO 128 placed"]}}, {"a": 1, "b": 2}, fail
+    )
+    assert cells["l2"].targets == ("a", "b") and cells["l2"].watch == ("a IO 128 placed",)
+    with pytest.raises(InputError, match="no profile named c"):
+        parse_cells({"l2": {"targets": ["a", "c"]}}, {"a": 1}, fail)
+    with pytest.raises(InputError, match="start with one of its targets"):
+        parse_cells({"l2": {"targets": ["a"], "watch": ["IO 128"]}}, {"a": 1}, fail)
+
+
+async def test_the_repl_prompt_names_the_current_target_and_at_name_runs_elsewhere(
+    tmp_path: Path, sims: list[SimulatorThread]
+) -> None:
+    sims[1].server.controller.set("I", 5, 55)
+    sims[0].server.controller.set("I", 5, 33)
+    cell = Cell(
+        [
+            ("robotA", Target(sims[0].host, sims[0].port)),
+            ("robotB", Target(sims[1].host, sims[1].port)),
+        ]
+    )
+    driver = Driver(tmp_path, screen=True)
+    driver.engine = cell  # type: ignore[assignment]
+
+    async def steps(d: Driver) -> None:
+        await d.until(lambda out: "robotA\x1b[0m ›" in out, "the prompt naming robotA")
+        d.type("get I 5\r")
+        await d.until(lambda out: "robotA › I5 = 33" in out, "robotA's value")
+        d.type("@robotB get I 5\r")
+        await d.until(lambda out: "robotB › I5 = 55" in out, "robotB's value")
+        d.type("use robotB\r")
+        await d.until(lambda out: "current target: robotB" in out, "use")
+        d.type("put I 6 66\r")
+        await d.until(lambda out: "robotB › I6: " in out, "the write naming robotB")
+
+    out = await driver.run(steps)
+    assert "robotB\x1b[0m ›" in out  # the prompt after use
+    assert sims[1].server.controller.value(I, 6) == 66
+    assert sims[0].server.controller.value(I, 6) != 66
