@@ -114,12 +114,15 @@ def run_live(
     def wait() -> None:
         woke.wait(WAKE_EVERY)
         woke.clear()
+        for event in cell.outbox.drain().events:  # a file of the cell's that failed
+            if isinstance(event, Alert):
+                output.local_failure(event.text)
         for run in runs:
             run.take(run.engine.outbox.drain())
 
     try:
-        for run in runs:
-            run.submit_set_up(log_csv)
+        for n, run in enumerate(runs):  # a cell's CSV log is one, started at one target
+            run.submit_set_up(log_csv if n == 0 else None)
         while not all(run.set_up_done() for run in runs):
             wait()
         if not all(run.set_up_ok() for run in runs):
@@ -137,6 +140,9 @@ def run_live(
             raise
     finally:
         cell.stop()
+    for event in cell.outbox.drain().events:
+        if isinstance(event, Alert):
+            output.local_failure(event.text)
     for run in runs:
         run.ended = True
         run.take(run.engine.outbox.drain())  # the last alerts (a file that failed at the end)

@@ -58,6 +58,15 @@ def count_of(kind: Callable[[str], float]) -> Callable[[str], float]:
     return parse
 
 
+def cell_size(text: str) -> int:
+    """``sim --cell N``: how many simulators, one to a cell's most."""
+    from ..commands.cells import MOST_TARGETS
+
+    if not text.isdigit() or not 1 <= int(text) <= MOST_TARGETS:
+        raise argparse.ArgumentTypeError(f"a cell has 1 to {MOST_TARGETS} simulators, got {text!r}")
+    return int(text)
+
+
 def port_number(text: str) -> int:
     if not text.isdigit() or not 0 <= int(text) <= 65535:
         raise argparse.ArgumentTypeError(f"a port is a number from 0 to 65535, got {text!r}")

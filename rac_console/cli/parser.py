@@ -19,6 +19,7 @@ from .options import (
     WATCH_HELP,
     WORDS_EPILOG,
     CliParser,
+    cell_size,
     count_of,
     global_options,
     help_option,
@@ -238,6 +239,15 @@ def build_cli() -> CliParser:
         default=None,
         help="after a variable's last recorded answer: hold it (the default: never shows "
         "a change that did not happen) or cycle back to its first",
+    )
+    sim.add_argument(
+        "--cell",
+        type=cell_size,
+        default=None,
+        metavar="N",
+        help="serve N simulators (robotA, robotB, ...) on ports PORT, PORT+1, ... (--port 0: "
+        "any free ones) playing a handshake: robotA's IO 128 (part placed) on every 4 s, "
+        "robotB's IO 64 (go) answering it; Ctrl-C stops them all",
     )
     faults = sim.add_argument_group(
         "faults (each reproducible with --seed; change them while it runs with a line "

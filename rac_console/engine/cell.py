@@ -7,22 +7,29 @@ that target, any other line to the current one (``use NAME`` changes it). A writ
 always goes to one controller, named by the line or by the prompt, under that
 controller's own rules. Jobs are numbered by one counter for the whole cell, so a
 number names one job whichever engine runs it.
+
+The files are the cell's: one ``--record``, one ``--log`` transcript and one CSV log for
+every target, each line naming its target (:class:`~.engine.CellFiles`). The members'
+options name no file; the cell opens them before any thread starts, says a failure once
+(it stops that file for every target), and closes them once every member has stopped.
 """
 
 from __future__ import annotations
 
 import itertools
 from collections.abc import Callable, Iterator, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 from ..commands.cells import route
 from ..commands.language import Command, Connect, Use
 from ..commands.target import Target
 from ..protocol import InputError
 from ..protocol.text import terminal_safe
+from .cellcsv import CellCsv
 from .commands import BUILTIN
-from .engine import Engine, EngineOptions
-from .events import Message, Result
+from .engine import CellFiles, Engine, EngineOptions
+from .events import Alert, Message, Result
+from .frame_files import FrameFiles
 from .outbox import Batch, Outbox
 from .registry import Registry, Where
 
@@ -64,19 +71,46 @@ class Cell:
             raise InputError("a cell needs at least one target")
         self.registry, self.where = registry, where
         self._numbers: Iterator[int] = itertools.count(1)
-        #: The cell's own results (``use``, a line for a target it does not have).
+        #: The cell's own results (``use``, a line for a target it does not have) and
+        #: alerts (a file of the cell's that failed).
         self.outbox = Outbox(notify)
+        options = options if options is not None else EngineOptions()
+        names = [name for name, _ in targets]
+        # One target keeps its own files, exactly as without a cell; several share the
+        # cell's, each line naming its target.
+        self.files: FrameFiles | None = None
+        self.csv: CellCsv | None = None
+        if len(targets) > 1:
+            self.files = FrameFiles(options.record, options.transcript, self._alert)
+            self.csv = CellCsv(names, self._alert)
+            try:
+                if options.log_csv:
+                    self.csv.wait_for_rows(options.log_csv)
+            except InputError:
+                self.files.close()
+                raise
+        files, csv = self.files, self.csv
+        own = (
+            options
+            if files is None
+            else replace(options, record=None, transcript=None, log_csv=None)
+        )
         self.members: tuple[Member, ...] = tuple(
             Member(
                 name,
                 target,
                 Engine(
                     target=target,
-                    options=options,
+                    options=own,
                     outbox=Outbox(notify),
                     where=where,
                     registry=registry,
                     numbers=self._numbers,
+                    cell_files=(
+                        None
+                        if files is None or csv is None
+                        else CellFiles(name, files.view(name), csv)
+                    ),
                 ),
             )
             for name, target in targets
@@ -91,6 +125,7 @@ class Cell:
         cell.registry, cell.where = engine.registry, engine.where
         cell._numbers = engine.numbers
         cell.outbox = Outbox(engine.outbox.notify)
+        cell.files = cell.csv = None
         member = Member(name or member_name(engine.target), engine.target, engine)
         cell.members = (member,)
         cell._by_name = {member.name: member}
@@ -130,8 +165,17 @@ class Cell:
             member.engine.start(connect)
 
     def stop(self, timeout: float = 5.0) -> None:
+        """Stop every member, then close the cell's files (no member writes them now)."""
         for member in self.members:
             member.engine.stop(timeout)
+        if self.files is not None:
+            self.files.close()
+        if self.csv is not None:
+            self.csv.close()
+
+    def _alert(self, text: str) -> None:
+        """A file of the cell's failed (from any member's thread): said once, here."""
+        self.outbox.put(Alert(text))
 
     # ------------------------------------------------------------------ jobs
 

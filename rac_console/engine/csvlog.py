@@ -64,16 +64,22 @@ def csv_field(cell: str) -> str:
     return cell
 
 
-def columns_of(variables: Iterable[VarRef]) -> list[str]:
+def columns_of(variables: Iterable[VarRef], prefix: str = "") -> list[str]:
     """``time``, then one column per field of each variable, in order; each name a
     :func:`text_cell`, as a value is (a label is text too)."""
-    names = ["time"]
+    return ["time", *variable_columns(variables, prefix)]
+
+
+def variable_columns(variables: Iterable[VarRef], prefix: str = "") -> list[str]:
+    """One column per field of each variable: ``I10``, ``P10.X``; with ``prefix``
+    (a cell's target: ``cell3.``) ``cell3.I10``."""
+    names: list[str] = []
     for var in variables:
         labels = var.kind.labels
         if labels:
-            names.extend(text_cell(f"{var}.{label}") for label in labels)
+            names.extend(text_cell(f"{prefix}{var}.{label}") for label in labels)
         else:
-            names.append(text_cell(str(var)))
+            names.append(text_cell(f"{prefix}{var}"))
     return names
 
 
@@ -167,12 +173,14 @@ class CsvLog:
         variables: list[VarRef],
         on_failure: Callable[[str], None] | None = None,
         fd: int | None = None,
+        header: list[str] | None = None,
     ) -> None:
         """Raises InputError when the file cannot be opened, or holds other columns.
 
         ``fd``: the file opened already (:func:`open_for_append`), now this log's. A
         write that fails, the header's too, sets :attr:`failure` and calls
-        ``on_failure`` with it."""
+        ``on_failure`` with it. ``header``: columns of the caller's (a cell's), whose
+        rows it writes with :meth:`write_cells`."""
         self.path = path
         self.variables = variables
         self.rows = 0
@@ -182,7 +190,7 @@ class CsvLog:
         #: Each variable's last value and its fields as written, joined: a value seen
         #: again is not formatted again.
         self._fields: dict[VarRef, tuple[Variant | None, str]] = {}
-        header = columns_of(variables)
+        header = header if header is not None else columns_of(variables)
         try:
             existing, last = _existing(path)
             if existing is not None and existing != header:
@@ -219,6 +227,11 @@ class CsvLog:
                 fields[var] = kept
             row.append(kept[1])
         if self._write_line(",".join(row)):
+            self.rows += 1
+
+    def write_cells(self, cells: list[str]) -> None:
+        """One row made by the caller: each cell written already (escaped, quoted)."""
+        if self._write_line(",".join(cells)):
             self.rows += 1
 
     def _write_line(self, line: str) -> bool:

@@ -24,6 +24,7 @@ from ..commands.policy import TargetProfile, WritePolicy, Writes
 from ..commands.target import Target
 from ..protocol import InputError
 from ..session import ConnectFailed, Disconnected, Frame
+from .cellcsv import CellCsv
 from .commands import BUILTIN
 from .context import CommandContext, EngineParts, Job
 from .csvsink import CsvSink
@@ -65,6 +66,17 @@ class EngineOptions:
     readings: bool = False  # each Cycle carries how each read went (the CLI's lines)
 
 
+@dataclass(frozen=True)
+class CellFiles:
+    """What a cell's member writes to: the cell's files, each line naming the member.
+    The cell owns them (opens, closes, says a failure once); the member's options name
+    no file."""
+
+    name: str
+    files: FrameFiles  # the cell's, seen as this member (FrameFiles.view)
+    csv: CellCsv
+
+
 class Engine:
     """Start it, submit lines, drain :attr:`outbox`, stop it."""
 
@@ -79,6 +91,7 @@ class Engine:
         where: Where = Where.CONSOLE,
         registry: Registry = BUILTIN,
         numbers: Iterator[int] | None = None,
+        cell_files: CellFiles | None = None,
         **words: object,
     ) -> None:
         """The target is ``target``, or made of ``host``, ``port`` and the words
@@ -86,15 +99,23 @@ class Engine:
         or the words ``timeout``, ``interval``, ``verify``, ``cycles``, ``record``,
         ``transcript``, ``log_csv``. Raises InputError when a file cannot be opened
         (before any thread starts). ``numbers`` gives submitted jobs their numbers:
-        the engines of a cell share one, so a number names one job in the cell."""
+        the engines of a cell share one, so a number names one job in the cell, and
+        ``cell_files`` gives each the cell's files in place of its own."""
         self._rules, self._plain_policy = _target_of(host, port, target, words)
         self.options = options if options is not None else _options_of(words)
         self.outbox = outbox if outbox is not None else Outbox()
         self.where, self.registry = where, registry
         options = self.options
-        self._files = FrameFiles(options.record, options.transcript, self._alert)
+        if cell_files is not None:
+            self._files = cell_files.files
+        else:
+            self._files = FrameFiles(options.record, options.transcript, self._alert)
         self._publisher = Publisher(self.outbox, self._files, options.frames)
-        self._csv = CsvSink(self._alert, lambda: self.publish_status(force=True))
+        self._csv = CsvSink(
+            self._alert,
+            lambda: self.publish_status(force=True),
+            (cell_files.csv, cell_files.name) if cell_files is not None else None,
+        )
         self._link = Link(
             self._publisher, options.timeout, went_down=self._went_down, connecting=self._connecting
         )
@@ -253,7 +274,7 @@ class Engine:
             self._started.set()
             self._link.close()
             self._files.close()
-            self._csv.stop()
+            self._csv.close()
             self._publisher.flush()
             self.publish_status(force=True)
 

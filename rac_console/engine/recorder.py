@@ -11,6 +11,7 @@ import contextlib
 import errno
 import json
 import os
+import threading
 from collections.abc import Callable
 from typing import TextIO
 
@@ -42,6 +43,10 @@ class LineFile:
     good: the failure is kept in :attr:`failure` and told once to ``on_failure``; every
     later line is skipped, so the work on screen goes on untouched. Each line is one
     unbuffered write, so the file holds only whole lines up to the failure.
+
+    A cell's engines share one file, each on its own thread: :attr:`lock` is held for
+    each write and for the close, so no line is written to a descriptor closed (and
+    perhaps reused) by another thread, and a frame's lines stay together.
     """
 
     #: What the file is, in messages: ``cannot write the {what} FILE``.
@@ -56,6 +61,7 @@ class LineFile:
         self.written = 0
         self.failure: str | None = None
         self._on_failure = on_failure
+        self.lock = threading.RLock()
         try:
             self._fd: int | None = os.open(
                 path, os.O_WRONLY | os.O_CREAT | os.O_APPEND | getattr(os, "O_BINARY", 0), 0o600
@@ -65,14 +71,15 @@ class LineFile:
 
     def append(self, line: bytes) -> None:
         """One whole line (its newline included), unless the file stopped."""
-        if self._fd is None:
-            return
-        try:
-            append_whole(self._fd, line)
-        except OSError as exc:
-            self._fail(exc)
-            return
-        self.written += 1
+        with self.lock:
+            if self._fd is None:
+                return
+            try:
+                append_whole(self._fd, line)
+            except OSError as exc:
+                self._fail(exc)
+                return
+            self.written += 1
 
     def _fail(self, exc: OSError) -> None:
         reason = exc.strerror or str(exc)
@@ -83,16 +90,19 @@ class LineFile:
             self._on_failure(self.failure)
 
     def close(self) -> None:
-        if self._fd is not None:
-            fd, self._fd = self._fd, None
-            with contextlib.suppress(OSError):
-                os.close(fd)
+        with self.lock:
+            if self._fd is not None:
+                fd, self._fd = self._fd, None
+                with contextlib.suppress(OSError):
+                    os.close(fd)
 
 
 class FrameRecorder(LineFile):
     """A frame observer appending JSON lines: ``t``, ``dir``, ``text``, ``rtt_ms``
-    (``partial``, ``unsolicited``, and ``refused`` with why for a reply not taken).
-    A failing disk stops it, said once (see :class:`LineFile`)."""
+    (``partial``, ``unsolicited``, and ``refused`` with why for a reply not taken);
+    in a cell also ``target``, the name of the target it crossed to or from (a single
+    target's lines have none, as they always had). A failing disk stops it, said once
+    (see :class:`LineFile`)."""
 
     what = "record file"
     stopped = "recording stopped"
@@ -102,15 +112,15 @@ class FrameRecorder(LineFile):
     def frames(self) -> int:
         return self.written
 
-    def __call__(self, frame: Frame) -> None:
+    def __call__(self, frame: Frame, target: str | None = None) -> None:
         if self._fd is None:
             return
         data = frame.data[:-1] if frame.data.endswith(b"\r") else frame.data
-        record: dict[str, object] = {
-            "t": round(frame.time, 6),
-            "dir": frame.direction,
-            "text": escape_bytes(data),
-        }
+        record: dict[str, object] = {"t": round(frame.time, 6)}
+        if target is not None:
+            record["target"] = target
+        record["dir"] = frame.direction
+        record["text"] = escape_bytes(data)
         if frame.rtt is not None:
             record["rtt_ms"] = round(frame.rtt * 1000, 3)
         if not frame.data.endswith(b"\r"):

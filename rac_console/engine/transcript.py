@@ -12,6 +12,9 @@ every byte that is not printable ASCII is escaped (``\\x1b``; a backslash is dou
 so the file has one line per frame whatever the controller sent, and ``grep`` and
 ``less`` show it as it is. Appended, never truncated, created owner-only, one unbuffered
 write per line; a failing disk stops it, said once (:class:`~.recorder.LineFile`).
+
+In a cell, one transcript holds every target's frames, each line naming its target
+after the stamp: ``[2026-11-22 03:45:55.123] cell3 TX GET:RC8:10:I:``.
 """
 
 from __future__ import annotations
@@ -43,10 +46,10 @@ class FrameTranscript(LineFile):
     what = "log file"
     stopped = "the --log transcript stopped"
 
-    def __call__(self, frame: Frame) -> None:
+    def __call__(self, frame: Frame, target: str | None = None) -> None:
         if self._fd is None:
             return
-        stamp = stamp_text(frame.time)
+        stamp = stamp_text(frame.time) + _named(target)
         complete = frame.data.endswith(b"\r")
         text = escape_bytes(frame.data[:-1] if complete else frame.data)
         lines = [f"{stamp}{DIRECTIONS[frame.direction]} {text}\n"]
@@ -56,14 +59,20 @@ class FrameTranscript(LineFile):
             lines.append(f"{stamp}-- the line above has no CR: the connection closed\n")
         if frame.problem is not None:
             lines.append(f"{stamp}-- the line above was refused: {_one_line(frame.problem)}\n")
-        for line in lines:
-            self.append(line.encode("utf-8"))
+        with self.lock:  # a frame's lines together, whichever target writes next
+            for line in lines:
+                self.append(line.encode("utf-8"))
 
-    def note(self, text: str, when: float | None = None) -> None:
+    def note(self, text: str, when: float | None = None, target: str | None = None) -> None:
         """Our own line (the connection lost, back, a request with no reply)."""
         if self._fd is not None:
-            stamp = stamp_text(time.time() if when is None else when)
+            stamp = stamp_text(time.time() if when is None else when) + _named(target)
             self.append(f"{stamp}-- {_one_line(text)}\n".encode())
+
+
+def _named(target: str | None) -> str:
+    """``cell3 `` in a cell's transcript (escaped: an address is typed text); else ''."""
+    return "" if target is None else f"{terminal_safe(target).replace(' ', '_')} "
 
 
 def _one_line(text: str) -> str:

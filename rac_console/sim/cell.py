@@ -13,6 +13,7 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import threading
+from collections.abc import Sequence
 
 from .controller import SimulatedController
 from .server import SimulatorServer
@@ -38,12 +39,17 @@ class SimulatedCell:
         reaction: float = REACTION,
         host: str = "127.0.0.1",
         ports: tuple[int, ...] = (),
+        servers: Sequence[SimulatorServer] = (),
     ) -> None:
+        """``servers``: made by the caller (``rac-console sim --cell N``: its faults,
+        its notices), each over a :class:`SimulatedController`; else ``count`` plain
+        ones on ``host`` and ``ports`` (0: any free port)."""
+        count = len(servers) or count
         if not 1 <= count <= len(NAMES):
             raise ValueError(f"a simulated cell has 1 to {len(NAMES)} simulators, not {count}")
         self.cycle, self.hold, self.reaction = cycle, hold, reaction
         wanted = ports or (0,) * count
-        self.servers = tuple(
+        self.servers = tuple(servers) or tuple(
             SimulatorServer(host, port, controller=SimulatedController()) for port in wanted
         )
         self._handshake: asyncio.Task[None] | None = None
@@ -60,9 +66,14 @@ class SimulatedCell:
     async def start(self) -> SimulatedCell:
         for server in self.servers:
             await server.start()
-        if len(self.servers) > 1:
-            self._handshake = asyncio.create_task(self._play())
+        self.play()
         return self
+
+    def play(self) -> None:
+        """Begin the handshake (the servers listen already: ``sim --cell`` starts them
+        itself, so that all of them start or none does)."""
+        if len(self.servers) > 1 and self._handshake is None:
+            self._handshake = asyncio.create_task(self._play())
 
     async def stop(self) -> None:
         if self._handshake is not None:

@@ -19,6 +19,12 @@ Only what the controller said is served, never an invented value:
   shows a change that did not happen) or starts again from its first (``cycle``).
 
 The order is the replay's, shared by every connection, like one controller's values.
+
+A cell's recording (every line naming its ``target``) is one recording per target, each
+paired on its own (:func:`load_recordings`): the targets' lines interleave, and a reply
+answers the request of its own target. A file mixing lines with and without a target
+is refused: it is two recordings appended to one file.
+
 Pure: no I/O but reading the file; what the user should hear goes to ``notify``. The
 file is read a line at a time, never a line longer than :data:`MAX_LINE_BYTES` nor more
 than :data:`MAX_FILE_BYTES` in all: a bigger one is refused, said in one line.
@@ -29,10 +35,12 @@ from __future__ import annotations
 import itertools
 import json
 import os
+import re
 from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass, field
 from typing import BinaryIO
 
+from ..commands.cells import MOST_TARGETS
 from ..protocol.hresult import (
     E_ACCESSDENIED,
     E_INVALIDCOMMAND,
@@ -56,6 +64,8 @@ MAX_LINE_BYTES = 512 * 1024
 #: The largest file a replay loads, in bytes (about half a million answers of a number):
 #: every answer is held in memory, so a bigger file is refused, not read.
 MAX_FILE_BYTES = 64 * 1024 * 1024
+#: A target's name as a cell writes it: a profile's name, or an address (``[::1]:5006``).
+_NAME = re.compile(r"[A-Za-z0-9_.:\[\]-]{1,64}", re.ASCII)
 
 Key = tuple[str, int]  # (type code, index): ("I", 10)
 Notify = Callable[[str, str], None]  # (kind, text), as Notices.note takes them
@@ -71,6 +81,7 @@ class Recording:
 
     path: str
     answers: dict[Key, list[bytes]] = field(default_factory=dict)  # reply frames, CR ended
+    target: str | None = None  # the cell's target it was recorded from (None: no cell)
     unanswered: int = 0  # requests with no reply, or whose reply was refused or cut off
     unused_replies: int = 0  # unsolicited lines, and replies that answered no request
     not_gets: int = 0  # answered requests that were not GETs (PUTs, raw lines, SIM:)
@@ -92,8 +103,9 @@ class Recording:
         ]
         skipped = f" (ignored: {', '.join(ignored)})" if ignored else ""
         then = "hold the last" if end == "hold" else "start again from the first"
+        of = "" if self.target is None else f" ({terminal_safe(self.target)})"
         return (
-            f"replaying {terminal_safe(self.path)}: {len(self.answers)} variables, "
+            f"replaying {terminal_safe(self.path)}{of}: {len(self.answers)} variables, "
             f"{self.count} answers{skipped}; after a variable's last answer: {then}"
         )
 
@@ -127,24 +139,35 @@ def _is_hex(pair: str) -> bool:
 
 
 def load_recording(path: str) -> Recording:
-    """Read a ``--record`` file; ReplayError (one line) when it cannot be replayed, or
-    is larger than :data:`MAX_FILE_BYTES` or has a line longer than :data:`MAX_LINE_BYTES`
-    (refused before either is read whole)."""
+    """Read a ``--record`` file of one target (see :func:`load_recordings`)."""
+    recordings = load_recordings(path)
+    if len(recordings) > 1:
+        names = ", ".join(terminal_safe(r.target or "") for r in recordings)
+        raise ReplayError(f"{terminal_safe(path)} holds a cell's targets ({names}), not one")
+    return recordings[0]
+
+
+def load_recordings(path: str) -> list[Recording]:
+    """Read a ``--record`` file: one recording, or one per target of a cell's, in the
+    order they first appear; a target with no answered GET is left out. ReplayError (one
+    line) when it cannot be replayed, or is larger than :data:`MAX_FILE_BYTES` or has a
+    line longer than :data:`MAX_LINE_BYTES` (refused before either is read whole)."""
     name = terminal_safe(path)
     try:
         with open(path, "rb") as file:
             if os.fstat(file.fileno()).st_size > MAX_FILE_BYTES:  # a pipe says 0: counted
                 raise ReplayError(_too_large(name))
-            recording = read_records(_bounded_lines(file, name), path)
+            recordings = read_targets(_bounded_lines(file, name), path)
     except OSError as exc:
         reason = terminal_safe(exc.strerror or str(exc))
         raise ReplayError(f"cannot read the replay file {name}: {reason}") from None
-    if not recording.answers:
+    answered = [recording for recording in recordings if recording.answers]
+    if not answered:
         raise ReplayError(
             f"{name} holds no GET answered by a controller: nothing to replay "
             "(record one with --record FILE)"
         )
-    return recording
+    return answered
 
 
 def _too_large(name: str) -> str:
@@ -175,39 +198,73 @@ def _bounded_lines(file: BinaryIO, name: str) -> Iterator[bytes]:
 
 
 def read_records(lines: Iterable[bytes], path: str) -> Recording:
-    """Pair each request with the reply that answered it, line by line."""
-    recording = Recording(path)
-    answers = recording.answers
-    seen: dict[bytes, bytes] = {}  # one bytes object per distinct reply: a still value
-    pending: bytes | None = None  # the request waiting for its reply
+    """Pair each request with the reply that answered it, line by line (one target)."""
+    recordings = read_targets(lines, path)
+    return recordings[0] if recordings else Recording(path)
+
+
+class _Pairing:
+    """One target's requests paired with their replies, as its lines come."""
+
+    def __init__(self, recording: Recording, seen: dict[bytes, bytes]) -> None:
+        self.recording = recording
+        self.seen = seen  # one bytes object per distinct reply: a still value
+        self.pending: bytes | None = None  # the request waiting for its reply
+
+    def add(self, direction: str, data: bytes, unusable: str) -> None:
+        recording, pending = self.recording, self.pending
+        if direction == "tx":
+            recording.unanswered += pending is not None
+            self.pending = data
+            return
+        if pending is None or unusable == "unsolicited":  # a waiting request still waits
+            recording.unused_replies += 1
+            return
+        self.pending = None
+        if unusable:  # refused or cut off: the request went unanswered
+            recording.unanswered += 1
+            return
+        key = _get_key(pending)
+        if key is None:
+            recording.not_gets += 1
+            return
+        reply = data + b"\r"
+        recording.answers.setdefault(key, []).append(self.seen.setdefault(reply, reply))
+
+    def finish(self) -> Recording:
+        self.recording.unanswered += self.pending is not None
+        return self.recording
+
+
+def read_targets(lines: Iterable[bytes], path: str) -> list[Recording]:
+    """One recording per target (one in all for a file of no cell), paired apart."""
+    pairings: dict[str | None, _Pairing] = {}
+    seen: dict[bytes, bytes] = {}
     for number, raw in enumerate(lines, 1):
         if not raw.strip():
             continue
-        direction, data, unusable = _record(raw, number, path)
-        if direction == "tx":
-            recording.unanswered += pending is not None
-            pending = data
-            continue
-        if pending is None or unusable == "unsolicited":  # a waiting request still waits
-            recording.unused_replies += 1
-            continue
-        if unusable:  # refused or cut off: the request went unanswered
-            recording.unanswered += 1
-            pending = None
-            continue
-        key = _get_key(pending)
-        pending = None
-        if key is None:
-            recording.not_gets += 1
-            continue
-        reply = data + b"\r"
-        answers.setdefault(key, []).append(seen.setdefault(reply, reply))
-    recording.unanswered += pending is not None
-    return recording
+        target, direction, data, unusable = _record(raw, number, path)
+        pairing = pairings.get(target)
+        if pairing is None:
+            if pairings and (target is None or None in pairings):
+                raise ReplayError(
+                    f"{terminal_safe(path)} line {number}: lines of a cell's targets and "
+                    "lines of no target in one file (two recordings appended?): "
+                    "replay them apart"
+                )
+            if len(pairings) == MOST_TARGETS:
+                raise ReplayError(
+                    f"{terminal_safe(path)} line {number}: more than {MOST_TARGETS} "
+                    "targets, more than a cell holds"
+                )
+            pairing = pairings[target] = _Pairing(Recording(path, target=target), seen)
+        pairing.add(direction, data, unusable)
+    return [pairing.finish() for pairing in pairings.values()]
 
 
-def _record(raw: bytes, number: int, path: str) -> tuple[str, bytes, str]:
-    """One line's direction, its bytes and why a reply cannot be used ("" when it can)."""
+def _record(raw: bytes, number: int, path: str) -> tuple[str | None, str, bytes, str]:
+    """One line's target, direction, its bytes and why a reply cannot be used ("" when
+    it can)."""
     where = f"{terminal_safe(path)} line {number}"
     try:
         record = json.loads(raw)
@@ -220,21 +277,28 @@ def _record(raw: bytes, number: int, path: str) -> tuple[str, bytes, str]:
         raise ReplayError(f'{where}: \'dir\' must be "tx" or "rx", not {_quoted(direction)}')
     if not isinstance(text, str):
         raise ReplayError(f"{where}: 'text' must be a string, not {_quoted(text)}")
+    target = record.get("target")
+    if target is not None and not (isinstance(target, str) and _NAME.fullmatch(target)):
+        raise ReplayError(f"{where}: 'target' is no target's name: {_quoted(target)}")
     try:
         data = unescape_text(text)
     except ValueError:
         raise ReplayError(
             f"{where}: 'text' is not as --record writes it: {_quoted(text)}"
         ) from None
+    return target, direction, data, _unusable(record, data)
+
+
+def _unusable(record: dict[str, object], data: bytes) -> str:
     if record.get("partial"):
-        return direction, data, "partial"
+        return "partial"
     if record.get("refused") is not None:
-        return direction, data, "refused"
+        return "refused"
     if record.get("unsolicited"):
-        return direction, data, "unsolicited"
+        return "unsolicited"
     if b"\r" in data:  # it could not be sent again as one reply
-        return direction, data, "refused"
-    return direction, data, ""
+        return "refused"
+    return ""
 
 
 def _quoted(value: object) -> str:

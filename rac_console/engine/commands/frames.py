@@ -54,6 +54,8 @@ def run_frame_file(context: CommandContext, command: FrameFile, line: str | None
         return [Message(str(exc), "error")]
     context.parts.publisher.status_dirty = True
     what = "every frame as JSON lines" if word == "record" else "a transcript of every frame"
+    if files.shared:
+        what += " of every target, each line naming its target,"
     return [Message(f"{word}: {what} to {terminal_safe(command.path)} ({word} stop ends it)")]
 
 

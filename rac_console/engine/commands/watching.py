@@ -24,6 +24,7 @@ from ...commands.language import (
 from ...protocol import InputError
 from ...protocol.text import counted
 from ..context import CommandContext
+from ..csvsink import CsvSink
 from ..events import Feedback, Message
 from ..registry import (
     AT_A_TERMINAL,
@@ -106,6 +107,8 @@ def run_csv_log(context: CommandContext, command: CsvLog, line: str | None) -> l
 
 def _csv_log(context: CommandContext, command: CsvLog) -> Message:
     sink, rows = context.parts.csv, context.parts.poller.watch.rows
+    if sink.cell is not None:
+        return _cell_csv_log(sink, command)
     current, log = sink.path, sink.log
     if command.stop:
         ended = sink.stop()
@@ -139,6 +142,38 @@ def _csv_log(context: CommandContext, command: CsvLog) -> Message:
     return Message(
         f"{how} {started.path}: {counted(len(started.variables), 'variable')}, "
         "one row per poll cycle (log stop ends it)"
+    )
+
+
+def _cell_csv_log(sink: CsvSink, command: CsvLog) -> Message:
+    """``log`` in a cell: the cell's one log, for every target whichever runs it."""
+    cell = sink.cell
+    assert cell is not None
+    if command.stop:
+        current, ended = cell.path, sink.stop()
+        if ended is not None:
+            return Message(f"CSV log stopped: {counted(ended.rows, 'row')} in {ended.path}")
+        if current is not None:
+            return Message(f"CSV log to {current} stopped before its first row")
+        return Message("no CSV log to stop", "error")
+    log = cell.log
+    if command.path is None:
+        if log is not None:
+            rows = counted(log.rows, "row")
+            return Message(f"logging every target to {log.path}: {rows} so far")
+        if cell.pending is not None:
+            waiting = ", ".join(cell.waiting_for())
+            return Message(
+                f"logging to {cell.pending} once every target has polled (waiting for {waiting})"
+            )
+        return Message("not logging: log FILE.csv starts a CSV log of every target's values")
+    try:
+        sink.wait_for_rows(command.path)
+    except InputError as exc:
+        return Message(f"CSV log not started: {exc}", "error")
+    return Message(
+        f"logging every target to {cell.path} from its next poll cycle: a column per "
+        "target and variable watched then, a row per target's cycle (log stop ends it)"
     )
 
 
