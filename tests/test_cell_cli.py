@@ -185,3 +185,38 @@ def test_a_cell_naming_a_missing_profile_is_one_line(
     done = cli(env, "--cell", "line2", "watch", "I", "1", "--count", "1")
     assert done.returncode == 2
     assert "no profile named cell5" in done.stderr and len(done.stderr.splitlines()) == 1
+
+
+def test_watch_logs_one_csv_column_per_target_and_variable(
+    env: dict[str, str],  # noqa: F811
+    two: tuple[SimulatorThread, SimulatorThread],
+    config: Callable[[str], Path],
+    tmp_path: Path,
+) -> None:
+    config(cell_config(*two))
+    two[0].server.controller.set("I", 5, 33)
+    two[1].server.controller.set("S", 1, "=cmd|' /C calc'!A0")
+    log = tmp_path / "cell.csv"
+    done = cli(
+        env,
+        "--cell",
+        "line2",
+        "watch",
+        "I",
+        "5",
+        "S",
+        "1",
+        "--count",
+        "2",
+        "--every",
+        "0",
+        "--log-csv",
+        str(log),
+    )
+    assert done.returncode == 0, done.stderr
+    rows = log.read_text(encoding="utf-8").splitlines()
+    assert rows[0] == "time,cell3.I5,cell3.S1,cell4.I5,cell4.S1"
+    assert len(rows) == 1 + 4  # two cycles of each target, a row each
+    cell3 = [r for r in rows[1:] if r.split(",")[1] == "33"]
+    assert len(cell3) == 2 and all(r.endswith(",,") for r in cell3)  # cell4's left empty
+    assert any("'=cmd|" in r for r in rows[1:])  # a formula is text, not a formula

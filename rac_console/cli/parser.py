@@ -242,6 +242,7 @@ def build_cli() -> CliParser:
     )
     sim.add_argument(
         "--cell",
+        dest="sim_cell",
         type=cell_size,
         default=None,
         metavar="N",

@@ -75,7 +75,7 @@ async def serve(args: argparse.Namespace) -> int:
     except ValueError as exc:
         print(f"rac-console: {exc}", file=sys.stderr)
         return 2
-    count = getattr(args, "cell", None)
+    count = getattr(args, "sim_cell", None)
     if count is not None and getattr(args, "replay", None) is not None:
         print(
             "rac-console: --cell N or --replay FILE, not both "
