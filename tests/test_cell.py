@@ -205,3 +205,36 @@ async def test_the_repl_prompt_names_the_current_target_and_at_name_runs_elsewhe
     assert "robotB\x1b[0m ›" in out  # the prompt after use
     assert sims[1].server.controller.value(I, 6) == 66
     assert sims[0].server.controller.value(I, 6) != 66
+
+
+def test_a_wait_after_another_targets_condition_says_the_delay_between_them() -> None:
+    from rac_console.sim.cell import SimulatedCellThread
+
+    with SimulatedCellThread(2, cycle=1.0, hold=0.5, reaction=0.2) as simulated:
+        (a, host_a, port_a), (b, host_b, port_b) = simulated.cell.addresses
+        cell = Cell([(a, Target(host_a, port_a)), (b, Target(host_b, port_b))])
+        cell.start()
+        drained = Drained(cell)
+        try:
+            seq = cell.submit(f"@{b} wait IO 64 on within 3 after @{a} IO 128 on")
+            name, result = drained.result(seq)
+            never = cell.submit(f"@{b} wait IO 65 on within 0.3 after @{a} IO 128 on")
+            _, missed = drained.result(never)
+        finally:
+            cell.stop()
+    said = text(result)
+    assert name is None  # the cell's answer, for both steps
+    assert f"{b} IO64 on " in said and f" s after {a} IO128 on" in said
+    delay = float(said.split(f"{b} IO64 on ")[1].split(" s after")[0])
+    assert 0.0 < delay < 1.0  # robotB answers 0.2 s after robotA, read to within 10 ms
+    assert "IO65 on: not met within 0.3 s" in text(missed)
+
+
+def test_a_wait_after_needs_a_cell(sims: list[SimulatorThread]) -> None:
+    cell = open_cell(sims[:1])
+    drained = Drained(cell)
+    try:
+        seq = cell.submit("wait IO 64 on within 1 after @robotB IO 128 on")
+        assert "no target named robotB is open here; open: robotA" in text(drained.result(seq)[1])
+    finally:
+        cell.stop()

@@ -7,17 +7,18 @@ import io
 import itertools
 import json
 import sys
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from contextlib import ExitStack
 from dataclasses import replace
 
 from ..commands.argv import exchange_from_words, input_line
 from ..commands.cells import route
-from ..commands.language import Command, Latency, Use
+from ..commands.language import Command, Latency, Use, Wait
 from ..commands.outcome import ExitStatus, Outcome, refused, worst
 from ..commands.policy import Writes
 from ..commands.target import Target
 from ..engine import Measured, Message
+from ..engine.chained_wait import chained_feedback, met
 from ..engine.commands import BUILTIN
 from ..engine.jobs import run_job
 from ..engine.registry import Where
@@ -209,14 +210,50 @@ def _run_on_cell(
                     current = output.target = command.name
                     output.say(f"current target: {current}", {"line": number})
                 continue
-            if name not in sessions:
-                sessions[name] = stack.enter_context(
-                    open_session(args, output.local_failure, targets[name])
-                )
-            member_args = argparse.Namespace(**{**vars(args), "target": targets[name]})
-            results = _results(sessions[name], command or rest, member_args, line, Where.RUN)
+
+            def run_on(
+                target: str, what: str | Command, line: str = line
+            ) -> list[Outcome | Message]:
+                if target not in sessions:
+                    sessions[target] = stack.enter_context(
+                        open_session(args, output.local_failure, targets[target])
+                    )
+                on = argparse.Namespace(**{**vars(args), "target": targets[target]})
+                return _results(sessions[target], what, on, line, Where.RUN)
+
+            if isinstance(command, Wait) and command.after is not None:
+                results = _chained(command, name, run_on, names)
+                output.target = None  # the results name their targets
+            else:
+                results = run_on(name, command or rest)
             status = worst([status, _show_line(output, results, number)])
     return status
+
+
+def _chained(
+    command: Wait,
+    name: str,
+    run_on: Callable[[str, str | Command], list[Outcome | Message]],
+    names: list[str],
+) -> list[Outcome | Message]:
+    """``wait ... after @FIRST ...`` in a script: FIRST's wait, then this target's."""
+    after = command.after
+    assert after is not None
+    if after.target not in names:
+        text = f"no target named {after.target} is open here; open: {', '.join(names)}"
+        return [Message(text, "error")]
+    first = next((r for r in run_on(after.target, after.wait) if isinstance(r, Outcome)), None)
+    if first is None:
+        return [Message(f"{after.target}: the wait did not run", "error")]
+    second = None
+    if met(first):
+        found = run_on(name, replace(command, after=None))
+        second = next((r for r in found if isinstance(r, Outcome)), None)
+    return [
+        item
+        for item in chained_feedback(after.target, first, name, second)
+        if isinstance(item, Outcome | Message)
+    ]
 
 
 def _context(session: Session, args: argparse.Namespace) -> SessionContext:

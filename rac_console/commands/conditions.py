@@ -8,10 +8,12 @@ from __future__ import annotations
 
 import math
 import re
+from dataclasses import replace
 
 from ..protocol import InputError, Variant
 from ..protocol.variables import encode_value
 from .language import (
+    After,
     CsvLog,
     Op,
     Wait,
@@ -31,7 +33,23 @@ _OPERATOR_RE = re.compile(r"(==|=|!=|<=|>=|<|>)\s*(.*)", re.DOTALL)
 _WITHIN_RE = re.compile(r"(.*?)\s*\bwithin\s+(\S+?)s?", re.ASCII | re.DOTALL | re.IGNORECASE)
 
 
+_AFTER_RE = re.compile(r"(.*)\s+after\s+@(\S+)\s+(.+)", re.ASCII | re.DOTALL | re.IGNORECASE)
+
+
 def parse_wait(rest: str) -> Wait:
+    """``wait VAR CONDITION [within S]``, and in a cell ``... after @NAME VAR CONDITION``:
+    each condition waits up to S seconds, the second from when the first held."""
+    chained = _AFTER_RE.fullmatch(rest.strip())
+    if chained is not None:
+        first = _parse_one(chained.group(3))
+        second = _parse_one(chained.group(1))
+        if _WITHIN_RE.fullmatch(chained.group(3).strip()) is None:
+            first = replace(first, within=second.within)
+        return replace(second, after=After(chained.group(2), first))
+    return _parse_one(rest)
+
+
+def _parse_one(rest: str) -> Wait:
     var, after = parse_var(rest, WAIT_USAGE)
     condition, within = after.strip(), DEFAULT_WITHIN
     match = _WITHIN_RE.fullmatch(condition)

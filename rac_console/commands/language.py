@@ -167,6 +167,14 @@ class Op(Enum):
 
 
 @dataclass(frozen=True)
+class After:
+    """The condition of another target a cell's ``wait`` waits for first."""
+
+    target: str
+    wait: Wait
+
+
+@dataclass(frozen=True)
 class Wait:
     """``wait VAR OP VALUE [within SECONDS]``: read until the condition holds, or time out."""
 
@@ -175,6 +183,9 @@ class Wait:
     value: Variant | float | None  # a Variant for == and !=, a number for < <= > >=
     within: float
     value_text: str = ""  # as typed, for messages
+    #: ``... after @NAME VAR CONDITION``: waited for only once that target's condition
+    #: held (a cell's handshake: robot B's answer after robot A's signal).
+    after: After | None = None
 
     @property
     def condition(self) -> str:

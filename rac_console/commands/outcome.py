@@ -32,6 +32,7 @@ class Waited:
     seconds: float  # from the first read sent to the reply that met it (or the last)
     reads: int
     within: float
+    met_at: float | None = None  # time.time() of the reply that met it
 
     def text(self) -> str:
         reads = counted(self.reads, "read")

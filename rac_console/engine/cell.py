@@ -21,17 +21,32 @@ from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, replace
 
 from ..commands.cells import route
-from ..commands.language import Command, Connect, Use
+from ..commands.language import Command, Connect, Use, Wait
+from ..commands.outcome import Outcome
 from ..commands.target import Target
 from ..protocol import InputError
 from ..protocol.text import terminal_safe
 from .cellcsv import CellCsv
+from .chained_wait import chained_feedback, met
 from .commands import BUILTIN
 from .engine import CellFiles, Engine, EngineOptions
-from .events import Alert, Message, Result
+from .events import Alert, Event, Message, Result
 from .frame_files import FrameFiles
 from .outbox import Batch, Outbox
 from .registry import Registry, Where
+
+
+@dataclass
+class _Chain:
+    """A ``wait ... after @NAME ...`` under way: the first target's wait, then this
+    one's; the front end awaits ``seq``."""
+
+    seq: int
+    line: str | None
+    command: Wait
+    first: str  # the target waited for first
+    second: str  # the target the line ran on
+    first_outcome: Outcome | None = None
 
 
 @dataclass(frozen=True)
@@ -117,6 +132,7 @@ class Cell:
         )
         self._by_name = {member.name: member for member in self.members}
         self.current = self.members[0].name
+        self._chains: dict[int, _Chain] = {}  # by the number of the job awaited now
 
     @classmethod
     def of(cls, engine: Engine, name: str | None = None) -> Cell:
@@ -130,6 +146,7 @@ class Cell:
         cell.members = (member,)
         cell._by_name = {member.name: member}
         cell.current = member.name
+        cell._chains = {}
         return cell
 
     @property
@@ -195,6 +212,8 @@ class Cell:
             return self._use(command, line)
         if isinstance(command, Connect) and len(self.members) > 1:
             return self._answer(line, Message(self._fixed(), "error"))
+        if isinstance(command, Wait) and command.after is not None:
+            return self._chain(command, member.name, line)
         if command is None:  # a blank line, a comment
             return member.engine.submit(rest)
         return member.engine.submit_command(command, line)
@@ -225,6 +244,40 @@ class Cell:
         shown = f"{member.name} ({terminal_safe(label)})" if label else member.name
         return self._answer(line, Message(f"current target: {shown}; @NAME runs a line elsewhere"))
 
+    def _chain(self, command: Wait, name: str, line: str | None) -> int:
+        """``wait ... after @FIRST ...``: FIRST's wait now, this target's once it held."""
+        after = command.after
+        assert after is not None
+        try:
+            first = self.member(after.target)
+        except InputError as exc:
+            return self._answer(line, Message(str(exc), "error"))
+        chain = _Chain(next(self._numbers), line, command, first.name, name)
+        self._chains[first.engine.submit_command(after.wait)] = chain
+        return chain.seq
+
+    def _advance(self, chain: _Chain, result: Result) -> list[Result]:
+        """A chained wait's job ended: the second wait starts, or the whole answer."""
+        outcome = next((f for f in result.feedback if isinstance(f, Outcome)), None)
+        if chain.first_outcome is None:  # the first target's wait
+            if outcome is None or not met(outcome):
+                feedback = (
+                    chained_feedback(chain.first, outcome, chain.second, None)
+                    if outcome is not None
+                    else result.feedback
+                )
+                return [Result(chain.seq, feedback, chain.line, chain.command)]
+            chain.first_outcome = outcome
+            second = replace(chain.command, after=None)
+            self._chains[self.member(chain.second).engine.submit_command(second)] = chain
+            return []
+        feedback = (
+            chained_feedback(chain.first, chain.first_outcome, chain.second, outcome)
+            if outcome is not None
+            else result.feedback
+        )
+        return [Result(chain.seq, feedback, chain.line, chain.command)]
+
     def _answer(self, line: str | None, message: Message) -> int:
         seq = next(self._numbers)
         self.outbox.put(Result(seq, (message,), line))
@@ -250,4 +303,17 @@ class Cell:
         then each target's batch, by name."""
         drained: list[tuple[str | None, Batch]] = [(None, self.outbox.drain())]
         drained.extend((member.name, member.engine.outbox.drain()) for member in self.members)
+        if self._chains:  # a chained wait's steps are the cell's, answered as one
+            answers: list[Result] = []
+            for _, batch in drained[1:]:
+                kept: list[Event] = []
+                for event in batch.events:
+                    chain = self._chains.pop(event.seq, None) if isinstance(event, Result) else None
+                    if chain is None:
+                        kept.append(event)
+                    else:
+                        assert isinstance(event, Result)
+                        answers.extend(self._advance(chain, event))
+                batch.events[:] = kept
+            drained[0][1].events.extend(answers)
         return drained

@@ -79,7 +79,7 @@ def _ended(
     *,
     ended: bool = False,
 ) -> Outcome:
-    waited = Waited(wait.condition, met, seconds, reads, wait.within)
+    waited = Waited(wait.condition, met, seconds, reads, wait.within, time.time() if met else None)
     if met:
         return replace(outcome, waited=waited)
     # Not met: the last read's own failure says most; else the condition is the error.

@@ -73,6 +73,11 @@ class SimulatedCell:
         """Begin the handshake (the servers listen already: ``sim --cell`` starts them
         itself, so that all of them start or none does)."""
         if len(self.servers) > 1 and self._handshake is None:
+            placer, answerer = (s.controller for s in self.servers[:2])
+            assert isinstance(placer, SimulatedController)
+            assert isinstance(answerer, SimulatedController)
+            placer.set(*PART_PLACED, False)  # no part placed yet, no answer yet
+            answerer.set(*GO, False)
             self._handshake = asyncio.create_task(self._play())
 
     async def stop(self) -> None:

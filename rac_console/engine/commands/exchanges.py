@@ -74,6 +74,14 @@ def noted(context: JobContext, outcome: Outcome) -> Outcome:
 
 
 def run_wait(context: JobContext, command: Wait, line: str | None) -> list[Feedback]:
+    if command.after is not None:  # a cell runs it (engine/cell.py): here is one target
+        return [
+            Message(
+                f"after @{command.after.target} waits on another target: open a cell "
+                "(-H cell3,cell4 or --cell NAME)",
+                "error",
+            )
+        ]
     session = context.session
     if session is None:
         return [Message(NOT_CONNECTED, "error")]
