@@ -12,7 +12,7 @@ number names one job whichever engine runs it.
 from __future__ import annotations
 
 import itertools
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
 
 from ..commands.cells import split_address
@@ -62,11 +62,8 @@ class Cell:
         Raises InputError when a file cannot be opened (before any thread starts)."""
         if not targets:
             raise InputError("a cell needs at least one target")
-        self.registry, self.where = registry, where
-        self._numbers = itertools.count(1)
-        #: The cell's own results (``use``, a line for a target it does not have).
-        self.outbox = Outbox(notify)
-        self.members: tuple[Member, ...] = tuple(
+        numbers = itertools.count(1)
+        members = [
             Member(
                 name,
                 target,
@@ -76,13 +73,43 @@ class Cell:
                     outbox=Outbox(notify),
                     where=where,
                     registry=registry,
-                    numbers=self._numbers,
+                    numbers=numbers,
                 ),
             )
             for name, target in targets
-        )
+        ]
+        self._setup(members, numbers, notify, where, registry)
+
+    @classmethod
+    def of(cls, engine: Engine, name: str | None = None) -> Cell:
+        """A cell of one member around an engine already made (a front end given an
+        engine): the cell's own answers are numbered by the engine's counter."""
+        cell = cls.__new__(cls)
+        target = engine.target
+        member = Member(name or member_name(target), target, engine)
+        cell._setup([member], engine.numbers, engine.outbox.notify, engine.where, engine.registry)
+        return cell
+
+    def _setup(
+        self,
+        members: Sequence[Member],
+        numbers: Iterator[int],
+        notify: Callable[[], None] | None,
+        where: Where,
+        registry: Registry,
+    ) -> None:
+        self.registry, self.where = registry, where
+        self._numbers = numbers
+        #: The cell's own results (``use``, a line for a target it does not have).
+        self.outbox = Outbox(notify)
+        self.members: tuple[Member, ...] = tuple(members)
         self._by_name = {member.name: member for member in self.members}
         self.current = self.members[0].name
+
+    @property
+    def outboxes(self) -> tuple[Outbox, ...]:
+        """The cell's own outbox, then each member's: a front end sets their notify."""
+        return (self.outbox, *(member.engine.outbox for member in self.members))
 
     # ------------------------------------------------------------------ members
 
@@ -118,9 +145,13 @@ class Cell:
         try:
             name, rest = split_address(line)
             member = self.member(name)
-            command = self.registry.parse(rest)
         except InputError as exc:
             return self._answer(line, Message(str(exc), "error"))
+        try:
+            command = self.registry.parse(rest)
+        except InputError:
+            # The target says why, in its turn: after the lines queued before this one.
+            return member.engine.submit(rest)
         if isinstance(command, Use):
             if self.where not in self.registry.spec_of(command).where:
                 return member.engine.submit_command(command, line)  # the engine says why

@@ -136,6 +136,16 @@ class Engine:
     # ------------------------------------------------------- any thread
 
     @property
+    def target(self) -> Target:
+        """The target the engine was made for (a cell's member is fixed to it)."""
+        return self._rules
+
+    @property
+    def numbers(self) -> Iterator[int]:
+        """What numbers its jobs (a cell made around this engine numbers its own too)."""
+        return self._seq
+
+    @property
     def profiles(self) -> Mapping[str, TargetProfile]:
         """The profiles ``connect NAME`` knows (read before the engine starts)."""
         return self._rules.profiles

@@ -49,13 +49,22 @@ def complete(
     seen: Iterable[tuple[str, int]] = (),
     targets: Iterable[tuple[str, str]] = (),
     registry: Registry = BUILTIN,
+    cell: Sequence[tuple[str, str]] = (),
 ) -> list[Candidate]:
     """Candidates for the word at the end of ``text``: a command name, or what the
     command's entry offers for the argument being typed.
 
     ``seen`` holds (TYPE, index) pairs already used or watched, offered as indices;
-    ``targets`` the config file's profiles (name, label or host), offered after connect.
+    ``targets`` the config file's profiles (name, label or host), offered after connect;
+    ``cell`` a cell's open targets (name, label), offered after ``use`` and as ``@NAME``
+    at the start of a line (the line after it completes as any other).
     """
+    if cell and text.lstrip().startswith("@"):
+        head = text.lstrip()
+        name, space, rest = head.partition(" ")
+        if not space:
+            return [Candidate(f"@{n}", h, len(name)) for n, h in cell if f"@{n}".startswith(name)]
+        return complete(rest.lstrip(), seen, targets, registry, cell)
     if is_raw_line(text):
         return []
     done, partial = _tokens(text)
@@ -69,7 +78,7 @@ def complete(
         spec = registry.get(done[0].lower())
         if spec is None:
             return []
-        options = spec.complete(done[1:], Sources(seen, targets, names))
+        options = spec.complete(done[1:], Sources(seen, targets, names, cell))
     return [Candidate(o, h, start) for o, h in options if o.lower().startswith(low)]
 
 
