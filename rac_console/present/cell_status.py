@@ -76,7 +76,8 @@ def _writes(status: Status | None, short: bool) -> Text | None:
 def _rtt(status: Status | None) -> Text | None:
     if status is None or status.rtt is None or status.connection != "connected":
         return None
-    return Text(f"{status.rtt * 1000:.0f}ms", style="dim")
+    ms = status.rtt * 1000
+    return Text(f"{ms:.1f}ms" if ms < 10 else f"{ms:.0f}ms", style="dim")
 
 
 def badge_text(badge: Badge, form: int, now: float) -> Text:

@@ -131,6 +131,14 @@ class RacConsoleApp(PaletteActions, TableActions, LogActions, App[int]):
             id="cancel-command",
         ),
         Binding("f1", "help", "Help", id="help"),
+        # A cell's: shown only with more than one target (check_action).
+        Binding(
+            "f8",
+            "next_target",
+            "Next target",
+            tooltip="A cell: use the next target (lines without @NAME go to it)",
+            id="next-target",
+        ),
         # Priority: taken as the key arrives, so the keys typed right after it go to the
         # new pane (without it they were already on their way to the old one).
         Binding(
@@ -178,14 +186,6 @@ class RacConsoleApp(PaletteActions, TableActions, LogActions, App[int]):
             id="toggle-hex",
         ),
         Binding("ctrl+l", "clear_log", "Clear log", id="clear-log"),
-        # A cell's: shown only with more than one target (check_action).
-        Binding(
-            "f8",
-            "next_target",
-            "Next target",
-            tooltip="A cell: use the next target (lines without @NAME go to it)",
-            id="next-target",
-        ),
         Binding(
             "shift+f6",
             "focus_pane(-1)",

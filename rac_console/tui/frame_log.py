@@ -259,6 +259,8 @@ class FrameLog(InlineWidthLog):
             return 0
         events = list(self._pending)
         self._pending.clear()
+        if self.target_width:  # a cell: each target's batch came apart; in time order
+            events.sort(key=lambda event: event.time if isinstance(event, Frame) else event[0])
         count, shown = self._keep(events)
         if self._narrowed:
             self.update_title()
