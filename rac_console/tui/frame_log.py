@@ -181,7 +181,8 @@ class FrameLog(InlineWidthLog):
     def set_filter(self, text: str) -> None:
         """Show only the frames that name a variable (and their replies), or hold a text."""
         new = FrameFilter.of(text)
-        if (new.needle, new.var) == (self._filter.needle, self._filter.var):
+        old = self._filter
+        if (new.needle, new.var, new.target) == (old.needle, old.var, old.target):
             self._filter = new  # as typed, for the title
             self.update_title()
             return
