@@ -257,7 +257,7 @@ class RacConsoleApp(PaletteActions, TableActions, LogActions, App[int]):
         self.row_detail = RowDetail(id="detail")
         self.frame_log = FrameLog(id="log")
         if self.cell_mode:
-            self.frame_log.target_width = max(len(name) for name in self.cell.names)
+            self.frame_log.target_width = max(len(terminal_safe(n)) for n in self.cell.names)
         self.log_filter = log_filter_line(self.frame_log, cell=self.cell_mode)
         self.io_panel = IoPanel(lambda var: self.toggles.busy(var), id="io")
         self.watch_area = WatchArea(self.table, self.io_panel, id="watch-area")
@@ -438,7 +438,8 @@ class RacConsoleApp(PaletteActions, TableActions, LogActions, App[int]):
         if self.cell_mode:
             results.write(
                 Text(
-                    f"A cell of {len(self.states)} targets ({', '.join(self.cell.names)}): "
+                    f"A cell of {len(self.states)} targets "
+                    f"({terminal_safe(', '.join(self.cell.names))}): "
                     f"lines go to the one the prompt names; @NAME LINE runs a line on "
                     f"another; use NAME (or {key_of(type(self), 'next-target') or 'F8'}) "
                     "changes the current one.",
@@ -598,7 +599,7 @@ class RacConsoleApp(PaletteActions, TableActions, LogActions, App[int]):
                 max(s.status.timeout for s in self.states.values() if s.status) / 2
             )
             if old is None:
-                self.sub_title = f"cell: {', '.join(self.cell.names)}"
+                self.sub_title = terminal_safe(f"cell: {', '.join(self.cell.names)}")
             return
         if old is None or status.target != old.target:
             self.sub_title = terminal_safe(status.target)

@@ -235,8 +235,8 @@ class FrameLog(InlineWidthLog):
         for a frame, a prefix for a note).
         """
         if isinstance(event, Frame):
-            if target is not None:
-                self._origin[id(event)] = target
+            if target is not None:  # a name from the config file: never raw to the screen
+                self._origin[id(event)] = terminal_safe(target)
             self._pending.append(event)
             return
         text = event.text if target is None else f"{target}: {event.text}"
