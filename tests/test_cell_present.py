@@ -109,3 +109,10 @@ def test_a_cell_table_groups_rows_by_target_in_cell_order() -> None:
     ]
     # The filter matches a target's name too.
     assert ordered_keys(views, added, SortMode.ADDED, "robotb", groups=groups) == ["robotB I10"]
+
+
+def test_a_running_line_says_how_to_cancel_after_the_badges() -> None:
+    badges = [Badge("robotA", STATUS, "green", current=True), Badge("robotB", STATUS)]
+    line = cell_status_text(badges, 120, running=("wait IO 128 on", 3.2, 1)).plain
+    assert line.index("robotB") < line.index("Esc cancels: wait IO 128 on (3 s) +1")
+    assert "Esc" not in cell_status_text(badges, 120, running=("get I 1", 0.1, 0)).plain

@@ -249,6 +249,7 @@ async def test_one_target_down_leaves_the_others_polling(tmp_path: Path, three) 
             lambda: (shown := row(app, "robotB", "I10")) is not None and shown.stale,
             "robotB's row stale",
         )
+
         def badge_b() -> str:
             return app.status_bar.line.plain.split("│")[1]
 
@@ -278,3 +279,38 @@ async def test_completion_offers_the_cell_targets(tmp_path: Path, two) -> None:
         app.command_line.cursor_position = len(app.command_line.value)
         await pilot.press("tab")
         assert app.command_line.value == "@robotB watch "
+
+
+async def test_the_io_grid_takes_the_current_targets_io_rows_only(tmp_path: Path, two) -> None:
+    app = make_cell_app(tmp_path, two)
+    async with app.run_test(size=(120, 40)) as pilot:
+        await connected(pilot, app)
+        await watch_handshake(pilot, app)
+        await pilot.press("f5")  # robotA's IO rows to the grid; robotB's stay in the table
+        await until(pilot, lambda: table_cells(app) == [("robotB", "IO64")], "robotB's row only")
+        await pilot.press("f8")  # robotB current: its IO goes to the grid, robotA's back
+        await until(pilot, lambda: table_cells(app) == [("robotA", "IO128")], "robotA's row only")
+
+
+async def test_a_cell_of_one_is_the_console_as_before(tmp_path: Path) -> None:
+    from rac_console.commands.target import Target
+    from rac_console.engine.cell import Cell
+    from rac_console.engine.engine import EngineOptions
+    from rac_console.present.history import History
+    from rac_console.sim.thread import SimulatorThread
+
+    with SimulatorThread() as sim:
+        options = EngineOptions(interval=0.05, cycles=True)
+        cell = Cell([("sim", Target(sim.host, sim.port))], options=options)
+        app = RacConsoleApp(cell, History(tmp_path / "history"))
+        async with app.run_test(size=(120, 40)) as pilot:
+            await connected(pilot, app)
+            await type_line(pilot, "watch I 10")
+            await until(pilot, lambda: app.table.row_count == 1, "the row")
+            assert next(str(c.label) for c in app.table.columns.values()) == "Variable"
+            assert str(app.table.get_row_at(0)[0]) == "I10"
+            assert not app.prompt.is_mounted  # no prompt: the command line as it was
+            assert not app.check_action("next_target", ())
+            await until(pilot, lambda: "› watch I 10" in results_text(app), "the echo")
+            assert "sim ›" not in results_text(app)
+            assert "LIVE" in app.status_bar.line.plain  # the status line as it was

@@ -17,7 +17,7 @@ from rich.text import Text
 
 from ..engine.events import Status
 from ..protocol.text import terminal_safe
-from .status import CANNOT_CONNECT, label_style
+from .status import CANNOT_CONNECT, RUNNING_SHOWN_AFTER, RUNNING_STYLE, label_style
 
 SEPARATOR = " │ "
 #: Names are cut to this many cells when the line is still too wide.
@@ -97,15 +97,33 @@ def badge_text(badge: Badge, form: int, now: float) -> Text:
     return text
 
 
+def running_text(running: tuple[str, float, int] | None, form: int) -> Text | None:
+    """The way out of a long line (``Esc cancels``), once it has run a moment; the
+    line itself only in the long form."""
+    if running is None or running[1] < RUNNING_SHOWN_AFTER:
+        return None
+    line, seconds, queued = running
+    what = f" Esc cancels: {_cut(terminal_safe(line), 20)}" if form == 0 else " Esc"
+    more = f" +{queued}" if queued else ""
+    return Text(f"{what} ({seconds:.0f} s){more} ", style=RUNNING_STYLE)
+
+
 def cell_status_text(
-    badges: Sequence[Badge], width: int | None = None, now: float | None = None
+    badges: Sequence[Badge],
+    width: int | None = None,
+    now: float | None = None,
+    running: tuple[str, float, int] | None = None,
 ) -> Text:
     """The badges side by side, in the longest form that fits ``width`` (None: the
-    longest); the shortest form when none does (the widget crops what is left)."""
+    longest), then the running line's way out; the shortest form when none does (the
+    widget crops what is left: the running line, last, goes first)."""
     when = time.monotonic() if now is None else now
     line = Text()
     for form in range(3):
         line = Text(SEPARATOR).join(badge_text(badge, form, when) for badge in badges)
+        shown = running_text(running, form)
+        if shown is not None:
+            line = Text.assemble(line, "  ", shown)
         if width is None or line.cell_len <= width:
             break
     line.no_wrap = True

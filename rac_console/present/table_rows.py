@@ -64,10 +64,12 @@ def ordered_keys(
     needle: str = "",
     hide_io: bool = False,
     groups: Mapping[str, tuple[int, str]] | None = None,
+    io_of: str | None = None,
 ) -> list[str]:
     """:func:`visible_keys` over rows by key; ``groups`` (a cell's table) gives each key
     its target's place in the cell and name: rows go by target first, in cell order,
-    then in the sort's order within each target."""
+    then in the sort's order within each target. ``io_of``: in a cell, ``hide_io``
+    hides only this target's IO rows (the ones the I/O grid shows)."""
     group = groups or {}
 
     def where(key: str) -> tuple[int, str]:
@@ -76,7 +78,10 @@ def ordered_keys(
     shown = [
         key
         for key, row in views.items()
-        if matches(row, needle, where(key)[1]) and not (hide_io and row.var.kind.code == "IO")
+        if matches(row, needle, where(key)[1])
+        and not (
+            hide_io and row.var.kind.code == "IO" and (io_of is None or where(key)[1] == io_of)
+        )
     ]
     if mode is SortMode.NAME:
         shown.sort(key=lambda key: (where(key)[0], views[key].var.kind.code, views[key].var.index))

@@ -629,6 +629,9 @@ class RacConsoleApp(PaletteActions, TableActions, LogActions, App[int]):
         for state in self.states.values():
             state.removed = set()
         groups = [(state.name, state.rows) for state in self.states.values()]
+        if self.cell_mode and self.table.io_target != self.cell.current:
+            self.table.io_target = self.cell.current  # the grid shows the current's IO
+            self.table.set_hide_io(self.io_panel.display)
         self.table.refresh_rows(groups, removed, time.monotonic())
         self.redraw_trend()
         self.show_detail()
@@ -637,7 +640,7 @@ class RacConsoleApp(PaletteActions, TableActions, LogActions, App[int]):
         if self.cell_mode:
             current = self.cell.current
             badges = [state.badge(state.name == current) for state in self.states.values()]
-            self._status_line = self.status_bar.show_cell(badges)
+            self._status_line = self.status_bar.show_cell(badges, self._running_line())
             return
         if self.status is None:
             return

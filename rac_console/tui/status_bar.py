@@ -20,6 +20,7 @@ class StatusBar(Static):
         self._figures: tuple[Status, float | None, float, tuple[str, float, int] | None] | None
         self._figures = None
         self._badges: list[Badge] = []
+        self._cell_running: tuple[str, float, int] | None = None
         self.line = Text()
 
     def show(
@@ -43,11 +44,11 @@ class StatusBar(Static):
             self.refresh()
         return line
 
-    def show_cell(self, badges: list[Badge]) -> Text:
+    def show_cell(self, badges: list[Badge], running: tuple[str, float, int] | None = None) -> Text:
         """A cell's line: one badge per target (see :func:`.cell_status_text`)."""
-        self._badges = badges
+        self._badges, self._cell_running = badges, running
         width = self.content_size.width
-        line = cell_status_text(badges, width if width > 0 else None)
+        line = cell_status_text(badges, width if width > 0 else None, running=running)
         if line != self.line:
             self.line = line
             self.refresh()
@@ -60,4 +61,4 @@ class StatusBar(Static):
         if self._figures is not None:
             self.show(*self._figures)
         elif self._badges:
-            self.show_cell(self._badges)
+            self.show_cell(self._badges, self._cell_running)

@@ -205,6 +205,8 @@ class WatchTable(DataTable[object]):
         self._filter = ""  # as typed
         self._needle = ""  # as matched
         self._hide_io = False
+        #: In a cell: the target whose IO rows the I/O grid shows (hidden here then).
+        self.io_target: str | None = None
         self.sort_mode = SortMode.ADDED
         self._title: Text | None = None
         self._now = 0.0  # the clock of the last refresh, for a re-filter between two
@@ -390,7 +392,13 @@ class WatchTable(DataTable[object]):
             else None
         )
         wanted = ordered_keys(
-            self._views, self._added, self.sort_mode, self._needle, self._hide_io, groups
+            self._views,
+            self._added,
+            self.sort_mode,
+            self._needle,
+            self._hide_io,
+            groups,
+            self.io_target if self.cell else None,
         )
         keep = set(wanted)
         for key in [key for key in self._order if key not in keep]:
