@@ -31,7 +31,7 @@ from textual.worker import Worker, WorkerState
 
 from .. import __version__
 from ..commands.cells import split_address
-from ..commands.language import Command, Simple, Step, Use, VarRef, WatchFile
+from ..commands.language import Command, Simple, Step, Use, WatchFile
 from ..commands.outcome import Outcome
 from ..engine import (
     SIMULATOR_NOTICE,
@@ -43,26 +43,23 @@ from ..engine import (
     Feedback,
     Message,
     Result,
-    RowView,
     Status,
     UiStep,
 )
 from ..engine.cell import Cell
 from ..engine.config import config_path
 from ..engine.settings import SettingsFile
-from ..present.banner import live_banner
+from ..present.banner import cell_banner, live_banner
 from ..present.completion import shown_candidates
 from ..present.glyphs import ascii_wanted
 from ..present.heap import keep_full_collections_rare
 from ..present.history import History, is_refused
-from ..present.render import error_text, notice_text, outcome_text
-from ..present.row_actions import PendingToggles
+from ..present.render import echo_text, error_text, notice_text, outcome_text
 from ..present.status import connect_targets, target_label
-from ..present.trends import TrendStore
 from ..present.type_ahead import may_ask
 from ..protocol.text import counted, terminal_safe
 from .ascii_screen import ascii_driver
-from .cell_state import MemberState
+from .cell_state import CellMembers, MemberState
 from .command_line import CommandLine
 from .confirm_screen import ConfirmWriteScreen, border_colour
 from .file_writes import FileWrites
@@ -114,7 +111,7 @@ PANES_HELP = "Next or previous pane: command line, table, I/O grid, frame log"
 FREEZE_HELP = "Freeze the log's scrolling, or follow new frames again"
 
 
-class RacConsoleApp(PaletteActions, TableActions, LogActions, App[int]):
+class RacConsoleApp(CellMembers, PaletteActions, TableActions, LogActions, App[int]):
     """Woken by the engine: its outbox's ``notify`` posts :class:`OutboxWoke`, and the
     screen is brought up to date then (see :meth:`on_outbox_woke`), not on a timer."""
 
@@ -300,51 +297,6 @@ class RacConsoleApp(PaletteActions, TableActions, LogActions, App[int]):
             yield self.command_line
         yield FittingFooter()
 
-    # ------------------------------------------------------------ the cell
-
-    @property
-    def current(self) -> MemberState:
-        """The target lines without ``@NAME`` go to (``use NAME``, F8)."""
-        return self.states[self.cell.current]
-
-    @property
-    def engine(self) -> Engine:
-        return self.current.member.engine
-
-    @property
-    def status(self) -> Status | None:
-        """The current target's status (in a cell of one: the status)."""
-        return self.current.status
-
-    @status.setter
-    def status(self, status: Status | None) -> None:
-        self.current.status = status
-
-    @property
-    def rows(self) -> dict[VarRef, RowView]:
-        """The current target's rows (the I/O grid's; the table shows every target's)."""
-        return self.current.rows
-
-    @property
-    def trends(self) -> TrendStore:
-        return self.current.trends
-
-    @property
-    def toggles(self) -> PendingToggles:
-        return self.current.toggles
-
-    def trend_store(self, name: str) -> TrendStore:
-        """A target's trend samples, by name."""
-        return self.states[name].trends if name in self.states else self.trends
-
-    def state_of(self, name: str | None) -> MemberState:
-        return self.states.get(name or "", self.current)
-
-    def show_prompt(self) -> None:
-        if self.cell_mode:
-            state = self.current
-            self.prompt.update(Text.assemble((f"{terminal_safe(state.name)} ›", "bold cyan"), " "))
-
     def action_next_target(self) -> None:
         """F8: ``use`` the next target of the cell, as typed."""
         names = self.cell.names
@@ -436,16 +388,8 @@ class RacConsoleApp(PaletteActions, TableActions, LogActions, App[int]):
         results = self.results
         status = self.status
         if self.cell_mode:
-            results.write(
-                Text(
-                    f"A cell of {len(self.states)} targets "
-                    f"({terminal_safe(', '.join(self.cell.names))}): "
-                    f"lines go to the one the prompt names; @NAME LINE runs a line on "
-                    f"another; use NAME (or {key_of(type(self), 'next-target') or 'F8'}) "
-                    "changes the current one.",
-                    style="bold",
-                )
-            )
+            key = key_of(type(self), "next_target") or "F8"
+            results.write(cell_banner(self.cell.names, key))
         elif status is not None and status.is_simulator:
             results.write(
                 Text.assemble(
@@ -520,12 +464,9 @@ class RacConsoleApp(PaletteActions, TableActions, LogActions, App[int]):
 
     def _clock_shown(self) -> bool:
         """Whether anything on screen changes with time alone."""
-        states = self.states.values()
         return bool(
-            any(state.rows for state in states)  # their ages
+            self.members_timed()  # rows' ages, a reply waited for, a retry's countdown
             or self.lines_pending  # the running line's time
-            or any(s.member.engine.outbox.waiting_since is not None for s in states)  # a reply
-            or any(s.status is not None and s.status.retry_at is not None for s in states)
             or self.frames_per_second() > 0  # the rate, back to 0
         )
 
@@ -625,22 +566,16 @@ class RacConsoleApp(PaletteActions, TableActions, LogActions, App[int]):
         self._table_at = time.monotonic()
         if self._clock is not None and self._clock_shown():
             self._clock.resume()
-        removed = {(state.name, var) for state in self.states.values() for var in state.removed}
-        for state in self.states.values():
-            state.removed = set()
-        groups = [(state.name, state.rows) for state in self.states.values()]
         if self.cell_mode and self.table.io_target != self.cell.current:
             self.table.io_target = self.cell.current  # the grid shows the current's IO
             self.table.set_hide_io(self.io_panel.display)
-        self.table.refresh_rows(groups, removed, time.monotonic())
+        self.table.refresh_rows(self.row_groups(), self.take_removed(), time.monotonic())
         self.redraw_trend()
         self.show_detail()
         self.io_panel.refresh_rows(self.rows, time.monotonic())
         self.watch_area.share_width()  # the grid beside the table only while both fit
         if self.cell_mode:
-            current = self.cell.current
-            badges = [state.badge(state.name == current) for state in self.states.values()]
-            self._status_line = self.status_bar.show_cell(badges, self._running_line())
+            self._status_line = self.status_bar.show_cell(self.badges(), self._running_line())
             return
         if self.status is None:
             return
@@ -770,15 +705,7 @@ class RacConsoleApp(PaletteActions, TableActions, LogActions, App[int]):
         """The line echoed, then what came of it; in a cell, after the target it ran
         on (``robotB › put I 10 5``: an ``@robotB`` is said by the name)."""
         if result.line is not None:
-            line = result.line
-            if target is not None:
-                line = split_address(line)[1] if line.lstrip().startswith("@") else line
-                echo = Text.assemble(
-                    (f"{terminal_safe(target)} ", "bold"), (f"› {terminal_safe(line)}", "bold cyan")
-                )
-            else:
-                echo = Text(f"› {terminal_safe(line)}", style="bold cyan")
-            self.results.write(echo)
+            self.results.write(echo_text(result.line, target))
         for feedback in result.feedback:
             self.show(feedback)
 
