@@ -116,3 +116,15 @@ def test_a_running_line_says_how_to_cancel_after_the_badges() -> None:
     line = cell_status_text(badges, 120, running=("wait IO 128 on", 3.2, 1)).plain
     assert line.index("robotB") < line.index("Esc cancels: wait IO 128 on (3 s) +1")
     assert "Esc" not in cell_status_text(badges, 120, running=("get I 1", 0.1, 0)).plain
+
+
+def test_the_log_escapes_a_target_name_from_the_config() -> None:
+    from rac_console.session import Frame
+    from rac_console.tui.frame_log import FrameLog
+
+    log = FrameLog()
+    log.target_width = 8
+    frame = Frame(1_700_000_000.0, "tx", b"GET:RC8:1:I:\r", None)  # type: ignore[arg-type]
+    log.add(frame, "bad\x1b[2J")
+    line, _ = log._frame_line(frame, None)
+    assert "\x1b" not in line and "GET:RC8:1:I:" in line
