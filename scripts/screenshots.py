@@ -13,8 +13,12 @@ import tempfile
 from pathlib import Path
 
 from rac_console.commands.policy import TargetProfile, WritePolicy, Writes, parse_allow
+from rac_console.commands.target import Target
 from rac_console.engine import Engine
+from rac_console.engine.cell import Cell
+from rac_console.engine.engine import EngineOptions
 from rac_console.present.history import History
+from rac_console.sim.cell import SimulatedCellThread
 from rac_console.sim.thread import SimulatorThread
 from rac_console.tui.app import RacConsoleApp
 
@@ -95,6 +99,32 @@ PROFILE_SCENES = {
 }
 
 
+#: A cell of two simulators playing the handshake (robotA places a part on IO 128,
+#: robotB answers on IO 64): their trends overlaid (t on robotA's row, T on robotB's).
+CELL_SCENES = {
+    "cell": (
+        (120, 40),
+        [
+            "watch IO 128 part placed",
+            "watch I 10 parts",
+            "@robotB watch IO 64 go",
+            "@robotB watch I 10 parts",
+            "@robotB put I 10 7",
+        ],
+        ["f6", "t", "shift+f6", "down", "down", "T", "f6"],
+    ),
+}
+
+
+def cell_of(sims: SimulatedCellThread) -> Cell:
+    """A cell on the simulators: a profile each (a colour, a label)."""
+    targets = []
+    for (name, host, port), colour in zip(sims.cell.addresses, ("green", "magenta"), strict=False):
+        profile = TargetProfile(name, host, port, f"Cell {name[-1]}", colour, WritePolicy())
+        targets.append((name, Target(host, port, profile=profile)))
+    return Cell(targets, options=EngineOptions(interval=0.2, cycles=True))
+
+
 def profile_engine(port: int) -> Engine:
     """An engine on profile cell3: a LIVE target that asks before every write."""
     policy = WritePolicy(
@@ -110,7 +140,7 @@ async def take(
     lines: list[str],
     typed: str,
     keys: list[str] | None = None,
-    engine: Engine | None = None,
+    engine: Engine | Cell | None = None,
 ) -> None:
     with tempfile.TemporaryDirectory() as home:
         engine = engine or Engine(None, interval=0.2, cycles=True)
@@ -153,6 +183,10 @@ async def main(only: list[str]) -> None:
             continue
         with SimulatorThread() as sim:
             await take(name, size, lines, typed, engine=profile_engine(sim.port))
+    for name, (size, lines, keys) in CELL_SCENES.items():
+        if wanted(name):
+            with SimulatedCellThread(2) as sims:
+                await take(name, size, lines, "", keys, engine=cell_of(sims))
 
 
 if __name__ == "__main__":

@@ -193,6 +193,7 @@ def test_a_cancel_between_the_get_before_and_the_put_sends_nothing_more(
     engine.start()
     sent: list[bytes] = []
     try:
+
         def cancel_after_the_read_before(frame: Frame) -> None:
             if frame.direction == "tx":
                 sent.append(bytes(frame.data))

@@ -78,9 +78,7 @@ def registered() -> Iterator[CommandSpec]:
 
 
 def test_the_entry_gives_help_completion_hint_and_colour(registered: CommandSpec) -> None:
-    assert "twice TYPE INDEX  -  read a variable twice: did it move?" in BUILTIN.help_lines(
-        "twice"
-    )
+    assert "twice TYPE INDEX  -  read a variable twice: did it move?" in BUILTIN.help_lines("twice")
     assert any(line.startswith("twice TYPE INDEX") for line in BUILTIN.help_lines())
     assert [c.text for c in complete("tw")] == ["twice"]
     assert "IO" in [c.text for c in complete("twice ")]
@@ -158,4 +156,3 @@ def test_two_engines_poll_two_controllers_side_by_side() -> None:
 def _shown(front: Front, key: str) -> object:
     row = front.rows.get(key)
     return row.variant.value if row is not None and row.variant is not None else None
-

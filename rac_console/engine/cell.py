@@ -150,6 +150,11 @@ class Cell:
         return cell
 
     @property
+    def outboxes(self) -> tuple[Outbox, ...]:
+        """The cell's own outbox, then each member's: a front end sets their notify."""
+        return (self.outbox, *(member.engine.outbox for member in self.members))
+
+    @property
     def single(self) -> bool:
         """One target: every front end looks and behaves exactly as without a cell."""
         return len(self.members) == 1
@@ -203,9 +208,13 @@ class Cell:
         try:
             name, rest = route(line, self.names, self.current)
             member = self.member(name)
-            command = self.registry.parse(rest)
         except InputError as exc:
             return self._answer(line, Message(str(exc), "error"))
+        try:
+            command = self.registry.parse(rest)
+        except InputError:
+            # The target says why, in its turn: after the lines queued before this one.
+            return member.engine.submit(rest)
         if isinstance(command, Use):
             if self.where not in self.registry.spec_of(command).where:
                 return member.engine.submit_command(command, line)  # the engine says why

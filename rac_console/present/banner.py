@@ -4,6 +4,8 @@ is typed, so a robot is never taken for the simulator."""
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 from rich.text import Text
 
 from ..engine.events import Status
@@ -28,3 +30,13 @@ def profile_words(status: Status) -> str:
         return ""
     label = f" ({label_text(status.label)})" if status.label else ""
     return f", profile {terminal_safe(status.profile)}{label}: writes {status.writes}"
+
+
+def cell_banner(names: Sequence[str], next_key: str) -> Text:
+    """A cell's welcome: its targets, and how a line reaches each."""
+    return Text(
+        f"A cell of {len(names)} targets ({terminal_safe(', '.join(names))}): lines go to "
+        f"the one the prompt names; @NAME LINE runs a line on another; use NAME (or "
+        f"{next_key}) changes the current one.",
+        style="bold",
+    )

@@ -56,17 +56,15 @@ def complete(
 
     ``seen`` holds (TYPE, index) pairs already used or watched, offered as indices;
     ``targets`` the config file's profiles (name, label or host), offered after connect;
-    ``cell`` the open targets of a cell (name, label), offered after ``use`` and as the
-    ``@NAME`` a line may start with.
+    ``cell`` a cell's open targets (name, label), offered after ``use`` and as ``@NAME``
+    at the start of a line (the line after it completes as any other).
     """
     if cell and text.lstrip().startswith("@"):
-        name, space, rest = text.lstrip()[1:].partition(" ")
-        if not space:  # the @NAME itself
-            low = name.lower()
-            return [
-                Candidate(f"@{n}", h, len(name) + 1) for n, h in cell if n.lower().startswith(low)
-            ]
-        text = rest.lstrip()
+        head = text.lstrip()
+        name, space, rest = head.partition(" ")
+        if not space:
+            return [Candidate(f"@{n}", h, len(name)) for n, h in cell if f"@{n}".startswith(name)]
+        return complete(rest.lstrip(), seen, targets, registry, cell)
     if is_raw_line(text):
         return []
     done, partial = _tokens(text)

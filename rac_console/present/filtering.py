@@ -26,31 +26,42 @@ def add_filter_title(title: Text, typed: str) -> None:
 @dataclass(frozen=True, slots=True)
 class FrameFilter:
     """The frame log's filter: a variable (``IO128``, ``I 10``, ``P[3]``) keeps the frames
-    that get or put it and their replies; any other text keeps the lines that hold it."""
+    that get or put it and their replies; any other text keeps the lines that hold it.
+    In a cell, a first word ``@NAME`` (or ``/NAME``) keeps one target's frames: alone
+    (``@robotA``) or before the rest (``@robotB IO64``)."""
 
     typed: str = ""
     needle: str = ""
     var: tuple[str, int] | None = None
+    target: str | None = None  # a cell's target, as named after @
 
     @classmethod
     def of(cls, typed: str) -> FrameFilter:
-        needle = needle_of(typed)
+        target = None
+        text = typed.strip()
+        if text[:1] in ("@", "/") and len(text) > 1:
+            first, _, text = text.partition(" ")
+            target = first[1:]
+        needle = needle_of(text)
         var = None
         try:
-            ref, rest = parse_var(typed.strip(), "")
+            ref, rest = parse_var(text.strip(), "")
         except InputError:
             pass
         else:
             if not rest.strip():
                 var = (ref.kind.code, ref.index)
-        return cls(typed, needle, var)
+        return cls(typed, needle, var, target)
 
     def __bool__(self) -> bool:
-        return bool(self.needle)
+        return bool(self.needle) or self.target is not None
 
-    def matches(self, request: RequestLine | None, body: str) -> bool:
+    def matches(self, request: RequestLine | None, body: str, target: str | None = None) -> bool:
         """``request``: the frame's (a reply's is the request it answered, None when it
-        answered nothing); ``body``: the line as shown, after its time."""
+        answered nothing); ``body``: the line as shown, after its time; ``target``: the
+        cell's target the frame went to or came from."""
+        if self.target is not None and (target is None or target.lower() != self.target.lower()):
+            return False
         if not self.needle:
             return True
         if self.var is not None:

@@ -13,6 +13,7 @@ from typing import Any
 from rich.console import Console
 from rich.text import Text
 
+from ..commands.cells import split_address
 from ..commands.language import VarRef
 from ..commands.outcome import Outcome
 from ..protocol import Variant, vt_name
@@ -158,3 +159,15 @@ def print_outcome(out: Console, err: Console, outcome: Outcome, prefix: str = ""
         out.print(outcome_text(outcome), soft_wrap=True, highlight=False)
     else:
         print_error(err, error_text(outcome, prefix))
+
+
+def echo_text(line: str, target: str | None = None) -> Text:
+    """A line echoed over its result: ``› get I 1``; in a cell, after the target it ran
+    on (``robotB › put I 10 5``: an ``@robotB`` is said by the name)."""
+    if target is None:
+        return Text(f"› {terminal_safe(line)}", style="bold cyan")
+    if line.lstrip().startswith("@"):
+        line = split_address(line)[1]
+    return Text.assemble(
+        (f"{terminal_safe(target)} ", "bold"), (f"› {terminal_safe(line)}", "bold cyan")
+    )

@@ -161,12 +161,14 @@ class TrendStore:
         newest.reverse()
         return [field_value(value, field) for _, value in newest]
 
-    def window(self, var: VarRef, field: int, seconds: float) -> Window:
-        """The samples of the last ``seconds`` before the newest cycle, with min/max/last."""
+    def window(self, var: VarRef, field: int, seconds: float, end: float | None = None) -> Window:
+        """The samples of the last ``seconds`` before the newest cycle (or before
+        ``end``: a cell's trends of several stores on one time axis), with min/max/last."""
         one = self._series.get(var)
-        if one is None or self.latest is None:
+        latest = self.latest if end is None else end
+        if one is None or latest is None:
             return Window(seconds, [], None, None, None, False)
-        start = self.latest - seconds
+        start = latest - seconds
         raw = one.raw
         samples: list[Sample] = []
         prior: Sample | None = None
@@ -184,7 +186,7 @@ class TrendStore:
             samples = older + samples
             prior = next((s for s in reversed(one.coarse) if s[0] < start), None)
         values = [field_value(value, field) for _, value in samples]
-        covered = seconds if prior is not None or not samples else self.latest - samples[0][0]
+        covered = seconds if prior is not None or not samples else latest - samples[0][0]
         numbers = [value for value in values if value is not None]
         last = next((value for value in reversed(values) if value is not None), None)
         return Window(
@@ -195,7 +197,7 @@ class TrendStore:
             last,
             thinned,
             [t for t, _ in samples],
-            self.latest,
+            latest,
             covered if samples else 0.0,
             None if prior is None else field_value(prior[1], field),
         )

@@ -130,6 +130,11 @@ class SimulatedCellThread:
             if not self._thread.is_alive():
                 self._loop.close()
 
+    def stop_one(self, index: int) -> None:
+        """One simulator goes away (a controller switched off); the others go on."""
+        server = self.cell.servers[index]
+        asyncio.run_coroutine_threadsafe(server.stop(), self._loop).result(5)
+
     def __enter__(self) -> SimulatedCellThread:
         return self.start()
 

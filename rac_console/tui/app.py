@@ -22,6 +22,7 @@ from rich.text import Text
 from textual import on
 from textual.app import App, ComposeResult
 from textual.binding import Binding, BindingType
+from textual.containers import Horizontal
 from textual.message import Message as TextualMessage
 from textual.reactive import reactive
 from textual.timer import Timer
@@ -29,35 +30,36 @@ from textual.widgets import Input, Static
 from textual.worker import Worker, WorkerState
 
 from .. import __version__
-from ..commands.language import Command, Simple, Step, VarRef, WatchFile
+from ..commands.cells import split_address
+from ..commands.language import Command, Simple, Step, Use, WatchFile
 from ..commands.outcome import Outcome
 from ..engine import (
     SIMULATOR_NOTICE,
     Alert,
+    Batch,
     ConfirmWrite,
     Cycle,
     Engine,
     Feedback,
     Message,
     Result,
-    RowView,
     Status,
     UiStep,
 )
+from ..engine.cell import Cell
 from ..engine.config import config_path
 from ..engine.settings import SettingsFile
-from ..present.banner import live_banner
+from ..present.banner import cell_banner, live_banner
 from ..present.completion import shown_candidates
 from ..present.glyphs import ascii_wanted
 from ..present.heap import keep_full_collections_rare
 from ..present.history import History, is_refused
-from ..present.render import error_text, notice_text, outcome_text
-from ..present.row_actions import PendingToggles
+from ..present.render import echo_text, error_text, notice_text, outcome_text
 from ..present.status import connect_targets, target_label
-from ..present.trends import TrendStore
 from ..present.type_ahead import may_ask
 from ..protocol.text import counted, terminal_safe
 from .ascii_screen import ascii_driver
+from .cell_state import CellMembers, MemberState
 from .command_line import CommandLine
 from .confirm_screen import ConfirmWriteScreen, border_colour
 from .file_writes import FileWrites
@@ -109,7 +111,7 @@ PANES_HELP = "Next or previous pane: command line, table, I/O grid, frame log"
 FREEZE_HELP = "Freeze the log's scrolling, or follow new frames again"
 
 
-class RacConsoleApp(PaletteActions, TableActions, LogActions, App[int]):
+class RacConsoleApp(CellMembers, PaletteActions, TableActions, LogActions, App[int]):
     """Woken by the engine: its outbox's ``notify`` posts :class:`OutboxWoke`, and the
     screen is brought up to date then (see :meth:`on_outbox_woke`), not on a timer."""
 
@@ -126,6 +128,14 @@ class RacConsoleApp(PaletteActions, TableActions, LogActions, App[int]):
             id="cancel-command",
         ),
         Binding("f1", "help", "Help", id="help"),
+        # A cell's: shown only with more than one target (check_action).
+        Binding(
+            "f8",
+            "next_target",
+            "Next target",
+            tooltip="A cell: use the next target (lines without @NAME go to it)",
+            id="next-target",
+        ),
         # Priority: taken as the key arrives, so the keys typed right after it go to the
         # new pane (without it they were already on their way to the old one).
         Binding(
@@ -202,23 +212,23 @@ class RacConsoleApp(PaletteActions, TableActions, LogActions, App[int]):
 
     def __init__(
         self,
-        engine: Engine,
+        cell: Cell | Engine,
         history: History,
         watch_file: str | None = None,
         profile_names: Sequence[str] = (),
         settings: SettingsFile | None = None,
     ) -> None:
         super().__init__()
-        self.engine = engine
+        #: The console's targets: one engine each (a plain console is a cell of one).
+        self.cell = cell if isinstance(cell, Cell) else Cell.of(cell)
+        self.states = {member.name: MemberState(member) for member in self.cell.members}
+        self.cell_mode = len(self.cell.members) > 1
         self.history = history
         self.watch_file = watch_file
         self.profile_names = tuple(profile_names)  # the palette offers connect NAME
-        self.profiles = dict(engine.profiles)  # read before the engine starts: its words
+        self.profiles = dict(self.engine.profiles)  # read before the engine starts: its words
         self.files = FileWrites()  # history and settings, written off this loop
         self.kept = SettingsKeeper(self, settings)  # theme, I/O grid, log toggles
-        self.status: Status | None = None
-        self.rows: dict[VarRef, RowView] = {}
-        self._removed: set[VarRef] = set()
         #: Lines handed to the engine and not answered yet: seq -> (line, when), in order.
         self.lines_pending: dict[int, tuple[str, float]] = {}
         self._flushes: deque[tuple[float, int]] = deque()  # (when, frames) in RATE_WINDOW
@@ -230,15 +240,23 @@ class RacConsoleApp(PaletteActions, TableActions, LogActions, App[int]):
         self._status_line = Text()
         # Kept as attributes: timers and workers never query a DOM being torn down.
         self.status_bar = StatusBar(id="status")
-        self.trends = TrendStore()
-        self.toggles = PendingToggles()
-        self.table = WatchTable(self.trends, self.type_on_command_line, self.toggle_row, id="watch")
+        self.table = WatchTable(
+            self.trend_store,
+            self.type_on_command_line,
+            self.toggle_row,
+            [(state.name, state.colour) for state in self.states.values()]
+            if self.cell_mode
+            else (),
+            id="watch",
+        )
         self.table_filter = TableFilter(self.table, id="table-filter")
-        self.trend_view = TrendView(self.trends, id="trend")
+        self.trend_view = TrendView(self.trend_store, id="trend")
         self.row_detail = RowDetail(id="detail")
         self.frame_log = FrameLog(id="log")
-        self.log_filter = log_filter_line(self.frame_log)
-        self.io_panel = IoPanel(self.toggles.busy, id="io")
+        if self.cell_mode:
+            self.frame_log.target_width = max(len(terminal_safe(n)) for n in self.cell.names)
+        self.log_filter = log_filter_line(self.frame_log, cell=self.cell_mode)
+        self.io_panel = IoPanel(lambda var: self.toggles.busy(var), id="io")
         self.watch_area = WatchArea(self.table, self.io_panel, id="watch-area")
         self.completions = Static(id="completions")
         self.hint = Static(id="hint")
@@ -249,7 +267,12 @@ class RacConsoleApp(PaletteActions, TableActions, LogActions, App[int]):
             id="command",
             placeholder="get P 1 · put IO 20 on · watch IO 0-7 · help",
         )
-        self.command_line.targets = tuple(connect_targets(engine.profiles))
+        self.command_line.targets = tuple(connect_targets(self.engine.profiles))
+        if self.cell_mode:
+            self.command_line.cell = tuple(
+                (state.name, terminal_safe(state.label or "")) for state in self.states.values()
+            )
+        self.prompt = Static(id="prompt")
         self.command_line.may_ask = self.may_ask
         #: The line whose question keys typed ahead must not answer (see CommandLine).
         self._held_seq: int | None = None
@@ -266,18 +289,32 @@ class RacConsoleApp(PaletteActions, TableActions, LogActions, App[int]):
         yield self.completions
         yield self.results
         yield self.hint
-        yield self.command_line
+        if self.cell_mode:  # the prompt names the target a line without @NAME goes to
+            with Horizontal(id="command-row"):
+                yield self.prompt
+                yield self.command_line
+        else:
+            yield self.command_line
         yield FittingFooter()
+
+    def action_next_target(self) -> None:
+        """F8: ``use`` the next target of the cell, as typed."""
+        names = self.cell.names
+        following = names[(names.index(self.cell.current) + 1) % len(names)]
+        self.submit_line(f"use {following}", Use(following))
 
     async def on_mount(self) -> None:
         self.kept.apply()
         self.watch(self, "theme", self.kept.changed, init=False)
-        self.engine.outbox.notify = self._wake  # before the engine publishes anything
+        for outbox in self.cell.outboxes:  # before the engines publish anything
+            outbox.notify = self._wake
+        self.show_prompt()
         if not self.is_headless:
             self._watch_terminal()
             # The first paint names the target ("connecting…") at once; the engine, and
             # with it the built-in simulator, starts once that is on screen.
-            self.engine.publish_target()
+            for member in self.cell.members:
+                member.engine.publish_target()
             self.drain_outbox()
             self.refresh_table()
             self.run_worker(self._start_after_first_paint(), name="engine start")
@@ -315,7 +352,7 @@ class RacConsoleApp(PaletteActions, TableActions, LogActions, App[int]):
 
     async def _start_engine(self) -> None:
         """Start the engine, then show what it published; the one timer starts."""
-        self._engine_starting = asyncio.ensure_future(asyncio.to_thread(self.engine.start))
+        self._engine_starting = asyncio.ensure_future(asyncio.to_thread(self.cell.start))
         await asyncio.shield(self._engine_starting)  # a close waits for it: see on_unmount
         self.drain_outbox()
         self._welcome()
@@ -332,20 +369,28 @@ class RacConsoleApp(PaletteActions, TableActions, LogActions, App[int]):
     async def on_unmount(self) -> None:
         if self._engine_starting is not None:
             await self._engine_starting  # a start under way ends before the stop below
-        self.engine.outbox.notify = None
+        for outbox in self.cell.outboxes:
+            outbox.notify = None
         self.kept.save(at_exit=True)
         await self.files.close()  # the last save and history line are on disk
-        await asyncio.to_thread(self.engine.stop)
-        self.status = self.engine.outbox.drain().status or self.status
+        await asyncio.to_thread(self.cell.stop)
+        for state in self.states.values():
+            state.status = state.member.engine.outbox.drain().status or state.status
 
     def exit_status(self, status: int) -> int:
-        """4 when the console would end with 0 but the recording stopped on the way."""
-        return self.status.exit_status(status) if self.status is not None else status
+        """4 when the console would end with 0 but a recording stopped on the way."""
+        for state in self.states.values():
+            if state.status is not None:
+                status = state.status.exit_status(status)
+        return status
 
     def _welcome(self) -> None:
         results = self.results
         status = self.status
-        if status is not None and status.is_simulator:
+        if self.cell_mode:
+            key = key_of(type(self), "next_target") or "F8"
+            results.write(cell_banner(self.cell.names, key))
+        elif status is not None and status.is_simulator:
             results.write(
                 Text.assemble(
                     ("SIMULATOR", "bold black on yellow"),
@@ -419,12 +464,9 @@ class RacConsoleApp(PaletteActions, TableActions, LogActions, App[int]):
 
     def _clock_shown(self) -> bool:
         """Whether anything on screen changes with time alone."""
-        status = self.status
         return bool(
-            self.rows  # their ages
+            self.members_timed()  # rows' ages, a reply waited for, a retry's countdown
             or self.lines_pending  # the running line's time
-            or self.engine.outbox.waiting_since is not None  # waiting for a reply
-            or (status is not None and status.retry_at is not None)  # the countdown
             or self.frames_per_second() > 0  # the rate, back to 0
         )
 
@@ -438,22 +480,23 @@ class RacConsoleApp(PaletteActions, TableActions, LogActions, App[int]):
         self.table.refuses_writes = writes_refused(status)
 
     def drain_outbox(self) -> None:
-        """Take everything the engine published since the last tick, in order."""
-        batch = self.engine.outbox.drain()
-        if batch.status is not None:
-            if self.status is None or batch.status.target != self.status.target:
-                self.sub_title = terminal_safe(batch.status.target)
-            if self.status is not None and batch.status.target_id != self.status.target_id:
-                self.trends.clear()  # the last target's samples are not the new one's
-            if self.status is None or _shown_target(batch.status) != _shown_target(self.status):
-                self.show_target(batch.status)
-            self.follow_status(self.status, batch.status)
-            self.status = batch.status
-            self.frame_log.slow_after = batch.status.timeout / 2  # a slow reply stands out
-        batch.apply_rows(self.rows)
-        self._removed |= batch.removed
-        self.forget_rows(batch.removed - batch.rows.keys())
-        self._removed -= batch.rows.keys()
+        """Take everything the engines published since the last tick, in order: the
+        cell's own results, then each target's batch."""
+        for name, batch in self.cell.drain():
+            self._take_batch(None if name is None else self.states[name], batch)
+        self.show_prompt()
+        self.sync_bindings()
+
+    def _take_batch(self, state: MemberState | None, batch: Batch) -> None:
+        """One target's batch (``state`` None: the cell's own answers)."""
+        if state is not None and batch.status is not None:
+            self._take_status(state, batch.status)
+        if state is not None:
+            batch.apply_rows(state.rows)
+            state.removed |= batch.removed
+            self.forget_rows(batch.removed - batch.rows.keys(), state.name)
+            state.removed -= batch.rows.keys()
+        name = state.name if state is not None and self.cell_mode else None
         for event in batch.events:
             if isinstance(event, Result):
                 if event.line is not None:  # a typed line: kept by the history unless refused
@@ -464,16 +507,18 @@ class RacConsoleApp(PaletteActions, TableActions, LogActions, App[int]):
                 if event.seq == self._held_seq:
                     self._release_keys()
                 self.lines_pending.pop(event.seq, None)
-                self.take_result(event)
-                self._show_result(event)
+                self.take_result(event, state.name if state is not None else None)
+                self._show_result(event, name)
             elif isinstance(event, Cycle):
-                self.take_cycle(event)
+                if state is not None:
+                    self.take_cycle(event, state.name)
             elif isinstance(event, ConfirmWrite):
-                self.confirm_write(event)
+                self.confirm_write(event, state.name if state is not None else None)
             else:
-                self.frame_log.add(event)
+                self.frame_log.add(event, name)
                 if isinstance(event, Alert):
-                    self.show(Message(event.text, "error"))
+                    text = event.text if name is None else f"{name}: {event.text}"
+                    self.show(Message(text, "error"))
         if batch.frames_dropped or batch.cycles_dropped:
             lost = [
                 counted(n, what)
@@ -484,7 +529,25 @@ class RacConsoleApp(PaletteActions, TableActions, LogActions, App[int]):
                 if n
             ]
             self.frame_log.add(Alert(f"{' and '.join(lost)} not shown: the screen fell behind"))
-        self.sync_bindings()
+
+    def _take_status(self, state: MemberState, status: Status) -> None:
+        old = state.status
+        if old is not None and status.target_id != old.target_id:
+            state.trends.clear()  # the last target's samples are not the new one's
+        state.status = status
+        if self.cell_mode:
+            self.frame_log.slow_after = (
+                max(s.status.timeout for s in self.states.values() if s.status) / 2
+            )
+            if old is None:
+                self.sub_title = terminal_safe(f"cell: {', '.join(self.cell.names)}")
+            return
+        if old is None or status.target != old.target:
+            self.sub_title = terminal_safe(status.target)
+        if old is None or _shown_target(status) != _shown_target(old):
+            self.show_target(status)
+        self.follow_status(old, status)
+        self.frame_log.slow_after = status.timeout / 2  # a slow reply stands out
 
     def flush_log(self) -> None:
         count = self.frame_log.flush()
@@ -503,12 +566,17 @@ class RacConsoleApp(PaletteActions, TableActions, LogActions, App[int]):
         self._table_at = time.monotonic()
         if self._clock is not None and self._clock_shown():
             self._clock.resume()
-        removed, self._removed = self._removed, set()
-        self.table.refresh_rows(self.rows, removed, time.monotonic())
+        if self.cell_mode and self.table.io_target != self.cell.current:
+            self.table.io_target = self.cell.current  # the grid shows the current's IO
+            self.table.set_hide_io(self.io_panel.display)
+        self.table.refresh_rows(self.row_groups(), self.take_removed(), time.monotonic())
         self.redraw_trend()
         self.show_detail()
         self.io_panel.refresh_rows(self.rows, time.monotonic())
         self.watch_area.share_width()  # the grid beside the table only while both fit
+        if self.cell_mode:
+            self._status_line = self.status_bar.show_cell(self.badges(), self._running_line())
+            return
         if self.status is None:
             return
         self._status_line = self.status_bar.show(  # for its width; repainted if changed
@@ -538,7 +606,8 @@ class RacConsoleApp(PaletteActions, TableActions, LogActions, App[int]):
         """Whether this line, run now, may stop to ask before it writes: a write on a
         ``confirm`` target with nothing running before it (a write queued behind a
         long wait must not hold the keys typed meanwhile)."""
-        status = self.status
+        name, _ = split_address(line) if line.lstrip().startswith("@") else (None, line)
+        status = self.state_of(name).status
         return (
             status is not None
             and status.writes == "confirm"
@@ -568,12 +637,15 @@ class RacConsoleApp(PaletteActions, TableActions, LogActions, App[int]):
         )
         self.show(Message(f"{keys} ignored: nothing typed before a question answers it"))
 
-    def submit_line(self, line: str, command: Command | None = None) -> int:
-        """Every line the console hands the engine (typed, or made by a key on a row:
-        then ``command`` is run as it is, never parsed, and ``line`` shows it):
-        counted as running or queued until its result, and cancelled by Esc."""
-        engine = self.engine
-        seq = engine.submit(line) if command is None else engine.submit_command(command, line)
+    def submit_line(
+        self, line: str, command: Command | None = None, target: str | None = None
+    ) -> int:
+        """Every line the console hands the cell (typed, or made by a key on a row:
+        then ``command`` is run as it is on ``target`` (None: the current one), never
+        parsed, and ``line`` shows it): counted as running or queued until its result,
+        and cancelled by Esc."""
+        cell = self.cell
+        seq = cell.submit(line) if command is None else cell.submit_command(command, line, target)
         self.lines_pending[seq] = (line, time.monotonic())
         self.sync_bindings()
         if self._clock is not None:
@@ -593,6 +665,8 @@ class RacConsoleApp(PaletteActions, TableActions, LogActions, App[int]):
         F2 and F4 show the one of their pair that says what they will do."""
         if action == "cancel_command":
             return self.line_running
+        if action == "next_target":
+            return self.cell_mode
         if action == "toggle_polling":
             return self.polling_paused == (parameters == ("resume",))
         if action == "toggle_scroll":
@@ -603,14 +677,14 @@ class RacConsoleApp(PaletteActions, TableActions, LogActions, App[int]):
         """Esc: the running line ends (a wait, a latency run, a request in flight), and
         the lines typed behind it are not run."""
         if self.lines_pending:
-            self.engine.cancel(queued=True)
+            self.cell.cancel(queued=True)
 
     def action_interrupt(self) -> None:
         """Ctrl+C: cancel as Esc does. With nothing running, text selected in the
         command line (or on screen) is copied, as Textual does; else it says how to
         quit, for the hand that reached for Ctrl+C to leave."""
         if self.lines_pending:
-            self.engine.cancel(queued=True)
+            self.cell.cancel(queued=True)
             return
         focused = self.focused
         if isinstance(focused, Input) and focused.selected_text:
@@ -627,9 +701,11 @@ class RacConsoleApp(PaletteActions, TableActions, LogActions, App[int]):
             markup=False,
         )
 
-    def _show_result(self, result: Result) -> None:
+    def _show_result(self, result: Result, target: str | None = None) -> None:
+        """The line echoed, then what came of it; in a cell, after the target it ran
+        on (``robotB › put I 10 5``: an ``@robotB`` is said by the name)."""
         if result.line is not None:
-            self.results.write(Text(f"› {terminal_safe(result.line)}", style="bold cyan"))
+            self.results.write(echo_text(result.line, target))
         for feedback in result.feedback:
             self.show(feedback)
 
@@ -693,7 +769,8 @@ class RacConsoleApp(PaletteActions, TableActions, LogActions, App[int]):
 
     def action_toggle_polling(self, _shown: str = "") -> None:
         paused = not (self.status is not None and self.status.paused)
-        self.engine.submit_command(Simple(Step.PAUSE if paused else Step.RESUME))
+        for name in self.cell.names:  # in a cell: every target's polls
+            self.cell.submit_command(Simple(Step.PAUSE if paused else Step.RESUME), None, name)
 
     def action_toggle_poll_frames(self) -> None:
         log = self.frame_log
@@ -717,7 +794,7 @@ class RacConsoleApp(PaletteActions, TableActions, LogActions, App[int]):
     @on(IoPanel.Toggle)
     def toggle_from_grid(self, event: IoPanel.Toggle) -> None:
         """Space in the I/O grid: the table's toggle, with the same in-flight guard."""
-        toggle(self, event.row)
+        toggle(self, event.row, self.cell.current if self.cell_mode else "")
 
     def action_toggle_io_grid(self) -> None:
         """IO rows move from the table to the grid, or back."""
@@ -737,23 +814,25 @@ class RacConsoleApp(PaletteActions, TableActions, LogActions, App[int]):
         if isinstance(screen, ConfirmWriteScreen) and screen.question.seq == seq:
             screen.dismiss(False)
 
-    def confirm_write(self, question: ConfirmWrite) -> None:
+    def confirm_write(self, question: ConfirmWrite, target: str | None = None) -> None:
         """A write on a ``confirm`` target asks first: old → new, ``[y/N]``, default No;
         the engine polls on until the answer, then the focus is back where it was (a
         table row or a grid bit: the next Space toggles the next one)."""
-        colour = self.status.colour if self.status is not None else None
+        state = self.state_of(target)
+        colour = state.status.colour if state.status is not None else state.colour
         held = question.seq == self._held_seq
         if held:  # what was typed after the write's Enter was typed ahead of this
             self.command_line.post_message(CommandLine.Asked())
 
         def answered(yes: bool | None) -> None:
-            self.engine.answer_confirm(question.seq, bool(yes))
+            self.cell.answer_confirm(question.seq, bool(yes))
             if not yes:  # no write: the row's next Space need not wait for the refusal
-                self.toggles.declined(question.seq)
+                state.toggles.declined(question.seq)
             if held and self._held_seq == question.seq:
                 self.command_line.post_message(CommandLine.Answered())
 
-        self.push_screen(ConfirmWriteScreen(question, colour), answered)
+        named = target if self.cell_mode else None
+        self.push_screen(ConfirmWriteScreen(question, colour, named), answered)
 
     def show_target(self, status: Status) -> None:
         """A profile's colour around the whole console and its label in the border's
@@ -779,12 +858,16 @@ def _shown_target(status: Status) -> tuple[str | None, str | None, str | None]:
 
 
 def run_console(
-    engine: Engine, history: History, watch_file: str | None, profile_names: Sequence[str] = ()
+    cell: Cell | Engine,
+    history: History,
+    watch_file: str | None,
+    profile_names: Sequence[str] = (),
 ) -> int:
-    """The console; ``profile_names`` are the config file's targets (the palette's
-    ``connect NAME`` entries)."""
+    """The console on a cell (one target: the console as it always was; an engine is
+    taken as a cell of one); ``profile_names`` are the config file's targets (the
+    palette's ``connect NAME`` entries)."""
     app = RacConsoleApp(
-        engine, history, watch_file, profile_names, settings=SettingsFile(config_path())
+        cell, history, watch_file, profile_names, settings=SettingsFile(config_path())
     )
     if ascii_wanted():  # RAC_CONSOLE_ASCII=1, or Windows' old console host
         app.driver_class = ascii_driver(app.driver_class)

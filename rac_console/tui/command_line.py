@@ -59,6 +59,8 @@ class CommandLine(Input):
 
     #: What ``connect`` completes to besides sim: (profile name, its label), set by the app.
     targets: tuple[tuple[str, str], ...] = ()
+    #: A cell's targets (name, label): ``use NAME`` and ``@NAME`` complete to them.
+    cell: tuple[tuple[str, str], ...] = ()
     BINDINGS: ClassVar[list[BindingType]] = [
         # The tooltip is the help screen's line (Up and Down share one).
         Binding(
@@ -297,7 +299,7 @@ class CommandLine(Input):
 
     def action_complete(self) -> None:
         text = self.value[: self.cursor_position]
-        candidates = complete(text, self._seen(), self.targets)
+        candidates = complete(text, self._seen(), self.targets, cell=self.cell)
         if not candidates:
             return
         start = len(text) - candidates[0].start

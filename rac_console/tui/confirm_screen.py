@@ -54,10 +54,14 @@ class ConfirmWriteScreen(ModalScreen[bool]):
 
     AUTO_FOCUS = None  # nothing here takes the focus: keys come to the screen
 
-    def __init__(self, question: ConfirmWrite, colour: str | None = None) -> None:
+    def __init__(
+        self, question: ConfirmWrite, colour: str | None = None, member: str | None = None
+    ) -> None:
+        """``member``: in a cell, the target's name (said first: which robot moves)."""
         super().__init__()
         self.question = question
         self.colour = colour
+        self.member = member
         self.ignored = 0  # keys ignored: typed ahead, or within the guard time
         self._ready_at = float("inf")  # event_clock() from when keys answer
         self._answered = False
@@ -75,6 +79,8 @@ class ConfirmWriteScreen(ModalScreen[bool]):
     def compose(self) -> ComposeResult:
         question = self.question
         where = label_text(question.label) if question.label else terminal_safe(question.target)
+        if self.member is not None:
+            where = f"{terminal_safe(self.member)} · {where}"
         with Vertical(id="confirm-box") as box:
             box.border_title = Text(f" {where} ")
             if question.label:

@@ -91,6 +91,10 @@ class FrameLog(InlineWidthLog):
         # The newest frame's time: the next frame's gap follows from it.
         self._last_time: float | None = None
         self._bodies: dict[int, str] = {}  # kept frames' lines after their time, by id
+        #: In a cell: each kept frame's target, by id, and the width of their column
+        #: (0: one target, no column).
+        self._origin: dict[int, str] = {}
+        self.target_width = 0
         self._frames_kept = 0
         self._frames_shown = 0  # counted while narrowed (a filter, or polls hidden)
         self._show_polls = True
@@ -177,7 +181,8 @@ class FrameLog(InlineWidthLog):
     def set_filter(self, text: str) -> None:
         """Show only the frames that name a variable (and their replies), or hold a text."""
         new = FrameFilter.of(text)
-        if (new.needle, new.var) == (self._filter.needle, self._filter.var):
+        old = self._filter
+        if (new.needle, new.var, new.target) == (old.needle, old.var, old.target):
             self._filter = new  # as typed, for the title
             self.update_title()
             return
@@ -222,24 +227,28 @@ class FrameLog(InlineWidthLog):
         if self.auto_scroll:
             self.call_after_refresh(self.scroll_end, animate=False, x_axis=False)
 
-    def add(self, event: Frame | Note | Alert) -> None:
+    def add(self, event: Frame | Note | Alert, target: str | None = None) -> None:
         """Queue one event drained from the engine's outbox; cheap, written at the next flush.
 
         A note carries the time it happened, so it sits in time order among the frames
-        around it.
+        around it. ``target``: in a cell, the target it came from (a column of its own
+        for a frame, a prefix for a note).
         """
         if isinstance(event, Frame):
+            if target is not None:  # a name from the config file: never raw to the screen
+                self._origin[id(event)] = terminal_safe(target)
             self._pending.append(event)
-        elif isinstance(event, Note):
-            self._pending.append((event.time, event.text))
-        else:
-            self._pending.append((time.time(), event.text))
+            return
+        text = event.text if target is None else f"{target}: {event.text}"
+        when = event.time if isinstance(event, Note) else time.time()
+        self._pending.append((when, text))
 
     def clear(self) -> FrameLog:
         """Ctrl+L: the lines and the frames kept go (a filter finds nothing older)."""
         self._kept_polls.clear()
         self._kept_others.clear()
         self._bodies.clear()
+        self._origin.clear()
         self._frames_kept = self._frames_shown = 0
         super().clear()
         self.update_title()
@@ -251,6 +260,8 @@ class FrameLog(InlineWidthLog):
             return 0
         events = list(self._pending)
         self._pending.clear()
+        if self.target_width:  # a cell: each target's batch came apart; in time order
+            events.sort(key=lambda event: event.time if isinstance(event, Frame) else event[0])
         count, shown = self._keep(events)
         if self._narrowed:
             self.update_title()
@@ -324,6 +335,7 @@ class FrameLog(InlineWidthLog):
                 self._frames_shown -= 1
             if bodies:
                 bodies.pop(id(event), None)
+            self._origin.pop(id(event), None)
 
     def _walk(self) -> list[Drawn]:
         """Every kept event with its gap, in the order they came."""
@@ -335,9 +347,10 @@ class FrameLog(InlineWidthLog):
             return False
         if not self._filter:
             return True
-        if self._filter.var is not None:
-            return self._filter.matches(frame.request, "")
-        return self._filter.matches(frame.request, self._body(frame))
+        target = self._origin.get(id(frame))
+        if self._filter.var is not None or not self._filter.needle:
+            return self._filter.matches(frame.request, "", target)
+        return self._filter.matches(frame.request, self._body(frame), target)
 
     def _rematch(self) -> None:
         """The filter or F3 changed: which kept frames pass, counted, and drawn again."""
@@ -383,6 +396,8 @@ class FrameLog(InlineWidthLog):
     def _frame_line(self, event: Frame, gap: float | None) -> tuple[str, int]:
         """A frame's line, and where its text starts (after the time and the gap)."""
         head = self._head(event.time, gap)
+        if self.target_width:
+            head = f"{head} {self._origin.get(id(event), ''):<{self.target_width}}"
         return f"{head} {self._bodies.get(id(event)) or frame_body(event)}", len(head) + 1
 
     def _hex_fits(self, width: int, line: str, hexed: str) -> bool:
@@ -473,7 +488,7 @@ def _hex_under(hexed: str, indent: int, width: int) -> list[str]:
 
 
 #: A frame line's start: the time, the gap (when shown), the arrow.
-_HEAD = re.compile(r"\d\d:\d\d:\d\d\.\d{3} +(?:(\+\d+(?:\.\d+)?)(ms|s) )?([→←]) ")
+_HEAD = re.compile(r"\d\d:\d\d:\d\d\.\d{3} +(?:(\+\d+(?:\.\d+)?)(ms|s) )?(?:\S+ +)?([→←]) ")
 #: A line of hex under its frame.
 _HEX_LINE = re.compile(r" +[0-9a-f]{2}(?: [0-9a-f]{2})*$")
 
@@ -502,6 +517,9 @@ class FrameHighlighter(Highlighter):
             text.stylize("dim", at)
 
 
-def log_filter_line(log: FrameLog) -> FilterLine:
-    """The frame log's filter line (``/``)."""
-    return FilterLine(log, FILTER_HINT, id="log-filter")
+CELL_FILTER_HINT = "filter frames: @NAME for a target, text, or a variable (@robotB IO64)"
+
+
+def log_filter_line(log: FrameLog, cell: bool = False) -> FilterLine:
+    """The frame log's filter line (``/``); in a cell it says how to name a target."""
+    return FilterLine(log, CELL_FILTER_HINT if cell else FILTER_HINT, id="log-filter")

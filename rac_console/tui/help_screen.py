@@ -55,15 +55,23 @@ def key_of(cls: type, action: str) -> str | None:
     return None
 
 
-def _pairs(cls: type, only: Sequence[str] | None = None) -> list[tuple[str, str]]:
+#: Keys only a cell has (more than one target): in the help only there.
+CELL_KEYS = frozenset({"next-target", "row-overlay"})
+
+
+def _pairs(
+    cls: type, only: Sequence[str] | None = None, without: frozenset[str] = frozenset()
+) -> list[tuple[str, str]]:
     """The keys of ``cls`` and of the console's classes it inherits from (not those of
     Textual's), labelled, with their descriptions; a key given twice counts once.
-    With ``only`` (binding ids), just those, in that order."""
+    With ``only`` (binding ids), just those, in that order; never those ``without``."""
     pairs: dict[str, str] = {}
     found: dict[str, tuple[str, str]] = {}
     for klass in cls.__mro__:
         if klass.__module__.startswith("rac_console."):
             for binding in bindings_of(klass):
+                if binding.id in without:
+                    continue
                 key = key_label(binding.key_display or binding.key)
                 text = binding.tooltip or binding.description
                 if only is None:
@@ -87,20 +95,22 @@ APP_KEYS = (
     "toggle-io-grid",
     "toggle-hex",
     "clear-log",
+    "next-target",
     "interrupt",
     "quit",
 )
 
 
-def console_key_groups(app_class: type[App[int]]) -> list[KeyGroup]:
+def console_key_groups(app_class: type[App[int]], cell: bool = False) -> list[KeyGroup]:
     """The console's keys, read from the bindings of the app and its panes, labelled
     as on the keyboard: the command line's first, then the table's, the other panes',
-    and last the keys that work anywhere."""
+    and last the keys that work anywhere (a cell's own keys only in a cell)."""
+    without = frozenset() if cell else CELL_KEYS
     pane = key_of(app_class, "focus_pane(1)") or "F6"
     grid = key_of(app_class, "toggle_io_grid") or "F5"
     trend = key_of(WatchTable, "row('trend')") or "t"
     row_filter = key_of(WatchTable, "row('filter')") or "/"
-    anywhere = _pairs(app_class, APP_KEYS)
+    anywhere = _pairs(app_class, APP_KEYS, without)
     palette = (key_label(app_class.COMMAND_PALETTE_BINDING), "Command palette")
     return [
         (
@@ -113,7 +123,7 @@ def console_key_groups(app_class: type[App[int]]) -> list[KeyGroup]:
                 *_pairs(app_class, ("cancel-command",)),
             ],
         ),
-        (f"watch table ({pane})", _pairs(WatchTable)),
+        (f"watch table ({pane})", _pairs(WatchTable, without=without)),
         (f"filter line ({row_filter} in the table or the frame log)", _pairs(FilterLine)),
         (f"I/O grid ({grid}, then {pane})", _pairs(IoPanel)),
         (f"frame log ({pane})", _pairs(FrameLog)),

@@ -18,8 +18,10 @@ from textual.widget import Widget
 from ..commands.language import Command
 from ..commands.policy import TargetProfile
 from ..engine import Engine, Feedback, Status
+from ..engine.cell import Cell
 from ..present.row_actions import PendingToggles
 from ..present.trends import TrendStore
+from .cell_state import MemberState
 from .command_line import CommandLine
 from .file_writes import FileWrites
 from .filter_line import FilterLine
@@ -31,10 +33,24 @@ from .watch_table import TableFilter, WatchTable
 
 
 class ConsoleHost(Protocol):
-    """The app as its parts see it: the engine, the panes, and a few verbs."""
+    """The app as its parts see it: the cell, the panes, and a few verbs."""
 
-    engine: Engine
-    status: Status | None
+    cell: Cell
+    cell_mode: bool  # more than one target
+
+    @property
+    def engine(self) -> Engine:
+        """The current target's engine."""
+
+    @property
+    def status(self) -> Status | None:
+        """The current target's status."""
+
+    def state_of(self, name: str | None) -> MemberState:
+        """A target's state by name (None, or a name not in the cell: the current one)."""
+
+    def trend_store(self, name: str) -> TrendStore: ...
+
     profile_names: tuple[str, ...]  # the config file's targets, for connect NAME
 
     @property
@@ -48,8 +64,12 @@ class ConsoleHost(Protocol):
     io_panel: IoPanel
     trend_view: TrendView
     row_detail: RowDetail
-    trends: TrendStore
-    toggles: PendingToggles
+
+    @property
+    def trends(self) -> TrendStore: ...
+    @property
+    def toggles(self) -> PendingToggles: ...
+
     files: FileWrites  # file writes, off the screen's loop
 
     # Textual's, as the app has them.
@@ -76,9 +96,11 @@ class ConsoleHost(Protocol):
     def show(self, feedback: Feedback) -> None:
         """A message, an outcome or a UI step, in the results."""
 
-    def submit_line(self, line: str, command: Command | None = None) -> int:
+    def submit_line(
+        self, line: str, command: Command | None = None, target: str | None = None
+    ) -> int:
         """Run a line as if typed (echoed, queued, cancelled by Esc), or ``command``
-        shown as ``line``: its sequence."""
+        shown as ``line`` on ``target`` (None: the current one): its sequence."""
 
     def may_ask(self, line: str) -> bool:
         """Whether ``line``, run now, may stop to ask before it writes."""

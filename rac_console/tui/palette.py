@@ -252,7 +252,7 @@ class PaletteActions:
         if isinstance(self.screen, HelpScreen):
             self.screen.dismiss(None)
             return
-        sections = help_sections(console_key_groups(type(self.screen.app)))
+        sections = help_sections(console_key_groups(type(self.screen.app), self.cell_mode))
         command_line = self.command_line
         # Back on the command line, wherever the help was opened from.
         self.push_screen(HelpScreen(sections), lambda _: focus_now(command_line))

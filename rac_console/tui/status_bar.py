@@ -8,6 +8,7 @@ from textual import events
 from textual.widgets import Static
 
 from ..engine.events import Status
+from ..present.cell_status import Badge, cell_status_text
 from ..present.status import status_text
 
 
@@ -18,6 +19,8 @@ class StatusBar(Static):
         super().__init__(id=id)
         self._figures: tuple[Status, float | None, float, tuple[str, float, int] | None] | None
         self._figures = None
+        self._badges: list[Badge] = []
+        self._cell_running: tuple[str, float, int] | None = None
         self.line = Text()
 
     def show(
@@ -41,9 +44,21 @@ class StatusBar(Static):
             self.refresh()
         return line
 
+    def show_cell(self, badges: list[Badge], running: tuple[str, float, int] | None = None) -> Text:
+        """A cell's line: one badge per target (see :func:`.cell_status_text`)."""
+        self._badges, self._cell_running = badges, running
+        width = self.content_size.width
+        line = cell_status_text(badges, width if width > 0 else None, running=running)
+        if line != self.line:
+            self.line = line
+            self.refresh()
+        return line
+
     def render(self) -> Text:
         return self.line
 
     def on_resize(self, event: events.Resize) -> None:
         if self._figures is not None:
             self.show(*self._figures)
+        elif self._badges:
+            self.show_cell(self._badges, self._cell_running)

@@ -77,45 +77,52 @@ class TableActions:
         elif row is None:
             self.show(Message("the table has no rows: watch TYPE INDEX adds one"))
         elif event.action == "put":
-            put_on_line(self, row)
+            put_on_line(self, row, event.target)
         elif event.action == "toggle":
-            toggle(self, row)
+            toggle(self, row, event.target)
         elif event.action == "unwatch":
-            shown = f"unwatch {row.var.kind.code} {row.var.index}"
-            self.submit_line(shown, Unwatch((row.var,)))
-        elif event.action == "trend" and not has_trend(row.var.kind):
+            shown = addressed(self, event.target, f"unwatch {row.var.kind.code} {row.var.index}")
+            self.submit_line(shown, Unwatch((row.var,)), event.target or None)
+        elif event.action in ("trend", "overlay") and not has_trend(row.var.kind):
             self.show(Message(f"{row.var} has no trend: t draws numbers, IO bits and positions"))
         elif event.action == "trend":
-            open_trend(self, row)
+            open_trend(self, row, event.target)
+        elif event.action == "overlay":
+            overlay_trend(self, row, event.target)
 
-    def toggle_row(self: ConsoleHost, row: RowView | None) -> None:
+    def toggle_row(self: ConsoleHost, row: RowView | None, target: str = "") -> None:
         """Space on the table, handed over as it is read (the keys after it wait)."""
         if row is None:
             self.show(Message("the table has no rows: watch TYPE INDEX adds one"))
         else:
-            toggle(self, row)
+            toggle(self, row, target)
 
     # --------------------------------------------------------------- trends
 
-    def take_cycle(self: ConsoleHost, cycle: Cycle) -> None:
-        """A poll cycle from the outbox: its values go to the trends (not an earlier
+    def take_cycle(self: ConsoleHost, cycle: Cycle, name: str | None = None) -> None:
+        """A poll cycle of target ``name``: its values go to its trends (not an earlier
         target's, drained after the change)."""
-        if self.status is not None and cycle.target_id != self.status.target_id:
+        state = self.state_of(name)
+        if state.status is not None and cycle.target_id != state.status.target_id:
             return
-        self.trends.add_cycle(cycle)
-        if self.toggles.cycle(cycle):
+        state.trends.add_cycle(cycle)
+        if state.toggles.cycle(cycle):
             self.refresh_table()
 
-    def take_result(self: ConsoleHost, result: Result) -> None:
-        if self.toggles.result(result):
+    def take_result(self: ConsoleHost, result: Result, name: str | None = None) -> None:
+        if self.state_of(name).toggles.result(result):
             self.refresh_table()
 
-    def forget_rows(self: ConsoleHost, removed: set[VarRef]) -> None:
-        """Unwatched rows: their trends and toggles go, and their trend view closes."""
+    def forget_rows(self: ConsoleHost, removed: set[VarRef], name: str | None = None) -> None:
+        """Unwatched rows: their trends and toggles go, and they leave the trend view
+        (closed when nothing is left in it)."""
+        state = self.state_of(name)
+        view = self.trend_view
         for var in removed:
-            self.trends.forget(var)
-            self.toggles.forget(var)
-            if self.trend_view.var == var and self.trend_view.has_class("-open"):
+            state.trends.forget(var)
+            state.toggles.forget(var)
+            shown = view.has_class("-open") and view.shows(state.name, var)
+            if shown and view.forget(state.name, var):
                 close_trend(self)
 
     # ------------------------------------------------------------ the detail
@@ -148,16 +155,16 @@ class TableActions:
         close_trend(self)
 
     def on_trend_view_field_cycled(self: ConsoleHost, event: TrendView.FieldCycled) -> None:
-        self.table.cycle_field(event.var)
+        self.table.cycle_field((event.target, event.var))
         view = self.trend_view
-        view.field = self.table.field_of(event.var)
+        view.field = self.table.field_of((event.target, event.var))
         view.redraw()
 
     def redraw_trend(self: ConsoleHost) -> None:
         """At the table's refresh rate: the open view follows its row's field choice."""
         view = self.trend_view
         if view.has_class("-open") and view.var is not None:
-            view.field = self.table.field_of(view.var)
+            view.fields = [self.table.field_of((t, v)) for t, v, _ in view.series]
             view.redraw()
 
 
@@ -173,18 +180,24 @@ def panes(host: ConsoleHost) -> list[Widget]:
     return shown
 
 
-def put_on_line(host: ConsoleHost, row: RowView) -> None:
+def addressed(host: ConsoleHost, target: str, line: str) -> str:
+    """A line made for a row, as shown: in a cell, after its target (``@robotB put …``)."""
+    return f"@{target} {line}" if host.cell_mode and target else line
+
+
+def put_on_line(host: ConsoleHost, row: RowView, target: str = "") -> None:
     """``p`` on a row: a ``put`` of its value on the command line, to edit and enter."""
     line = put_line(row.var, row.variant)
     if line.problem:
         host.show(Message(line.problem, "error"))
     command_line = host.command_line
-    command_line.value = line.text
-    command_line.cursor_position = len(line.text)
+    text = addressed(host, target, line.text)
+    command_line.value = text
+    command_line.cursor_position = len(text)
     focus_now(command_line)
 
 
-def toggle(host: ConsoleHost, row: RowView) -> None:
+def toggle(host: ConsoleHost, row: RowView, target: str = "") -> None:
     """Space: write the opposite of the value shown, as ``put IO N off`` typed would
     (the command made here, shown as that line, never parsed back).
 
@@ -197,18 +210,21 @@ def toggle(host: ConsoleHost, row: RowView) -> None:
         why = "is not an IO row" if var.kind.code != "IO" else "has no value read yet"
         host.show(Message(f"Space toggles an IO bit: {var} {why}; nothing sent"))
         return
-    if host.toggles.busy(var):
-        paused = host.status is not None and host.status.paused
+    state = host.state_of(target or None)
+    toggles = state.toggles
+    if toggles.busy(var):
+        paused = state.status is not None and state.status.paused
         wait = " (polling is paused: F2 resumes it)" if paused else ""
         host.show(Message(f"{var}: the last toggle has not come back yet{wait}; nothing sent"))
         return
     command, line = toggled
+    line = addressed(host, target, line)
     may_ask = host.may_ask(line)
-    seq = host.submit_line(line, command)
+    seq = host.submit_line(line, command, target or None)
     if may_ask:  # the keys typed after this Space must not answer its question
         host.command_line.hold()
         host.hold_keys(seq, queued=False)
-    host.toggles.start(var, seq, not bool(row.variant and row.variant.value))
+    toggles.start(var, seq, not bool(row.variant and row.variant.value))
 
 
 def close_detail(host: ConsoleHost) -> None:
@@ -223,18 +239,31 @@ def detail_follows_cursor(host: ConsoleHost) -> None:
         host.row_detail.show_row(host.table.cursor_view(), time.monotonic())
 
 
-def open_trend(host: ConsoleHost, row: RowView) -> None:
+def open_trend(host: ConsoleHost, row: RowView, target: str = "") -> None:
     """``t`` on a row: its trend in the frame log's place (again: closed)."""
     view = host.trend_view
-    if view.has_class("-open") and view.var == row.var:
+    if view.has_class("-open") and view.var == row.var and view.target == target:
         close_trend(host)
         return
     if host.row_detail.is_open:
         close_detail(host)  # the same place: one at a time
-    view.show_row(row.var, terminal_safe(row.label), host.table.field_of(row.var))
+    field = host.table.field_of((target, row.var))
+    view.show_row(row.var, terminal_safe(row.label), field, target)
     view.add_class("-open")
     host.frame_log.add_class("-under-trend")
     view.focus()
+
+
+def overlay_trend(host: ConsoleHost, row: RowView, target: str) -> None:
+    """``T`` on a row (a cell): the row joins the open trend, on the same time axis
+    (robotA's IO128 over robotB's IO64: the handshake); no trend open: ``t``'s."""
+    view = host.trend_view
+    if not view.has_class("-open"):
+        open_trend(host, row, target)
+        return
+    field = host.table.field_of((target, row.var))
+    if not view.add_row(row.var, terminal_safe(row.label), field, target):
+        host.show(Message(f"{target} {row.var} is in the trend already"))
 
 
 def close_trend(host: ConsoleHost) -> None:

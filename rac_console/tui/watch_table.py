@@ -11,7 +11,7 @@ keeps up to date.
 from __future__ import annotations
 
 import itertools
-from collections.abc import Callable
+from collections.abc import Callable, Mapping, Sequence
 from itertools import islice
 from typing import ClassVar
 
@@ -26,7 +26,8 @@ from ..commands.language import VarRef
 from ..engine import RowView, Status
 from ..present.cells import age_text, change_style, status_cell, type_text, value_cell
 from ..present.filtering import add_filter_title, needle_of
-from ..present.table_rows import SortMode, visible_keys
+from ..present.status import label_style
+from ..present.table_rows import RowKey, SortMode, ordered_keys, table_key
 from ..present.trends import TrendStore, field_labels, has_trend, sparkline_text
 from ..protocol.text import terminal_safe
 from .filter_line import FilterLine
@@ -43,6 +44,8 @@ COLUMNS = (
     ("value", "Value"),
     ("type", "VARTYPE"),
 )
+#: A cell's table has its target first.
+TARGET_COLUMN = ("target", "Target")
 #: The bottom border while values are cut: how to read a row whole.
 CUT_HINT = "values cut: F6, then d shows a row in full"
 CUT_FOCUSED = "values cut: d shows the row in full"
@@ -90,6 +93,13 @@ class WatchTable(DataTable[object]):
         Binding("delete", "row('unwatch')", "Unwatch", id="row-unwatch"),
         Binding("slash", "row('filter')", "Filter", id="row-filter"),
         Binding("t", "row('trend')", "Trend", id="row-trend"),
+        Binding(
+            "T",
+            "row('overlay')",
+            "Overlay trend",
+            tooltip="Add the row to the open trend (a cell: several targets on one time axis)",
+            id="row-overlay",
+        ),
         Binding("s", "cycle_sort", "Sort", id="row-sort"),
         Binding(
             "f",
@@ -103,12 +113,14 @@ class WatchTable(DataTable[object]):
     ]
 
     class RowAction(Message):
-        """A key on a row (``put``, ``toggle``, ``unwatch``, ``trend``), or ``filter``."""
+        """A key on a row (``put``, ``toggle``, ``unwatch``, ``trend``, ``overlay``), or
+        ``filter``."""
 
-        def __init__(self, action: str, row: RowView | None) -> None:
+        def __init__(self, action: str, row: RowView | None, target: str = "") -> None:
             super().__init__()
             self.action = action
             self.row = row  # as shown when the key was pressed; None on an empty table
+            self.target = target  # the row's target (its cell member's name)
 
     #: The printable keys the table acts on; any other goes to the command line.
     ACTION_CHARACTERS = frozenset(" /sftd")
@@ -135,7 +147,7 @@ class WatchTable(DataTable[object]):
             # a read-only target it is still answered: the engine says why.
             event.stop()
             event.prevent_default()
-            self._on_toggle(self.cursor_view())
+            self._on_toggle(self.cursor_view(), self.cursor_target())
             return
         if (
             event.is_printable
@@ -149,26 +161,40 @@ class WatchTable(DataTable[object]):
             self._on_typed(character)
 
     def check_action(self, action: str, parameters: tuple[object, ...]) -> bool | None:
-        """No Space in the footer on a read-only target (it still says why, see on_key)."""
+        """No Space in the footer on a read-only target (it still says why, see on_key);
+        the overlay of trends only in a cell."""
+        if action == "row" and parameters == ("overlay",):
+            return bool(self.cell)
         return not (action == "row" and parameters == ("toggle",) and self.refuses_writes)
 
     def __init__(
         self,
-        trends: TrendStore,
+        trends: Callable[[str], TrendStore],
         on_typed: Callable[[str], None],
-        on_toggle: Callable[[RowView | None], None],
+        on_toggle: Callable[[RowView | None, str], None],
+        cell: Sequence[tuple[str, str | None]] = (),
         **kwargs: object,
     ) -> None:
-        """``on_typed(character)``: a key typed here that belongs on the command line;
-        ``on_toggle(row)``: Space on a row, handed over at once (see :meth:`on_key`)."""
+        """``trends(name)``: a target's trend store; ``on_typed(character)``: a key typed
+        here that belongs on the command line; ``on_toggle(row, target)``: Space on a
+        row, handed over at once (see :meth:`on_key`); ``cell``: a cell's targets (name,
+        colour) when it has more than one: a Target column, rows grouped by target."""
         super().__init__(cursor_type="row", zebra_stripes=True, **kwargs)  # type: ignore[arg-type]
         self.trends = trends
         self._on_typed = on_typed
         self._on_toggle = on_toggle
+        self.cell = tuple(cell)
+        self._places = {name: n for n, (name, _) in enumerate(self.cell)}
+        self._colours = dict(self.cell)
+        self.columns_shown = (TARGET_COLUMN, *COLUMNS) if self.cell else COLUMNS
+        if self.cell:  # T overlays a trend: a key of the table's, not a command's start
+            self.ACTION_CHARACTERS = self.ACTION_CHARACTERS | {"T"}
+        self._owner: dict[str, RowKey] = {}  # every row's key: its target and variable
+        self._target_plain: dict[str, str] = {}  # a cell's rows: their Target cell's text
         #: The filter line ``/`` opens (it sets itself here).
         self.filter_line: FilterLine | None = None
         #: The field each V P J T row's trend follows (index into its labels); `f` cycles it.
-        self.fields: dict[VarRef, int] = {}
+        self.fields: dict[RowKey, int] = {}
         self._shown: dict[str, tuple[object, ...]] = {}
         self._views: dict[str, RowView] = {}  # every row held, as last refreshed
         self._order: list[str] = []  # the keys as the DataTable holds them
@@ -179,6 +205,8 @@ class WatchTable(DataTable[object]):
         self._filter = ""  # as typed
         self._needle = ""  # as matched
         self._hide_io = False
+        #: In a cell: the target whose IO rows the I/O grid shows (hidden here then).
+        self.io_target: str | None = None
         self.sort_mode = SortMode.ADDED
         self._title: Text | None = None
         self._now = 0.0  # the clock of the last refresh, for a re-filter between two
@@ -186,7 +214,7 @@ class WatchTable(DataTable[object]):
         self._stale: set[str] = set()
 
     def on_mount(self) -> None:
-        for key, label in COLUMNS:
+        for key, label in self.columns_shown:
             self.add_column(label, key=key)
         self._update_title()
         self.show_cursor = False
@@ -228,26 +256,31 @@ class WatchTable(DataTable[object]):
         self._apply()
 
     def action_cycle_field(self) -> None:
-        row = self.cursor_view()
-        if row is not None:
-            self.cycle_field(row.var)
+        key = self._cursor_key()
+        if key is not None:
+            self.cycle_field(self._owner[key])
             self._apply()
 
-    def cycle_field(self, var: VarRef) -> None:
+    def cycle_field(self, row: RowKey) -> None:
         """The next field of a V P J T row's trend (X → Y → Z → …); others have one."""
-        labels = field_labels(var.kind)
+        labels = field_labels(row[1].kind)
         if labels:
-            self.fields[var] = (self.fields.get(var, 0) + 1) % len(labels)
+            self.fields[row] = (self.fields.get(row, 0) + 1) % len(labels)
 
-    def field_of(self, var: VarRef) -> int:
-        return self.fields.get(var, 0)
+    def field_of(self, row: RowKey) -> int:
+        return self.fields.get(row, 0)
 
     def action_row(self, action: str) -> None:
-        self.post_message(self.RowAction(action, self.cursor_view()))
+        self.post_message(self.RowAction(action, self.cursor_view(), self.cursor_target()))
 
     def cursor_view(self) -> RowView | None:
         key = self._cursor_key()
         return self._views.get(key) if key is not None else None
+
+    def cursor_target(self) -> str:
+        """The target of the row under the cursor ("" on an empty table)."""
+        key = self._cursor_key()
+        return self._owner[key][0] if key is not None and key in self._owner else ""
 
     def _cursor_key(self) -> str | None:
         if not self._order:
@@ -256,24 +289,36 @@ class WatchTable(DataTable[object]):
 
     # ------------------------------------------------------------- refresh
 
-    def refresh_rows(self, rows: dict[VarRef, RowView], removed: set[VarRef], now: float) -> None:
+    def refresh_rows(
+        self,
+        groups: Sequence[tuple[str, Mapping[VarRef, RowView]]],
+        removed: set[RowKey],
+        now: float,
+    ) -> None:
         """Bring the table in line with the rows (ages, trends and the change highlight
         move with the clock); untouched cells are not redrawn. The rows in view are
         brought up to date each time, the others OFF_VIEW_PER_REFRESH at a time, in turn
         (and as they scroll into view): under a flood, 200 rows' cells built 30 times a
         second took most of the UI's time, for a dozen rows seen; built all at once every
         half second, they made the keys typed then wait."""
-        for var in removed:
-            key = str(var)
+        cell = bool(self.cell)
+        for name, var in removed:
+            key = table_key(name, var, cell)
             self._added.pop(key, None)
             self._views.pop(key, None)
+            self._owner.pop(key, None)
+            self._target_plain.pop(key, None)
             self._stale.discard(key)
-            self.fields.pop(var, None)
-        for row in rows.values():
-            if row.key not in self._added:
-                self._added[row.key] = next(self._count)
-                self._new.append(row.key)
-            self._views[row.key] = row
+            self.fields.pop((name, var), None)
+        views, added, owner = self._views, self._added, self._owner
+        for name, rows in groups:
+            for row in rows.values():
+                key = table_key(name, row.var, cell) if cell else row.key
+                if key not in added:
+                    added[key] = next(self._count)
+                    self._new.append(key)
+                    owner[key] = (name, row.var)
+                views[key] = row
         self._apply(now, every_row=False)
         self._say_cut()
         new, self._new = self._new, []
@@ -341,8 +386,19 @@ class WatchTable(DataTable[object]):
             now = self._now
         self._now = now
         cursor = self._cursor_key()
-        wanted = visible_keys(
-            self._views.values(), self._added, self.sort_mode, self._needle, self._hide_io
+        groups = (
+            {key: (self._places.get(name, 0), name) for key, (name, _) in self._owner.items()}
+            if self.cell
+            else None
+        )
+        wanted = ordered_keys(
+            self._views,
+            self._added,
+            self.sort_mode,
+            self._needle,
+            self._hide_io,
+            groups,
+            self.io_target if self.cell else None,
         )
         keep = set(wanted)
         for key in [key for key in self._order if key not in keep]:
@@ -366,8 +422,14 @@ class WatchTable(DataTable[object]):
                 stale.discard(key)
                 self._show(key, self._views[key], now)
         if self._order != wanted:  # only a real change of order costs a sort
-            rank = {key: n for n, key in enumerate(wanted)}
-            self.sort("var", key=lambda key: rank[key])
+            if self.cell:  # the sort sees cells: a row is its target's and its variable's
+                ranks = {
+                    (self._target_plain[k], str(self._owner[k][1])): n for n, k in enumerate(wanted)
+                }
+                self.sort("target", "var", key=lambda cells: ranks[(cells[0].plain, cells[1])])
+            else:
+                rank = {key: n for n, key in enumerate(wanted)}
+                self.sort("var", key=lambda key: rank[key])
             self._order = wanted
         if cursor is not None and cursor in keep:
             index = self._order.index(cursor)
@@ -376,12 +438,21 @@ class WatchTable(DataTable[object]):
         self._update_title()
 
     def _show(self, key: str, row: RowView, now: float) -> None:
+        name = self._owner[key][0] if key in self._owner else ""
+        target: tuple[object, ...] = ()
+        if self.cell:
+            colour = self._colours.get(name)
+            style = label_style(colour) if colour else "bold"
+            shown_name = Text(f" {terminal_safe(name)} ", style=style, no_wrap=True)
+            self._target_plain[key] = shown_name.plain
+            target = (shown_name,)
         cells = (
-            key,
+            *target,
+            str(row.var),
             Text(terminal_safe(row.label), no_wrap=True),  # never read as markup
             status_cell(row),
             age_text(row, now),
-            self._trend_cell(row),
+            self._trend_cell(row, name),
             value_cell(row, now, change_style(self.app.current_theme.dark)),
             type_text(row),
         )
@@ -390,7 +461,7 @@ class WatchTable(DataTable[object]):
             self.add_row(*cells, key=key)
             self._order.append(key)
         else:
-            for (column, _), old, new in zip(COLUMNS, shown, cells, strict=True):
+            for (column, _), old, new in zip(self.columns_shown, shown, cells, strict=True):
                 if _differs(old, new):
                     # Widening costs a pass over every row: only when a column grows.
                     width = len(str(new))
@@ -400,19 +471,20 @@ class WatchTable(DataTable[object]):
                     self.update_cell(key, column, new, update_width=wider)
         self._shown[key] = cells
 
-    def _trend_cell(self, row: RowView) -> Text:
+    def _trend_cell(self, row: RowView, name: str) -> Text:
         var = row.var
-        if not has_trend(var.kind) or var not in self.trends:
+        trends = self.trends(name)
+        if not has_trend(var.kind) or var not in trends:
             return Text("")
         labels = field_labels(var.kind)
-        field = self.field_of(var)
+        field = self.field_of((name, var))
         text = Text(no_wrap=True, overflow="crop")
         width = SPARK_WIDTH
         if labels:
             text.append(f"{labels[field]:<{FIELD_WIDTH - 1}} ", style="dim")
             width -= FIELD_WIDTH
         io = var.kind.code == "IO"
-        values = self.trends.last(var, field, width)
+        values = trends.last(var, field, width)
         bars = sparkline_text(values, width, *((0.0, 1.0) if io else (None, None)))
         text.append(bars, style="dim" if row.stale else "cyan")
         return text

@@ -1,0 +1,126 @@
+"""What the console holds of each target of its cell: the last status, the rows, the
+trend samples and the toggles under way, by target name (a cell of one holds one)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from rich.text import Text
+from textual.widgets import Static
+
+from ..commands.language import VarRef
+from ..engine import Engine, RowView, Status
+from ..engine.cell import Cell, Member
+from ..present.cell_status import Badge
+from ..present.row_actions import PendingToggles
+from ..present.table_rows import RowKey
+from ..present.trends import TrendStore
+from ..protocol.text import terminal_safe
+
+
+@dataclass
+class MemberState:
+    """One target as the console last heard of it."""
+
+    member: Member
+    status: Status | None = None
+    rows: dict[VarRef, RowView] = field(default_factory=dict)
+    removed: set[VarRef] = field(default_factory=set)  # gone since the table's refresh
+    trends: TrendStore = field(default_factory=TrendStore)
+    toggles: PendingToggles = field(default_factory=PendingToggles)
+
+    @property
+    def name(self) -> str:
+        return self.member.name
+
+    @property
+    def colour(self) -> str | None:
+        profile = self.member.target.profile
+        return profile.colour if profile is not None else None
+
+    @property
+    def label(self) -> str | None:
+        return self.member.target.label
+
+    def badge(self, current: bool) -> Badge:
+        return Badge(self.name, self.status, self.colour, current)
+
+
+class CellMembers:
+    """A mixin of the app: its targets' states, and the current one's as the app's own
+    (``status``, ``rows``, ``trends``, ``toggles``: in a cell of one, the console's)."""
+
+    cell: Cell
+    states: dict[str, MemberState]
+    cell_mode: bool
+    prompt: Static
+
+    @property
+    def current(self) -> MemberState:
+        """The target lines without ``@NAME`` go to (``use NAME``, F8)."""
+        return self.states[self.cell.current]
+
+    @property
+    def engine(self) -> Engine:
+        return self.current.member.engine
+
+    @property
+    def status(self) -> Status | None:
+        """The current target's status (in a cell of one: the status)."""
+        return self.current.status
+
+    @status.setter
+    def status(self, status: Status | None) -> None:
+        self.current.status = status
+
+    @property
+    def rows(self) -> dict[VarRef, RowView]:
+        """The current target's rows (the I/O grid's; the table shows every target's)."""
+        return self.current.rows
+
+    @property
+    def trends(self) -> TrendStore:
+        return self.current.trends
+
+    @property
+    def toggles(self) -> PendingToggles:
+        return self.current.toggles
+
+    def trend_store(self, name: str) -> TrendStore:
+        """A target's trend samples, by name."""
+        return self.states[name].trends if name in self.states else self.trends
+
+    def state_of(self, name: str | None) -> MemberState:
+        """A target by name (None, or a name not in the cell: the current one)."""
+        return self.states.get(name or "", self.current)
+
+    def show_prompt(self) -> None:
+        """The prompt names the current target (a cell's only)."""
+        if self.cell_mode:
+            shown = f"{terminal_safe(self.current.name)} ›"
+            self.prompt.update(Text.assemble((shown, "bold cyan"), " "))
+
+    def row_groups(self) -> list[tuple[str, dict[VarRef, RowView]]]:
+        """Every target's rows, in cell order, for the table."""
+        return [(state.name, state.rows) for state in self.states.values()]
+
+    def take_removed(self) -> set[RowKey]:
+        """The rows unwatched since the table's last refresh, by target."""
+        removed = {(state.name, var) for state in self.states.values() for var in state.removed}
+        for state in self.states.values():
+            state.removed = set()
+        return removed
+
+    def badges(self) -> list[Badge]:
+        current = self.cell.current
+        return [state.badge(state.name == current) for state in self.states.values()]
+
+    def members_timed(self) -> bool:
+        """Whether any target shows something that changes with time alone: its rows'
+        ages, a reply waited for, a retry's countdown."""
+        return any(
+            state.rows
+            or state.member.engine.outbox.waiting_since is not None
+            or (state.status is not None and state.status.retry_at is not None)
+            for state in self.states.values()
+        )
