@@ -169,7 +169,7 @@ def _interactive(args: argparse.Namespace) -> int:
     from ..tui.app import run_console
 
     watch_cell(cell, getattr(args, "cell_watch", ()))
-    return run_console(cell.members[0].engine, history, args.watch, sorted(args.target.profiles))
+    return run_console(cell, history, args.watch, sorted(args.target.profiles))
 
 
 def watch_cell(cell: Cell, lines: Sequence[str]) -> None:

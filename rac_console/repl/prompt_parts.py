@@ -19,7 +19,7 @@ from prompt_toolkit.lexers import Lexer
 from prompt_toolkit.styles import Style
 
 from ..engine import ConfirmWrite, Status
-from ..present.cell_view import target_badge
+from ..present.cell_status import Badge, cell_status_text
 from ..present.completion import complete, hint
 from ..present.history import History
 from ..present.status import ink_on, label_text, profile_colour, target_label
@@ -107,16 +107,10 @@ def toolbar_fragments(status: Status) -> FormattedText:
 def cell_toolbar_fragments(
     names: Sequence[str], statuses: Mapping[str, Status], current: str
 ) -> list[tuple[str, str]]:
-    """A cell's toolbar: one badge per target (its name, then how its connection
-    stands), the current one marked, so one controller down never looks like the cell
-    down."""
-    parts: list[tuple[str, str]] = []
-    for name in names:
-        badge = target_badge(name, statuses.get(name))
-        style = "class:toolbar.open" if badge.ok else "class:toolbar.readonly"
-        mark = "›" if name == current else " "
-        parts.append((style, f"{mark}{badge.text} "))
-    return parts
+    """A cell's toolbar: one badge per target (the console's, as text), the current one
+    marked, so one controller down never looks like the cell down."""
+    badges = [Badge(name, statuses.get(name), current=name == current) for name in names]
+    return [("class:toolbar", f" {cell_status_text(badges).plain} ")]
 
 
 def confirm_message(question: ConfirmWrite, member: str | None = None) -> FormattedText:
