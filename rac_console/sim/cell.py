@@ -12,11 +12,11 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
-import threading
 from collections.abc import Sequence
 
 from .controller import SimulatedController
 from .server import SimulatorServer
+from .thread import LoopThread
 
 #: The simulators' names, in order (a cell's target names).
 NAMES = tuple(f"robot{letter}" for letter in "ABCDEFGH")
@@ -104,36 +104,30 @@ class SimulatedCell:
             answerer.set(*GO, False)
 
 
-class SimulatedCellThread:
+class SimulatedCellThread(LoopThread):
     """A simulated cell on a thread of its own (the console's ``--cell demo``)."""
 
-    def __init__(self, count: int = 2, **options: float) -> None:
-        self.cell = SimulatedCell(count, **options)  # type: ignore[arg-type]
-        self._loop = asyncio.new_event_loop()
-        self._thread = threading.Thread(
-            target=self._loop.run_forever, name="rac-sim-cell", daemon=True
-        )
+    def __init__(
+        self,
+        count: int = 2,
+        *,
+        cycle: float = CYCLE,
+        hold: float = HOLD,
+        reaction: float = REACTION,
+    ) -> None:
+        super().__init__("rac-sim-cell")
+        self.cell = SimulatedCell(count, cycle=cycle, hold=hold, reaction=reaction)
 
     def start(self) -> SimulatedCellThread:
-        self._thread.start()
-        asyncio.run_coroutine_threadsafe(self.cell.start(), self._loop).result(10)
+        self.start_loop(self.cell.start)
         return self
 
     def stop(self) -> None:
-        if not self._thread.is_alive():
-            return
-        try:
-            asyncio.run_coroutine_threadsafe(self.cell.stop(), self._loop).result(5)
-        finally:
-            self._loop.call_soon_threadsafe(self._loop.stop)
-            self._thread.join(5)
-            if not self._thread.is_alive():
-                self._loop.close()
+        self.stop_loop(self.cell.stop)
 
     def stop_one(self, index: int) -> None:
         """One simulator goes away (a controller switched off); the others go on."""
-        server = self.cell.servers[index]
-        asyncio.run_coroutine_threadsafe(server.stop(), self._loop).result(5)
+        self.run(self.cell.servers[index].stop, 5)
 
     def __enter__(self) -> SimulatedCellThread:
         return self.start()

@@ -9,17 +9,51 @@ from __future__ import annotations
 
 import asyncio
 import threading
+from collections.abc import Awaitable, Callable
+from typing import Any, TypeVar
 
 from .server import SimulatorServer
 
+T = TypeVar("T")
 
-class SimulatorThread:
+
+class LoopThread:
+    """An event loop on a daemon thread: servers started and stopped on it."""
+
+    def __init__(self, name: str) -> None:
+        self._loop = asyncio.new_event_loop()
+        self._thread = threading.Thread(target=self._loop.run_forever, name=name, daemon=True)
+
+    def run(self, job: Callable[[], Awaitable[T]], timeout: float) -> T:
+        """``job()`` on the loop, waited for (``timeout`` seconds at most)."""
+
+        async def call() -> T:
+            return await job()
+
+        return asyncio.run_coroutine_threadsafe(call(), self._loop).result(timeout)
+
+    def start_loop(self, started: Callable[[], Awaitable[Any]]) -> None:
+        self._thread.start()
+        self.run(started, 10)
+
+    def stop_loop(self, stopped: Callable[[], Awaitable[Any]]) -> None:
+        if not self._thread.is_alive():
+            return
+        try:
+            self.run(stopped, 5)
+        finally:
+            self._loop.call_soon_threadsafe(self._loop.stop)
+            self._thread.join(5)
+            if not self._thread.is_alive():
+                self._loop.close()
+
+
+class SimulatorThread(LoopThread):
     """``start()`` returns once the simulator listens; ``host``/``port`` say where."""
 
     def __init__(self) -> None:
+        super().__init__("rac-sim")
         self.server = SimulatorServer()
-        self._loop = asyncio.new_event_loop()
-        self._thread = threading.Thread(target=self._loop.run_forever, name="rac-sim", daemon=True)
 
     @property
     def host(self) -> str:
@@ -30,20 +64,11 @@ class SimulatorThread:
         return self.server.port
 
     def start(self) -> SimulatorThread:
-        self._thread.start()
-        asyncio.run_coroutine_threadsafe(self.server.start(), self._loop).result(10)
+        self.start_loop(self.server.start)
         return self
 
     def stop(self) -> None:
-        if not self._thread.is_alive():
-            return
-        try:
-            asyncio.run_coroutine_threadsafe(self.server.stop(), self._loop).result(5)
-        finally:
-            self._loop.call_soon_threadsafe(self._loop.stop)
-            self._thread.join(5)
-            if not self._thread.is_alive():
-                self._loop.close()
+        self.stop_loop(self.server.stop)
 
     def __enter__(self) -> SimulatorThread:
         return self.start()
