@@ -114,7 +114,9 @@ class FastLane:
         frames = server.fast_frames
         controller = server.controller
         now = time.monotonic()
-        for fd, _ in self._epoll.poll(0):
+        # With one session the set is ready only when it is: the poll would say nothing new.
+        ready = list(sessions) if len(sessions) == 1 else (fd for fd, _ in self._epoll.poll(0))
+        for fd in ready:
             entry = sessions.get(fd)
             if entry is None:  # dropped earlier in this pass
                 continue
