@@ -114,9 +114,10 @@ class FastLane:
         frames = server.fast_frames
         controller = server.controller
         now = time.monotonic()
+        kept = 0  # requests answered from the kept replies, counted once at the end
         # With one session the set is ready only when it is: the poll would say nothing new.
-        ready = list(sessions) if len(sessions) == 1 else (fd for fd, _ in self._epoll.poll(0))
-        for fd in ready:
+        ready = [(fd, 0) for fd in sessions] if len(sessions) == 1 else self._epoll.poll(0)
+        for fd, _ in ready:
             entry = sessions.get(fd)
             if entry is None:  # dropped earlier in this pass
                 continue
@@ -137,7 +138,7 @@ class FastLane:
                     self._answer(session, sock, data)
                     frames = server.fast_frames  # a SIM: line may have turned faults on
                     continue
-                controller.requests += 1
+                kept += 1
                 try:  # _send, written out: this is every request of a polling client
                     sent = sock.send(reply)
                 except (BlockingIOError, InterruptedError):
@@ -150,6 +151,7 @@ class FastLane:
             except Exception as exc:  # a bug costs that session, never the others
                 server.notices.note("internal", f"internal error: {exc!r}")
                 self.drop(session)
+        controller.requests += kept
 
     def _answer(self, session: SimSession, sock: socket.socket, data: bytes) -> None:
         """A read that is not one kept request: split, answered line by line (as
