@@ -4,7 +4,10 @@ a session that leaves it for a transport keeps its order and is closed by stop()
 from __future__ import annotations
 
 import asyncio
+import errno
+import os
 import socket
+from typing import Any
 
 import pytest
 
@@ -119,3 +122,42 @@ def test_stop_closes_a_session_on_its_way_from_the_lane_to_a_transport() -> None
     left, after = asyncio.run(scenario())
     assert left == 0
     assert after == b""
+
+
+class _RegisterFailsOnce:
+    """An epoll set whose first register() fails as the kernel's would out of memory."""
+
+    def __init__(self, epoll: Any) -> None:
+        self._epoll, self.failed = epoll, False
+
+    def register(self, fd: int, mask: int) -> None:
+        if not self.failed:
+            self.failed = True
+            raise OSError(errno.ENOMEM, os.strerror(errno.ENOMEM))
+        self._epoll.register(fd, mask)
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(self._epoll, name)
+
+
+@needs_epoll
+def test_a_client_the_lane_cannot_watch_is_closed_and_the_next_one_served() -> None:
+    async def scenario() -> tuple[bytes, bytes, list[str]]:
+        said: list[str] = []
+        async with SimulatorServer(notify=said.append) as sim:
+            lane = sim._lane
+            assert lane is not None
+            lane._epoll = _RegisterFailsOnce(lane._epoll)  # type: ignore[assignment]
+            first_reader, first = await asyncio.open_connection(sim.host, sim.port)
+            refused = await asyncio.wait_for(first_reader.read(100), DEADLINE)
+            reader, writer = await asyncio.open_connection(sim.host, sim.port)
+            writer.write(b"GET:RC8:1:S:\r")
+            reply = await asyncio.wait_for(reader.readuntil(b"\r"), DEADLINE)
+            first.close()
+            writer.close()
+            return refused, reply, said
+
+    refused, reply, said = asyncio.run(scenario())
+    assert refused == b""
+    assert reply == b"0,8,RC8 simulator\r"
+    assert len(said) == 1 and "cannot take a client" in said[0], said

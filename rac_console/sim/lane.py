@@ -66,15 +66,16 @@ class FastLane:
         self._epoll.close()
 
     def admit(self, sock: socket.socket) -> None:
-        """Serve a new client here (the server checked max_sessions)."""
+        """Serve a new client here (the server checked max_sessions); OSError, with
+        nothing changed, if it cannot be watched."""
         sock.setblocking(False)
         with contextlib.suppress(OSError):  # as asyncio's transports do: replies go out at once
             sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+        fd = sock.fileno()
+        self._epoll.register(fd, select.EPOLLIN)
         session = SimSession(self._server, sock)
         session.lane = self
-        fd = sock.fileno()
         self._sessions[fd] = (session, sock)
-        self._epoll.register(fd, select.EPOLLIN)
         self._server.sessions.add(session)
 
     def drop(self, session: SimSession) -> None:

@@ -237,13 +237,21 @@ class SimulatorServer:
                 continue
             backoff = 0.0
             if self._lane is not None and self.plain:
-                if self.full():
-                    self.refused += 1
-                    conn.close()
-                else:
-                    self._lane.admit(conn)
+                self._admit(self._lane, conn)
                 continue
             self._connect(conn, None)  # and accept the next
+
+    def _admit(self, lane: FastLane, conn: socket.socket) -> None:
+        """A new client on the fast lane, unless max_sessions are open."""
+        if self.full():
+            self.refused += 1
+            conn.close()
+            return
+        try:
+            lane.admit(conn)
+        except OSError as exc:  # that client only (epoll out of memory, say)
+            conn.close()
+            self.notices.note("accept", f"cannot take a client: {_reason(exc)}")
 
     def adopt(self, session: SimSession, conn: socket.socket) -> None:
         """A transport for a session leaving the fast lane (``SimSession.hand_over``)."""
