@@ -7,6 +7,7 @@ so ``--version``, ``get`` and ``sim`` start fast. The grammar is :mod:`.parser`.
 from __future__ import annotations
 
 import argparse
+import gc
 import os
 import sys
 from collections.abc import Sequence
@@ -96,15 +97,32 @@ def _dispatch(args: argparse.Namespace) -> int:
 
         use_uvloop()
         return asyncio.run(serve(args))
-    return _interactive(args)
+    if args.command is not None:
+        return _interactive(args)
+    # The console's start makes hundreds of thousands of objects that live as long as it
+    # does (modules, classes, the screen): the collector would walk them again and again
+    # before the first paint. It is paused until then, and what the start made is frozen
+    # (never walked again): see _after_first_paint.
+    gc.disable()
+    try:
+        return _interactive(args)
+    finally:
+        gc.enable()
+
+
+def _after_first_paint() -> None:
+    """The console painted its first screen: the collector runs again, and skips what
+    the start made (it lives as long as the console)."""
+    gc.freeze()
+    gc.enable()
 
 
 def _interactive(args: argparse.Namespace) -> int:
     """The full-screen console, or the REPL: one engine and history file for both."""
     from ..engine import DEFAULT_INTERVAL, Engine, EngineOptions
-    from ..engine.registry import Where
+    from ..engine.where import Where
     from ..present.history import History, default_history_path
-    from ..protocol import InputError
+    from ..protocol.errors import InputError
     from ..protocol.text import terminal_safe
 
     options = EngineOptions(
@@ -150,7 +168,9 @@ def _interactive(args: argparse.Namespace) -> int:
         return run_repl(engine, history)
     from ..tui.app import run_console
 
-    return run_console(engine, history, args.watch, sorted(args.target.profiles))
+    return run_console(
+        engine, history, args.watch, sorted(args.target.profiles), _after_first_paint
+    )
 
 
 def parse_args(words: Sequence[str]) -> argparse.Namespace:

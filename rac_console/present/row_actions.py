@@ -3,23 +3,27 @@
 Pure, shared by any front end with a table. A line made here is exactly what a person
 would type: it is parsed back with the command language before it is offered, so a
 value that would not round-trip is said so instead of being written as something else.
+The command language loads with the first line made: the console holds its toggles
+from the start, before its first paint.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
-from ..commands.language import Put, VarRef, parse_put
-from ..commands.outcome import Outcome
-from ..engine.events import Cycle, Result
-from ..protocol import Variant
 from ..protocol.errors import InputError
 from ..protocol.text import scalar_text, terminal_safe
-from ..protocol.variables import encode_value
-from ..protocol.variant import float_text
+
+if TYPE_CHECKING:
+    from ..commands.language import Put, VarRef
+    from ..engine.events import Cycle, Result
+    from ..protocol.variant import Variant
 
 
 def _number_word(value: object) -> str | None:
+    from ..protocol.variant import float_text
+
     if isinstance(value, bool):
         return "1" if value else "0"
     if isinstance(value, float):
@@ -68,6 +72,8 @@ class PutLine:
 
 def put_line(var: VarRef, variant: Variant | None) -> PutLine:
     """``put P 10 <its value>``, checked to parse back to the same value."""
+    from ..commands.language import parse_put
+
     head = f"put {var.kind.code} {var.index} "
     if variant is None:
         return PutLine(head)
@@ -101,6 +107,9 @@ def toggle_command(var: VarRef, variant: Variant | None) -> tuple[Put, str] | No
     """Space on an IO row: the write of the opposite of the value shown, made here (the
     engine runs it as it is, never parsing a line back), and how it is shown; None
     when there is nothing to toggle."""
+    from ..commands.language import Put
+    from ..protocol.variables import encode_value
+
     line = toggle_line(var, variant)
     if line is None:
         return None
@@ -148,6 +157,8 @@ class PendingToggles:
 
     def result(self, result: Result) -> bool:
         """The reply to a toggle: True when that row is free again (the write failed)."""
+        from ..commands.outcome import Outcome
+
         for var, pending in self._rows.items():
             if pending.seq == result.seq:
                 outcomes = [f for f in result.feedback if isinstance(f, Outcome)]

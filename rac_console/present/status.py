@@ -14,7 +14,7 @@ from rich.text import Text
 
 from ..commands.policy import TargetProfile
 from ..commands.profiles import completion_targets
-from ..engine.events import LABEL_WIDTH, Status, shown_label
+from ..engine.status import LABEL_WIDTH, Status, shown_label
 from ..protocol.text import terminal_safe
 
 #: A reply is shown as awaited once it is this late (seconds): quicker ones would flicker.

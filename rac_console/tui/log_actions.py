@@ -2,8 +2,12 @@
 
 from __future__ import annotations
 
-from ..engine import Message
-from .host import ConsoleHost
+from typing import TYPE_CHECKING
+
+from ..engine.feedback import Message
+
+if TYPE_CHECKING:
+    from .host import ConsoleHost
 
 
 class LogActions:

@@ -10,6 +10,9 @@ text, never markup.
 :class:`PaletteActions` is a mixin of the app (what it needs of it is
 :class:`~rac_console.tui.host.ConsoleHost`): the help screen, and a screenshot that is
 saved even with no ``~/Downloads``, written off the screen's loop.
+
+The commands, the help and their texts are imported when the palette or the help first
+opens: the app's class needs only the two classes here to be defined.
 """
 
 from __future__ import annotations
@@ -20,25 +23,21 @@ from dataclasses import dataclass
 from datetime import datetime
 from functools import partial
 from pathlib import Path
-from typing import Literal
+from typing import TYPE_CHECKING, Literal
 
 from platformdirs import user_downloads_path
 from textual.command import DiscoveryHit, Hit, Hits, Provider
 from textual.content import Content
 from textual.markup import escape
 
-from ..commands.language import Connect, CsvLog, FrameFile
-from ..commands.policy import TargetProfile
-from ..commands.target import DEFAULT_PORT
-from ..engine import Message
-from ..present.help_text import help_sections
-from ..present.status import label_text
 from ..protocol.text import terminal_safe
-from .command_line import CommandLine
 from .filter_line import focus_now
-from .help_screen import HelpScreen, console_key_groups, key_of
-from .host import ConsoleHost, host_of
-from .watch_table import WatchTable
+from .host import host_of
+
+if TYPE_CHECKING:
+    from ..commands.policy import TargetProfile
+    from .command_line import CommandLine
+    from .host import ConsoleHost
 
 
 @dataclass(frozen=True)
@@ -61,6 +60,12 @@ class PaletteCommand:
 
 def console_commands(app: ConsoleHost) -> Iterator[PaletteCommand]:
     """The console's commands, titled for the state they would change."""
+    from ..commands.language import Connect, CsvLog
+    from ..commands.target import DEFAULT_PORT
+    from ..present.status import label_text
+    from .help_screen import key_of
+    from .watch_table import WatchTable
+
     cls = type(app)
     paused = app.status is not None and app.status.paused
     yield PaletteCommand(
@@ -156,6 +161,8 @@ def console_commands(app: ConsoleHost) -> Iterator[PaletteCommand]:
 def frame_file_commands(app: ConsoleHost) -> Iterator[PaletteCommand]:
     """``record`` and ``transcript`` from now on, or their stop: the moment worth keeping
     is rarely foreseen when the console starts."""
+    from ..commands.language import FrameFile
+
     status = app.status
     kinds: tuple[tuple[Literal["record", "transcript"], str | None, str], ...] = (
         ("record", status.recording if status else None, "every frame as JSON lines"),
@@ -193,6 +200,8 @@ def profile_help(profile: TargetProfile | None, current: bool = False) -> str:
 
 def textual_commands(app: ConsoleHost) -> Iterator[PaletteCommand]:
     """Textual's own (Theme, Keys, Screenshot, Quit…), with a key where one runs them."""
+    from .help_screen import key_of
+
     for command in app.get_system_commands(app.screen):
         callback = command.callback
         action = getattr(callback, "__name__", "").removeprefix("action_")
@@ -249,6 +258,9 @@ class PaletteActions:
 
     def action_help(self: ConsoleHost) -> None:
         """F1, ``?`` on an empty line, the palette: open the help (F1 again closes it)."""
+        from ..present.help_text import help_sections
+        from .help_screen import HelpScreen, console_key_groups
+
         if isinstance(self.screen, HelpScreen):
             self.screen.dismiss(None)
             return
@@ -291,6 +303,8 @@ class PaletteActions:
 
 def _say_screenshot(host: ConsoleHost, target: Path, fallback: bool, written: Future[int]) -> None:
     """Where the screenshot went, or why it did not (a notification and a line)."""
+    from ..engine.events import Message
+
     shown = terminal_safe(str(target))
     error = None if written.cancelled() else written.exception()
     if isinstance(error, OSError):
