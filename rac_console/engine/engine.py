@@ -26,7 +26,6 @@ from typing import TYPE_CHECKING
 
 from ..commands.policy import TargetProfile, WritePolicy, Writes
 from ..commands.target import Target
-from .job import Job
 from .outbox import Outbox
 from .status import Status, described
 from .where import Where
@@ -38,6 +37,7 @@ if TYPE_CHECKING:
     from .csvsink import CsvSink
     from .events import ConfirmWrite, Feedback
     from .frame_files import FrameFiles
+    from .job import Job
     from .link import Link
     from .poller import Poller
     from .publisher import Publisher
@@ -189,6 +189,8 @@ class Engine:
         return self._queue(command, line)
 
     def _queue(self, what: str | Command, line: str | None = None) -> int:
+        from .job import Job
+
         with self._jobs_lock:
             job = Job(next(self._seq), what, line)
             self._queued[job.seq] = job

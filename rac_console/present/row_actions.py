@@ -3,27 +3,22 @@
 Pure, shared by any front end with a table. A line made here is exactly what a person
 would type: it is parsed back with the command language before it is offered, so a
 value that would not round-trip is said so instead of being written as something else.
-The command language loads with the first line made: the console holds its toggles
-from the start, before its first paint.
+The toggles in flight are kept by :class:`~.toggles.PendingToggles`.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
 
+from ..commands.language import Put, VarRef, parse_put
+from ..protocol import Variant
 from ..protocol.errors import InputError
 from ..protocol.text import scalar_text, terminal_safe
-
-if TYPE_CHECKING:
-    from ..commands.language import Put, VarRef
-    from ..engine.events import Cycle, Result
-    from ..protocol.variant import Variant
+from ..protocol.variables import encode_value
+from ..protocol.variant import float_text
 
 
 def _number_word(value: object) -> str | None:
-    from ..protocol.variant import float_text
-
     if isinstance(value, bool):
         return "1" if value else "0"
     if isinstance(value, float):
@@ -72,8 +67,6 @@ class PutLine:
 
 def put_line(var: VarRef, variant: Variant | None) -> PutLine:
     """``put P 10 <its value>``, checked to parse back to the same value."""
-    from ..commands.language import parse_put
-
     head = f"put {var.kind.code} {var.index} "
     if variant is None:
         return PutLine(head)
@@ -107,80 +100,8 @@ def toggle_command(var: VarRef, variant: Variant | None) -> tuple[Put, str] | No
     """Space on an IO row: the write of the opposite of the value shown, made here (the
     engine runs it as it is, never parsing a line back), and how it is shown; None
     when there is nothing to toggle."""
-    from ..commands.language import Put
-    from ..protocol.variables import encode_value
-
     line = toggle_line(var, variant)
     if line is None:
         return None
     value, text = encode_value(var.kind, "off" if variant and variant.value else "on")
     return Put.of(var, value, text), line
-
-
-@dataclass
-class _Pending:
-    seq: int
-    value: bool
-    answered: bool = False
-    polls: int = 0
-
-
-class PendingToggles:
-    """IO writes made from the table that have not come back yet: one per row at a time.
-
-    A toggle writes the opposite of the value shown, so a second toggle before the row
-    shows the first one's effect would write the same value again (or one nobody
-    meant). A row is busy from the key press until the write failed or was read back
-    (the read-back shows the row its new value at once); with ``--no-verify``, until a
-    poll after it shows the value written, failing that the second cycle that polled
-    the row after the reply (the first may have polled it before the write went out).
-    """
-
-    def __init__(self) -> None:
-        self._rows: dict[VarRef, _Pending] = {}
-
-    def busy(self, var: VarRef) -> bool:
-        return var in self._rows
-
-    def start(self, var: VarRef, seq: int, value: bool) -> None:
-        self._rows[var] = _Pending(seq, value)
-
-    def forget(self, var: VarRef) -> None:
-        self._rows.pop(var, None)
-
-    def declined(self, seq: int) -> None:
-        """The user answered No to the toggle ``seq``'s question: nothing is sent, so
-        its row is free at once (not when the refusal comes back from the engine)."""
-        for var, pending in list(self._rows.items()):
-            if pending.seq == seq:
-                del self._rows[var]
-
-    def result(self, result: Result) -> bool:
-        """The reply to a toggle: True when that row is free again (the write failed)."""
-        from ..commands.outcome import Outcome
-
-        for var, pending in self._rows.items():
-            if pending.seq == result.seq:
-                outcomes = [f for f in result.feedback if isinstance(f, Outcome)]
-                if any(f.ok and f.verified is None for f in outcomes):
-                    pending.answered = True  # not read back: a poll must show it
-                    return False
-                del self._rows[var]
-                return True
-        return False
-
-    def cycle(self, cycle: Cycle) -> bool:
-        """A poll cycle: True when a row became free."""
-        if not self._rows:
-            return False
-        freed = False
-        for var, variant in cycle.samples:
-            pending = self._rows.get(var)
-            if pending is None or not pending.answered:
-                continue
-            pending.polls += 1
-            shows = variant is not None and bool(variant.value) == pending.value
-            if shows or pending.polls >= 2:
-                del self._rows[var]
-                freed = True
-        return freed

@@ -32,8 +32,8 @@ from .. import __version__
 from ..engine.feedback import Message, UiStep
 from ..present.glyphs import ascii_wanted
 from ..present.history import is_refused
-from ..present.row_actions import PendingToggles
 from ..present.status import connect_targets, target_label
+from ..present.toggles import PendingToggles
 from ..present.trends import TrendStore
 from ..protocol.text import counted, terminal_safe
 from .ascii_screen import ascii_driver

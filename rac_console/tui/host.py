@@ -19,7 +19,7 @@ if TYPE_CHECKING:  # for the type checker only: the parts import this module
     from ..commands.language import Command
     from ..commands.policy import TargetProfile
     from ..engine import Engine, Feedback, Status
-    from ..present.row_actions import PendingToggles
+    from ..present.toggles import PendingToggles
     from ..present.trends import TrendStore
     from .command_line import CommandLine
     from .file_writes import FileWrites

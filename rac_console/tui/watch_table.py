@@ -191,7 +191,8 @@ class WatchTable(DataTable[object]):
 
     def on_mount(self) -> None:
         for key, label in COLUMNS:
-            self.add_column(label, key=key)
+            # As Text: a str label is read as markup, which loads Rich's emoji table.
+            self.add_column(Text(label), key=key)
         self._update_title()
         self.show_cursor = False
 
