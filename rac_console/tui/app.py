@@ -25,6 +25,7 @@ from textual.binding import Binding, BindingType
 from textual.message import Message as TextualMessage
 from textual.reactive import reactive
 from textual.timer import Timer
+from textual.widget import AwaitMount
 from textual.widgets import Input, Static
 from textual.worker import Worker, WorkerState
 
@@ -242,20 +243,37 @@ class RacConsoleApp(PaletteActions, TableActions, LogActions, App[int]):
         #: Called once the first screen is painted, before the engine starts (the
         #: command line's start turns the garbage collector back on there).
         self.after_first_paint: Callable[[], object] | None = None
+        self._hidden_mounted = False
 
     def compose(self) -> ComposeResult:
+        """What the first screen shows; the panes hidden at start join it later (see
+        :meth:`mount_hidden_panes`)."""
         yield self.status_bar
         yield self.watch_area  # the table and the I/O grid
-        yield self.table_filter
         yield self.frame_log
-        yield self.log_filter
-        yield self.trend_view
-        yield self.row_detail
-        yield self.completions
         yield self.results
-        yield self.hint
         yield self.command_line
         yield FittingFooter()
+
+    def mount_hidden_panes(self) -> list[AwaitMount]:
+        """The panes nobody sees at start (the filter lines, the trend, the detail, the
+        completions, the hint), in their places: mounted once the first screen is
+        painted, which they are not on, or at once by a key that opens one before that.
+        Returns what to await for them to be mounted (nothing once they are)."""
+        if self._hidden_mounted:
+            return []
+        self._hidden_mounted = True
+        return [
+            self.mount(self.table_filter, after=self.watch_area),
+            self.mount(
+                self.log_filter,
+                self.trend_view,
+                self.row_detail,
+                self.completions,
+                after=self.frame_log,
+            ),
+            self.mount(self.hint, after=self.results),
+        ]
 
     async def on_mount(self) -> None:
         self.kept.apply()
@@ -270,7 +288,9 @@ class RacConsoleApp(PaletteActions, TableActions, LogActions, App[int]):
             self.refresh_table()
             self.run_worker(self._start_after_first_paint(), name="engine start")
             return
-        await self._start_engine()  # no screen to paint first: as the tests see it
+        for mounting in self.mount_hidden_panes():  # no screen to paint first: as the
+            await mounting  # tests see it, every pane is there before the engine starts
+        await self._start_engine()
 
     def _watch_terminal(self) -> None:
         """The console ends when its terminal goes: a SIGHUP (a controlling terminal
@@ -299,6 +319,7 @@ class RacConsoleApp(PaletteActions, TableActions, LogActions, App[int]):
         self.call_after_refresh(painted.set)
         with suppress(TimeoutError):
             await asyncio.wait_for(painted.wait(), FIRST_PAINT_WAIT)
+        self.mount_hidden_panes()
         if self.after_first_paint is not None:
             self.after_first_paint()
         await self._start_engine()
@@ -641,6 +662,7 @@ class RacConsoleApp(PaletteActions, TableActions, LogActions, App[int]):
         from ..present.completion import shown_candidates
 
         shown, more = shown_candidates(event.candidates)
+        self.mount_hidden_panes()
         width = max(len(c.text) for c in shown)
         text = Text()
         for n, candidate in enumerate(shown):
@@ -665,6 +687,7 @@ class RacConsoleApp(PaletteActions, TableActions, LogActions, App[int]):
         if event.value != self.command_line.value:
             return  # made for a line already changed
         if event.text:
+            self.mount_hidden_panes()
             self.hint.update(Text.assemble(("needs: ", "dim"), (event.text, "italic")))
             self.hint.add_class("-visible")
         else:

@@ -43,4 +43,5 @@ class LogActions:
 
     def action_filter_frames(self: ConsoleHost) -> None:
         """``/`` in the frame log: its filter line, with the filter as it is."""
+        self.mount_hidden_panes()
         self.log_filter.open()

@@ -76,6 +76,7 @@ class TableActions:
     def on_watch_table_row_action(self: ConsoleHost, event: WatchTable.RowAction) -> None:
         row = event.row
         if event.action == "filter":
+            self.mount_hidden_panes()
             self.table_filter.value = self.table.filter_text
             self.table_filter.open()
         elif row is None:
@@ -134,6 +135,7 @@ class TableActions:
         if detail.is_open:
             close_detail(self)
             return
+        self.mount_hidden_panes()
         if self.trend_view.has_class("-open"):
             close_trend(self)
         detail.add_class("-open")
@@ -239,6 +241,7 @@ def open_trend(host: ConsoleHost, row: RowView) -> None:
     if view.has_class("-open") and view.var == row.var:
         close_trend(host)
         return
+    host.mount_hidden_panes()
     if host.row_detail.is_open:
         close_detail(host)  # the same place: one at a time
     view.show_row(row.var, terminal_safe(row.label), host.table.field_of(row.var))
