@@ -39,6 +39,8 @@ NOT_BEFORE_THE_FIRST_PAINT = (
     "tomllib",
 )
 
+DEADLINE = 20.0
+
 #: The console as ``rac-console`` starts it, told to write the modules it has loaded
 #: to a file once its first screen is painted, and to end there.
 PROBE = """
@@ -60,6 +62,8 @@ def test_the_first_paint_loads_no_engine_part_session_language_or_simulator(
     tmp_path: Path,
 ) -> None:
     pty = pytest.importorskip("pty")
+    from pty_console import read_until, stop
+
     out = tmp_path / "modules"
     env = os.environ | {
         "HOME": str(tmp_path),
@@ -74,29 +78,19 @@ def test_the_first_paint_loads_no_engine_part_session_language_or_simulator(
     )
     os.close(slave)
     try:
-        seen = b""
-        while process.poll() is None or not seen:
-            try:
-                chunk = os.read(master, 65536)
-            except OSError:
-                break
-            if not chunk:
-                break
-            seen += chunk
-        process.wait(timeout=30)
+        seen = read_until(master, lambda _: process.poll() is not None, DEADLINE)
     finally:
-        if process.poll() is None:
-            process.kill()
+        stop(process)
         os.close(master)
     assert b"SIMULATOR" in seen, seen[-2000:]  # the first screen names its target
+    assert out.exists(), seen[-2000:]
     loaded = set(out.read_text(encoding="utf-8").split("\n"))
     assert "rac_console.tui.app" in loaded
     early = sorted(
         name
         for name in loaded
-        if any(
-            name == heavy or name.startswith(heavy + ".") for heavy in NOT_BEFORE_THE_FIRST_PAINT
-        )
+        for heavy in NOT_BEFORE_THE_FIRST_PAINT
+        if name == heavy or name.startswith(heavy + ".")
     )
     assert early == []
 
