@@ -18,8 +18,8 @@ from ..commands.target import Target
 from ..engine import Measured, Message
 from ..engine.commands import BUILTIN
 from ..engine.jobs import run_job
-from ..engine.registry import Where
 from ..engine.session_context import SessionContext
+from ..engine.where import Where
 from ..present.render import error_text, make_console, notice_text, print_error, print_outcome
 from ..protocol import InputError
 from ..session import Session

@@ -9,8 +9,10 @@ from __future__ import annotations
 import math
 from collections.abc import Iterable
 from enum import Enum
+from typing import TYPE_CHECKING
 
-from ..engine.events import RowView
+if TYPE_CHECKING:
+    from ..engine.events import RowView
 
 
 class SortMode(Enum):
