@@ -35,7 +35,9 @@ SOCKET_OWNERS = {
     "session/blocking.py",
     "session/diagnose.py",
     "session/endpoints.py",
-    "sim/server.py",
+    "sim/server.py",  # the simulator's server: its listener and accept loop,
+    "sim/session.py",  # each connection,
+    "sim/lane.py",  # and the epoll lane that serves connections on Linux
 }
 SOCKET_CALLS = {
     "create_connection",

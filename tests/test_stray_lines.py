@@ -431,7 +431,8 @@ def test_simulator_extra_line_never_lands_inside_a_split_reply() -> None:
 
 def test_extra_gap_set_and_read_while_the_simulator_runs() -> None:
     async def scenario() -> dict[str, bytes]:
-        async with SimulatorServer() as sim:
+        # No fast lane: the session has the transport whose writes are logged from the start.
+        async with SimulatorServer(fast_lane=False) as sim:
             raw, log, _ = await connect_logged(sim)
             seen = {
                 "set": await raw.ask(b"SIM:SET:extra_every=1,extra_gap_ms=0"),

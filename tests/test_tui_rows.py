@@ -20,7 +20,7 @@ from rac_console.present.row_detail import columns_for, detail_fields, detail_te
 from rac_console.protocol import Variant, kind_of
 from rac_console.tui.app import RacConsoleApp
 from rac_console.tui.help_screen import console_key_groups
-from rac_console.tui.palette import profile_help
+from rac_console.tui.palette_commands import profile_help
 
 P = kind_of("P")
 NOW = 1000.0

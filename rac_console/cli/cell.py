@@ -10,20 +10,19 @@ from __future__ import annotations
 import argparse
 import atexit
 import sys
+from typing import TYPE_CHECKING
 
 from ..commands.cells import DEMO_CELL, split_hosts
-from ..commands.language import parse_connect
-from ..commands.target import Target
-from ..commands.target import resolve_target as resolve_target_of
-from ..engine.config import load_config
 from ..protocol import InputError
 from ..protocol.text import terminal_safe
-from ..session.endpoints import addresses
+
+if TYPE_CHECKING:
+    from ..commands.target import Target
 
 #: Simulators of ``--cell demo``.
 DEMO_TARGETS = 2
 
-Members = list[tuple[str, Target]]
+Members = list[tuple[str, "Target"]]
 
 
 def settle_cell(args: argparse.Namespace) -> bool | None:
@@ -79,6 +78,11 @@ def _members(args: argparse.Namespace) -> Members | None:
         raise InputError(f"--cell {cell} and -H {args.host}: give one (a cell names its targets)")
     if args.port is not None:
         raise InputError("-p applies to one target; in a cell each profile has its port")
+    from ..commands.language import parse_connect
+    from ..commands.target import resolve_target as resolve_target_of
+    from ..engine.config import load_config
+    from ..session.endpoints import addresses
+
     config = load_config()
     where = str(config.path) if config.found else f"{config.path} (no such file)"
 
@@ -118,6 +122,7 @@ def _named(typed: str, target: Target) -> tuple[str, Target]:
 
 
 def _demo(args: argparse.Namespace) -> Members:
+    from ..commands.target import Target
     from ..sim.cell import SimulatedCellThread
 
     simulated = SimulatedCellThread(DEMO_TARGETS).start()

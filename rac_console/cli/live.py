@@ -42,7 +42,7 @@ from ..engine import (
 from ..engine.cell import Cell, member_name
 from ..engine.csvlog import timestamp
 from ..engine.execute import outcome_of
-from ..engine.registry import Where
+from ..engine.where import Where
 from ..present.render import error_text, outcome_text, print_error
 from ..protocol import InputError, hresult_name
 from ..session import BadReply, ConnectFailed, RequestTimeout

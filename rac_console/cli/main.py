@@ -7,6 +7,7 @@ so ``--version``, ``get`` and ``sim`` start fast. The grammar is :mod:`.parser`.
 from __future__ import annotations
 
 import argparse
+import gc
 import os
 import sys
 from collections.abc import Sequence
@@ -113,13 +114,20 @@ def _dispatch(args: argparse.Namespace) -> int:
     return _interactive(args)
 
 
+def _after_first_paint() -> None:
+    """The console painted its first screen: the collector runs again, and skips what
+    the start made (it lives as long as the console)."""
+    gc.freeze()
+    gc.enable()
+
+
 def _interactive(args: argparse.Namespace) -> int:
     """The full-screen console, or the REPL: one engine and history file for both."""
     from ..engine import DEFAULT_INTERVAL, EngineOptions
     from ..engine.cell import Cell, member_name
-    from ..engine.registry import Where
+    from ..engine.where import Where
     from ..present.history import History, default_history_path
-    from ..protocol import InputError
+    from ..protocol.errors import InputError
     from ..protocol.text import terminal_safe
 
     options = EngineOptions(
@@ -169,7 +177,7 @@ def _interactive(args: argparse.Namespace) -> int:
     from ..tui.app import run_console
 
     watch_cell(cell, getattr(args, "cell_watch", ()))
-    return run_console(cell, history, args.watch, sorted(args.target.profiles))
+    return run_console(cell, history, args.watch, sorted(args.target.profiles), _after_first_paint)
 
 
 def watch_cell(cell: Cell, lines: Sequence[str]) -> None:
@@ -188,6 +196,8 @@ def parse_args(words: Sequence[str]) -> argparse.Namespace:
     the other words as they came (``args.words_problem`` says why they cannot be
     used, if so). Other commands are argparse's alone.
     """
+    if not words:  # the console, as most start it: no command word to know
+        return build_cli(commands=False).parser.parse_args([])
     cli = build_cli()
     if not set(ONE_SHOT) & set(words):  # --version and the console skip the import
         return cli.parser.parse_args(words)
@@ -212,12 +222,23 @@ def parse_args(words: Sequence[str]) -> argparse.Namespace:
 def main(argv: Sequence[str] | None = None) -> int:
     from ..present.glyphs import make_streams_safe
 
-    make_streams_safe()  # a Windows pipe (cp1252) must never fail after a PUT went out
-    args = parse_args(sys.argv[1:] if argv is None else list(argv))
+    # The console's start makes hundreds of thousands of objects that live as long as it
+    # does (modules, classes, the screen): the collector would walk them again and again
+    # before its first paint. It is paused until then, and what the start made is frozen
+    # (never walked again): see _after_first_paint. Every other mode has it at once.
+    collecting = gc.isenabled()
+    gc.disable()
     try:
+        make_streams_safe()  # a Windows pipe (cp1252) must never fail after a PUT went out
+        args = parse_args(sys.argv[1:] if argv is None else list(argv))
+        if args.command is not None and collecting:
+            gc.enable()
         return int(_dispatch(args))
     except KeyboardInterrupt:
         print("rac-console: interrupted", file=sys.stderr)
         return 130
     except BrokenPipeError:
         return 0
+    finally:
+        if collecting:
+            gc.enable()

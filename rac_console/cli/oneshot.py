@@ -21,8 +21,8 @@ from ..engine import Measured, Message
 from ..engine.chained_wait import chained_feedback, met
 from ..engine.commands import BUILTIN
 from ..engine.jobs import run_job
-from ..engine.registry import Where
 from ..engine.session_context import SessionContext
+from ..engine.where import Where
 from ..present.cell_view import by_target
 from ..present.render import (
     error_text,

@@ -48,7 +48,9 @@ def build_parser() -> argparse.ArgumentParser:
     return build_cli().parser
 
 
-def build_cli() -> CliParser:
+def build_cli(commands: bool = True) -> CliParser:
+    """The grammar; without ``commands``, only what comes before a command word (the
+    console started with no words parses nothing more, and its start is timed)."""
     parser = argparse.ArgumentParser(
         prog="rac-console",
         description=DESCRIPTION,
@@ -81,12 +83,14 @@ def build_cli() -> CliParser:
             "their own interval",
         ),
     ]
-    commands = parser.add_subparsers(dest="command", metavar="COMMAND")
+    subparsers = parser.add_subparsers(dest="command", metavar="COMMAND")
+    if not commands:
+        return CliParser(parser, tuple(top_actions), ())
 
     def command(
         name: str, help_text: str, usage: str | None = None, epilog: str | None = None
     ) -> tuple[argparse.ArgumentParser, list[argparse.Action]]:
-        sub = commands.add_parser(
+        sub = subparsers.add_parser(
             name,
             help=help_text,
             description=help_text,
@@ -165,7 +169,7 @@ def build_cli() -> CliParser:
         "the round trip, a second session (GETs only; exit 3 at a connection failure)",
         epilog=CHECK_EPILOG,
     )
-    commands.add_parser(
+    subparsers.add_parser(
         "paths",
         help="where the config file and the history are on this machine",
         description="Where the config file and the history are on this machine.",
@@ -192,7 +196,7 @@ def build_cli() -> CliParser:
         default=argparse.SUPPRESS,
         help="log the watched values to FILE, one CSV row per poll cycle",
     )
-    sim = commands.add_parser(
+    sim = subparsers.add_parser(
         "sim",
         help="run the RC8 simulator as a server",
         description="Serve the built-in RC8 simulator over TCP.",

@@ -1,5 +1,10 @@
 """Which controller a command talks to: ``-H HOST``, ``-H PROFILE``, or the built-in
-simulator; and what it lets be written."""
+simulator; and what it lets be written.
+
+The session, the frame files and the host lookup are imported when a session is
+opened or a host is looked up: the console settles its target before its first
+paint, which needs none of them.
+"""
 
 from __future__ import annotations
 
@@ -7,16 +12,16 @@ import argparse
 import sys
 from collections.abc import Callable, Iterator
 from contextlib import ExitStack, contextmanager
+from typing import TYPE_CHECKING
 
 from ..commands.target import Target
 from ..commands.target import resolve_target as resolve_target_of
 from ..engine.config import load_config
-from ..engine.recorder import FrameRecorder
-from ..engine.transcript import FrameTranscript
-from ..protocol import InputError
+from ..protocol.errors import InputError
 from ..protocol.text import terminal_safe
-from ..session import Session
-from ..session.endpoints import addresses
+
+if TYPE_CHECKING:
+    from ..session import Session
 
 
 def resolve_target(args: argparse.Namespace) -> Target:
@@ -30,9 +35,17 @@ def resolve_target(args: argparse.Namespace) -> Target:
         args.port,
         profiles=config.profiles,
         read_only_flag=bool(args.read_only),
-        resolve=addresses,
+        resolve=_addresses,
         config_where=where,
     )
+
+
+def _addresses(host: str) -> frozenset[str] | None:
+    """:func:`~rac_console.session.endpoints.addresses`, imported when a host is named
+    (the package of sessions is not needed to start the console)."""
+    from ..session.endpoints import addresses
+
+    return addresses(host)
 
 
 def settle_target(args: argparse.Namespace) -> bool:
@@ -63,6 +76,10 @@ def open_session(
     with ``--record`` (and ``--log``), a recorder that tells ``on_record_failure`` when it stops.
 
     Raises InputError when the config file is broken (only when not resolved before)."""
+    from ..engine.recorder import FrameRecorder
+    from ..engine.transcript import FrameTranscript
+    from ..session import Session
+
     if target is None:
         target = getattr(args, "target", None) or resolve_target(args)
     with ExitStack() as stack:

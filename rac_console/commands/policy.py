@@ -3,6 +3,9 @@
 A target profile says ``writes = "open" | "confirm" | "read-only"`` and may list
 ``allow`` ranges (``"I 100-199"``, ``"IO 64-71"``): a write outside them is refused
 with the rule that refused it. Pure: no file, no socket.
+
+The command language and the variable tables are imported by the checks that use them:
+settling a target (the console, before its first paint) needs only the classes here.
 """
 
 from __future__ import annotations
@@ -10,10 +13,13 @@ from __future__ import annotations
 import re
 from dataclasses import dataclass
 from enum import Enum
+from typing import TYPE_CHECKING
 
-from ..protocol import KINDS, InputError, VarKind, kind_of
-from ..protocol.variables import MAX_INDEX
-from .language import Exchange, Get, Put, Raw, VarRef
+from ..protocol.errors import InputError
+
+if TYPE_CHECKING:
+    from ..protocol import VarKind
+    from .language import Exchange, VarRef
 
 
 class Writes(Enum):
@@ -43,6 +49,8 @@ _RANGE = re.compile(r"\s*([A-Za-z]+)\s*\[?\s*(\d{1,6})\s*(?:-\s*(\d{1,6})\s*)?\]
 
 def parse_allow(text: str) -> AllowRange:
     """``"I 100-199"``, ``"IO 64"``, ``"P[0-9]"``; InputError with how to write it."""
+    from ..protocol.variables import KINDS, MAX_INDEX, kind_of
+
     example = 'write a range as "TYPE FIRST-LAST" or "TYPE INDEX", e.g. "I 100-199", "IO 64"'
     match = _RANGE.fullmatch(text)
     if match is None:
@@ -59,6 +67,8 @@ def parse_allow(text: str) -> AllowRange:
 def written_var(command: Exchange) -> VarRef | None:
     """The variable a command writes: a typed put's, or a raw well-formed
     ``PUT:RC8:<index>:<type>:...`` line's; None for a GET or a line we cannot read."""
+    from .language import Put, Raw, VarRef
+
     if isinstance(command, Put):
         return command.var
     line = command.request.line
@@ -81,6 +91,8 @@ class WritePolicy:
 
     def refusal(self, command: Exchange) -> str | None:
         """Why ``allow`` keeps this off the wire, or None (read-only is checked apart)."""
+        from .language import Get
+
         if self.allow is None or isinstance(command, Get) or command.request.read_only_safe:
             return None
         var = written_var(command)

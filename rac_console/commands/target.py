@@ -9,10 +9,12 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import Literal
+from typing import TYPE_CHECKING, Literal
 
 from .policy import TargetProfile, WritePolicy, Writes
-from .profiles import Addresses, could_be_profile_name, match_profile
+
+if TYPE_CHECKING:  # matching a name to a profile loads with the first host named
+    from .profiles import Addresses
 
 DEFAULT_PORT = 5006
 #: What a target lets be written, as the status line says it.
@@ -71,6 +73,8 @@ def resolve_target(
             read_only_flag=read_only_flag,
             profiles=profiles,
         )
+    from .profiles import match_profile
+
     match = match_profile(profiles, host, port, resolve)
     profile = match.profile
     notices = tuple(match.notices())
@@ -103,6 +107,8 @@ def no_profile_hint(
 ) -> str | None:
     """``no profile named cel3 in FILE`` (or with the profiles there are), when ``host``
     looks like a profile's name rather than an address; None when it does not."""
+    from .profiles import could_be_profile_name
+
     if not could_be_profile_name(host):
         return None
     if config_where is not None:

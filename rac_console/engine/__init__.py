@@ -14,44 +14,56 @@ Thread rules (the only ones; nothing else is shared):
 - Nothing here imports Textual, prompt-toolkit or rich; the process-wide interpreter
   settings (switch interval, signal handlers) are left alone.
 
-:class:`Engine` and its module load on first use (PEP 562): the one-shot commands use
-the events and the handlers without the engine's thread, so they skip its imports.
+Every name loads with its module on first use (PEP 562, :mod:`rac_console.lazy`): the
+one-shot commands use the events and the handlers without the engine's thread, so they
+skip its imports, and the console settles its target (``engine.config``) before its first
+paint without loading the events.
 """
 
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
-from .events import (
-    CONFIRM_GUARD_SECONDS,
-    Alert,
-    ConfirmWrite,
-    Cycle,
-    Feedback,
-    Measured,
-    Message,
-    Note,
-    Result,
-    RowView,
-    Status,
-    UiStep,
-)
-from .outbox import Batch, Outbox
+from ..lazy import exports
 
 if TYPE_CHECKING:
     from .engine import DEFAULT_INTERVAL, SIMULATOR_NOTICE, Engine, EngineOptions
+    from .events import (
+        CONFIRM_GUARD_SECONDS,
+        Alert,
+        ConfirmWrite,
+        Cycle,
+        Feedback,
+        Measured,
+        Note,
+        Result,
+        RowView,
+    )
+    from .feedback import Message, UiStep
+    from .outbox import Batch, Outbox
+    from .status import Status
 
-#: Names served from :mod:`.engine` when first asked for.
-_FROM_ENGINE_MODULE = frozenset({"DEFAULT_INTERVAL", "SIMULATOR_NOTICE", "Engine", "EngineOptions"})
-
-
-def __getattr__(name: str) -> Any:
-    """The engine's names, imported when first used rather than with the package."""
-    if name in _FROM_ENGINE_MODULE:
-        from . import engine
-
-        value = getattr(engine, name)
-        globals()[name] = value  # asked once: later uses find it as a plain attribute
-        return value
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+#: Where each name lives: imported when first used, so ``engine.config`` (read to settle
+#: a target) or the outbox load neither the events nor the engine's parts.
+_WHERE = {
+    **dict.fromkeys(("DEFAULT_INTERVAL", "SIMULATOR_NOTICE", "Engine", "EngineOptions"), ".engine"),
+    **dict.fromkeys(
+        (
+            "CONFIRM_GUARD_SECONDS",
+            "Alert",
+            "ConfirmWrite",
+            "Cycle",
+            "Feedback",
+            "Measured",
+            "Note",
+            "Result",
+            "RowView",
+        ),
+        ".events",
+    ),
+    **dict.fromkeys(("Message", "UiStep"), ".feedback"),
+    "Status": ".status",
+    **dict.fromkeys(("Batch", "Outbox"), ".outbox"),
+}
+__getattr__ = exports(__name__, _WHERE)
 
 
 __all__ = [

@@ -19,21 +19,23 @@ from __future__ import annotations
 import itertools
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, replace
+from typing import TYPE_CHECKING
 
-from ..commands.cells import route
-from ..commands.language import Command, Connect, Use, Wait
-from ..commands.outcome import Outcome
-from ..commands.target import Target
 from ..protocol import InputError
 from ..protocol.text import terminal_safe
-from .cellcsv import CellCsv
-from .chained_wait import chained_feedback, met
-from .commands import BUILTIN
 from .engine import CellFiles, Engine, EngineOptions
-from .events import Alert, Event, Message, Result
-from .frame_files import FrameFiles
+from .feedback import Message
 from .outbox import Batch, Outbox
-from .registry import Registry, Where
+from .where import Where
+
+if TYPE_CHECKING:  # the console's first paint loads none of these
+    from ..commands.language import Command, Use, Wait
+    from ..commands.outcome import Outcome
+    from ..commands.target import Target
+    from .cellcsv import CellCsv
+    from .events import Event, Result
+    from .frame_files import FrameFiles
+    from .registry import Registry
 
 
 @dataclass
@@ -78,13 +80,13 @@ class Cell:
         options: EngineOptions | None = None,
         notify: Callable[[], None] | None = None,
         where: Where = Where.CONSOLE,
-        registry: Registry = BUILTIN,
+        registry: Registry | None = None,
     ) -> None:
         """One engine per ``(name, target)``, in order; the first is the current one.
         Raises InputError when a file cannot be opened (before any thread starts)."""
         if not targets:
             raise InputError("a cell needs at least one target")
-        self.registry, self.where = registry, where
+        self._registry, self.where = registry, where
         self._numbers: Iterator[int] = itertools.count(1)
         #: The cell's own results (``use``, a line for a target it does not have) and
         #: alerts (a file of the cell's that failed).
@@ -96,6 +98,9 @@ class Cell:
         self.files: FrameFiles | None = None
         self.csv: CellCsv | None = None
         if len(targets) > 1:
+            from .cellcsv import CellCsv
+            from .frame_files import FrameFiles
+
             self.files = FrameFiles(options.record, options.transcript, self._alert)
             self.csv = CellCsv(names, self._alert)
             try:
@@ -138,7 +143,7 @@ class Cell:
     def of(cls, engine: Engine, name: str | None = None) -> Cell:
         """A cell of one engine made already (a single target, exactly as before)."""
         cell = cls.__new__(cls)
-        cell.registry, cell.where = engine.registry, engine.where
+        cell._registry, cell.where = None, engine.where
         cell._numbers = engine.numbers
         cell.outbox = Outbox(engine.outbox.notify)
         cell.files = cell.csv = None
@@ -195,8 +200,15 @@ class Cell:
         if self.csv is not None:
             self.csv.close()
 
+    @property
+    def registry(self) -> Registry:
+        """The commands the cell's lines are parsed with: its engines'."""
+        return self._registry or self.members[0].engine.registry
+
     def _alert(self, text: str) -> None:
         """A file of the cell's failed (from any member's thread): said once, here."""
+        from .events import Alert
+
         self.outbox.put(Alert(text))
 
     # ------------------------------------------------------------------ jobs
@@ -205,6 +217,9 @@ class Cell:
         """Queue a typed line on its target; its Result carries the number returned
         (from the target's outbox, or the cell's for ``use`` and a problem with the
         line's ``@NAME``)."""
+        from ..commands.cells import route
+        from ..commands.language import Connect, Use, Wait
+
         try:
             name, rest = route(line, self.names, self.current)
             member = self.member(name)
@@ -231,6 +246,8 @@ class Cell:
         self, command: Command, line: str | None = None, name: str | None = None
     ) -> int:
         """Queue a command a front end made (Space on a row of ``name``'s table)."""
+        from ..commands.language import Connect, Use
+
         if isinstance(command, Use):
             return self._use(command, line)
         if isinstance(command, Connect) and len(self.members) > 1:
@@ -267,6 +284,10 @@ class Cell:
 
     def _advance(self, chain: _Chain, result: Result) -> list[Result]:
         """A chained wait's job ended: the second wait starts, or the whole answer."""
+        from ..commands.outcome import Outcome
+        from .chained_wait import chained_feedback, met
+        from .events import Result
+
         outcome = next((f for f in result.feedback if isinstance(f, Outcome)), None)
         if chain.first_outcome is None:  # the first target's wait
             if outcome is None or not met(outcome):
@@ -288,6 +309,8 @@ class Cell:
         return [Result(chain.seq, feedback, chain.line, chain.command)]
 
     def _answer(self, line: str | None, message: Message) -> int:
+        from .events import Result
+
         seq = next(self._numbers)
         self.outbox.put(Result(seq, (message,), line))
         return seq
@@ -313,6 +336,8 @@ class Cell:
         drained: list[tuple[str | None, Batch]] = [(None, self.outbox.drain())]
         drained.extend((member.name, member.engine.outbox.drain()) for member in self.members)
         if self._chains:  # a chained wait's steps are the cell's, answered as one
+            from .events import Result
+
             answers: list[Result] = []
             for _, batch in drained[1:]:
                 kept: list[Event] = []

@@ -15,9 +15,7 @@ from pathlib import Path
 
 from ..commands.cells import CellSpec
 from ..commands.policy import TargetProfile
-from ..commands.profiles import parse_config
-from ..commands.tomltext import parse_toml
-from ..protocol import InputError
+from ..protocol.errors import InputError
 from .textfile import read_text_file
 
 CONFIG_ENV = "RAC_CONSOLE_CONFIG"
@@ -62,6 +60,9 @@ def load_config(path: Path | None = None) -> Config:
         raise InputError(f"{path} (named by {CONFIG_ENV}) does not exist")
     if not exists:
         return Config(path)
+    from ..commands.profiles import parse_config  # TOML and its checks: for a file there
+    from ..commands.tomltext import parse_toml
+
     text = read_text_file(path, "a config file")
     parsed = parse_config(parse_toml(text, str(path)), str(path))
     return Config(path, True, parsed.profiles, parsed.settings, parsed.cells)

@@ -8,19 +8,19 @@ is the engine's, for every command.
 
 from __future__ import annotations
 
-import threading
 import time
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import TYPE_CHECKING, Protocol
 
-from ..commands.language import Command, Put, Raw, VarRef
+from ..commands.language import Put, Raw, VarRef
 from ..commands.outcome import Outcome
 from ..commands.policy import WritePolicy
 from ..commands.target import Target
 from ..protocol import Variant
 from ..session import ConnectFailed, Session, TransportError
 from .events import OK, ConfirmWrite
+from .job import Job
 from .writes import Confirm, plain_value
 
 if TYPE_CHECKING:  # the engine's parts, named here; a one-shot command loads none of them
@@ -30,26 +30,6 @@ if TYPE_CHECKING:  # the engine's parts, named here; a one-shot command loads no
     from .poller import Poller
     from .publisher import Publisher
     from .registry import Registry
-
-
-@dataclass
-class Job:
-    """One submitted line or command; a cancel belongs to it and to no other."""
-
-    seq: int
-    what: str | Command
-    shown: str | None = None  # how a command object is shown (a typed line shows itself)
-    _cancelled: threading.Event = field(default_factory=threading.Event, repr=False)
-
-    @property
-    def line(self) -> str | None:
-        return self.what if isinstance(self.what, str) else self.shown
-
-    def cancel(self) -> None:
-        self._cancelled.set()
-
-    def cancelled(self) -> bool:
-        return self._cancelled.is_set()
 
 
 class JobContext(Protocol):

@@ -7,6 +7,11 @@ engine itself only schedules: the parts are the link (:mod:`.link`), the poller
 (:mod:`.poller`), the frame files and the publisher, and every command is run by its
 registry entry's handler (:mod:`.jobs`). Engines share no mutable state: several run
 side by side in one process, one per controller.
+
+The parts (and the commands) are made when the engine starts, on the thread that starts
+it, or when first needed: the console makes its engine before its first paint, which
+must not wait for them. Files named in the options are opened at once, so that one
+that cannot be opened is said before anything starts.
 """
 
 from __future__ import annotations
@@ -17,25 +22,27 @@ import threading
 import time
 from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass, replace
+from typing import TYPE_CHECKING
 
-from ..commands.check import check_pointer
-from ..commands.language import Command
 from ..commands.policy import TargetProfile, WritePolicy, Writes
 from ..commands.target import Target
-from ..protocol import InputError
-from ..session import ConnectFailed, Disconnected, Frame
-from .cellcsv import CellCsv
-from .commands import BUILTIN
-from .context import CommandContext, EngineParts, Job
-from .csvsink import CsvSink
-from .events import ConfirmWrite, Feedback, Message, Result, Status
-from .frame_files import FrameFiles
-from .jobs import run_job
-from .link import Link, described
 from .outbox import Outbox
-from .poller import Poller
-from .publisher import Publisher
-from .registry import Registry, Where
+from .status import Status, described
+from .where import Where
+
+if TYPE_CHECKING:
+    from ..commands.language import Command
+    from ..session import Frame
+    from .cellcsv import CellCsv
+    from .context import EngineParts
+    from .csvsink import CsvSink
+    from .events import ConfirmWrite, Feedback
+    from .frame_files import FrameFiles
+    from .job import Job
+    from .link import Link
+    from .poller import Poller
+    from .publisher import Publisher
+    from .registry import Registry
 
 DEFAULT_INTERVAL = 0.5
 SIMULATOR_NOTICE = "no -H given: talking to the built-in RC8 simulator, not a controller"
@@ -89,7 +96,7 @@ class Engine:
         options: EngineOptions | None = None,
         outbox: Outbox | None = None,
         where: Where = Where.CONSOLE,
-        registry: Registry = BUILTIN,
+        registry: Registry | None = None,
         numbers: Iterator[int] | None = None,
         cell_files: CellFiles | None = None,
         **words: object,
@@ -104,42 +111,8 @@ class Engine:
         self._rules, self._plain_policy = _target_of(host, port, target, words)
         self.options = options if options is not None else _options_of(words)
         self.outbox = outbox if outbox is not None else Outbox()
-        self.where, self.registry = where, registry
-        options = self.options
-        if cell_files is not None:
-            self._files = cell_files.files
-        else:
-            self._files = FrameFiles(options.record, options.transcript, self._alert)
-        self._publisher = Publisher(self.outbox, self._files, options.frames)
-        self._csv = CsvSink(
-            self._alert,
-            lambda: self.publish_status(force=True),
-            (cell_files.csv, cell_files.name) if cell_files is not None else None,
-        )
-        self._link = Link(
-            self._publisher, options.timeout, went_down=self._went_down, connecting=self._connecting
-        )
-        self._poller = Poller(
-            self._link,
-            self._publisher,
-            self._csv,
-            interval=options.interval,
-            cycles=options.cycles,
-            publish_status=self.publish_status,
-            cut_cycles=options.cut_cycles,
-            max_cycles=options.max_cycles,
-            readings=options.readings,
-        )
-        self._parts = EngineParts(
-            self._link,
-            self._poller,
-            self._publisher,
-            self._files,
-            self._csv,
-            self._switch_target,
-            self._plain_policy,
-            self._ask_confirm,
-        )
+        self.where, self._registry = where, registry
+        self._cell_files = cell_files
         self._inbox: queue.SimpleQueue[Job | None] = queue.SimpleQueue()
         #: Where submitted jobs get their numbers (shared by the engines of a cell).
         self.numbers = numbers if numbers is not None else itertools.count(1)
@@ -152,8 +125,69 @@ class Engine:
         self._started = threading.Event()
         self._stopping = threading.Event()
         self._thread = threading.Thread(target=self._run, name="rac-engine", daemon=True)
-        if options.log_csv:
-            self._csv.wait_for_rows(options.log_csv)
+        self._build_lock = threading.Lock()
+        self._built = False
+        options = self.options
+        if options.record or options.transcript or options.log_csv:
+            self._build()  # a file that cannot be opened: InputError now, nothing started
+
+    def _build(self) -> None:
+        """Make the parts, once (any thread; the first caller makes them)."""
+        with self._build_lock:
+            if self._built:
+                return
+            from .context import EngineParts
+            from .csvsink import CsvSink
+            from .frame_files import FrameFiles
+            from .link import Link
+            from .poller import Poller
+            from .publisher import Publisher
+
+            options, cell_files = self.options, self._cell_files
+            self._files: FrameFiles = (
+                cell_files.files
+                if cell_files is not None
+                else FrameFiles(options.record, options.transcript, self._alert)
+            )
+            self._publisher: Publisher = Publisher(self.outbox, self._files, options.frames)
+            self._csv: CsvSink = CsvSink(
+                self._alert,
+                lambda: self.publish_status(force=True),
+                (cell_files.csv, cell_files.name) if cell_files is not None else None,
+            )
+            self._link: Link = Link(
+                self._publisher,
+                options.timeout,
+                went_down=self._went_down,
+                connecting=self._connecting,
+            )
+            self._poller: Poller = Poller(
+                self._link,
+                self._publisher,
+                self._csv,
+                interval=options.interval,
+                cycles=options.cycles,
+                publish_status=self.publish_status,
+                cut_cycles=options.cut_cycles,
+                max_cycles=options.max_cycles,
+                readings=options.readings,
+            )
+            self._parts: EngineParts = EngineParts(
+                self._link, self._poller, self._publisher, self._files, self._csv,
+                self._switch_target, self._plain_policy, self._ask_confirm,
+            )  # fmt: skip
+            self._built = True
+            if options.log_csv:
+                self._csv.wait_for_rows(options.log_csv)
+
+    @property
+    def registry(self) -> Registry:
+        """The commands this engine runs: the built-in ones unless others were given."""
+        if self._registry is None:
+            from .commands import BUILTIN
+
+            self._registry = BUILTIN
+        return self._registry
 
     # ------------------------------------------------------- any thread
 
@@ -171,6 +205,7 @@ class Engine:
         """Open the target (the simulator starts here when no host was given) and, with
         ``connect``, the connection; returns once the first status is in the outbox."""
         self._connect_first = connect
+        self._build()
         self._thread.start()
         self._started.wait(15)
 
@@ -185,6 +220,8 @@ class Engine:
         return self._queue(command, line)
 
     def _queue(self, what: str | Command, line: str | None = None) -> int:
+        from .job import Job
+
         with self._jobs_lock:
             job = Job(next(self.numbers), what, line)
             self._queued[job.seq] = job
@@ -214,8 +251,10 @@ class Engine:
                 cancelled.append(running)
         for job in cancelled:
             job.cancel()
+        if running is None:
+            return  # nothing in flight (nor, before the start, any part to reach)
         session = self._link.session
-        if running is not None and session is not None:
+        if session is not None:
             session.cancel()
 
     def answer_confirm(self, seq: int, yes: bool) -> None:
@@ -226,15 +265,18 @@ class Engine:
     def set_poll_frames(self, shown: bool) -> None:
         """Whether the front end shows poll frames (any thread). When nobody shows,
         records or observes them, a poll builds no frame at all."""
+        self._build()
         self._publisher.poll_frames = shown
 
     def add_frame_observer(self, observer: Callable[[Frame], None]) -> None:
         """Call ``observer`` on the engine's thread with every frame, before it is
         published (a sink of one's own; from the next frame on: keep it quick)."""
+        self._build()
         self._publisher.observers.append(observer)
 
     def alert(self, text: str) -> None:
         """Said at once (before start: a notice the front end shows first)."""
+        self._build()
         self._alert(text)
 
     # ---------------------------------------------------- engine thread
@@ -290,6 +332,10 @@ class Engine:
     def _run_job(self, job: Job) -> None:
         """Run one job; the status, then its Result, go to the outbox (so a front end
         showing the result knows the state it left)."""
+        from .context import CommandContext
+        from .events import Message, Result
+        from .jobs import run_job
+
         with self._jobs_lock:
             self._queued.pop(job.seq, None)
             self._running = job
@@ -316,6 +362,8 @@ class Engine:
 
     def _parsed(self, what: str | Command) -> Command | None:
         """The command a job names (None when its line does not parse)."""
+        from ..protocol.errors import InputError
+
         if not isinstance(what, str):
             return what
         try:
@@ -324,6 +372,10 @@ class Engine:
             return None
 
     def _connect_at_start(self) -> None:
+        from ..commands.check import check_pointer
+        from ..session import ConnectFailed, Disconnected
+        from .events import Message, Result
+
         try:
             self._link.connect_at_start()
         except (ConnectFailed, Disconnected) as exc:
@@ -396,6 +448,8 @@ class Engine:
         )
 
     def _status(self) -> Status:
+        if not self._built:
+            return self._status_before_start()
         link, poller, files, rules = self._link, self._poller, self._files, self._rules
         session = link.session
         profile = rules.profile
@@ -431,6 +485,41 @@ class Engine:
             ever_connected=link.ever_connected,
             recording=files.path("record"),
             transcribing=files.path("transcript"),
+        )
+
+    def _status_before_start(self) -> Status:
+        """:meth:`_status` of an engine whose parts are not made yet: as they begin
+        (no session, nothing watched, no file), without making them."""
+        rules, options = self._rules, self.options
+        profile = rules.profile
+        return Status(
+            target="NOT CONNECTED",
+            is_simulator=False,
+            has_session=False,
+            host=None,
+            port=5006,
+            timeout=options.timeout,
+            read_only=rules.read_only,
+            connection="closed",
+            retry_at=None,
+            rtt=None,
+            paused=False,
+            watched=0,
+            interval=options.interval,
+            period=options.interval,
+            cycle_seconds=None,
+            polls_per_second=None,
+            interval_met=True,
+            record_failure=None,
+            transcript_failure=None,
+            csv_log=None,
+            csv_failure=None,
+            seen=frozenset(),
+            profile=profile.name if profile is not None else None,
+            label=profile.label if profile is not None else None,
+            colour=profile.colour if profile is not None else None,
+            writes=rules.writes,
+            verify=options.verify,
         )
 
 

@@ -2,47 +2,21 @@
 
 A front end never reads an engine attribute; everything it shows arrives as one of
 these. A :class:`~rac_console.session.Frame` (with its parsed reply) is an event too.
+The status line's figures (:class:`Status`) live in :mod:`.status`, which the console's
+first paint loads without the rest.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
-from enum import Enum
-from typing import Literal
 
 from ..commands.language import Command, VarRef
 from ..commands.latency import LatencySummary
 from ..commands.outcome import Outcome
-from ..commands.target import WritesShown
 from ..protocol import Variant
-from ..protocol.text import terminal_safe
-from ..session import Frame, Reply, State, TransportError
-from ..session.types import ConnectProblem
-
-OK = "OK"
-#: The connection as the status line says it: the session's state, lost (found dead
-#: while idle, or a poll's connection failed after one had opened), dropped (closed
-#: early: backing off), or why connecting failed.
-Connection = State | Literal["lost", "dropped"] | ConnectProblem
-
-WAITING = "…"
-#: Characters of a profile's label shown (the badges after it must fit 80 columns).
-LABEL_WIDTH = 32
-
-
-def shown_label(label: str, width: int = LABEL_WIDTH) -> str:
-    """A profile's label as every front end shows it: escaped, and cut with ``…`` to
-    ``width`` characters (present/status.py's ``label_text`` then cuts it to cells)."""
-    safe = terminal_safe(label)
-    return safe if len(safe) <= width else safe[: width - 1].rstrip() + "…"
-
-
-@dataclass(frozen=True, slots=True)
-class Message:
-    """Feedback that is not an exchange: help text, a confirmation, an error."""
-
-    text: str
-    level: str = "info"  # info, error
+from ..session import Frame, Reply, TransportError
+from .feedback import Message, UiStep
+from .status import LABEL_WIDTH, OK, WAITING, Connection, Status, shown_label
 
 
 @dataclass(frozen=True, slots=True)
@@ -54,15 +28,6 @@ class Measured(Message):
     @classmethod
     def of(cls, what: str, summary: LatencySummary) -> Measured:
         return cls(summary.text(what), "info", summary)
-
-
-class UiStep(Enum):
-    """What only a front end can do."""
-
-    CLEAR = "clear"  # its log or screen
-    QUIT = "quit"
-    FRAMES_ON = "frames on"  # echo frames (REPL) / show poll frames (console)
-    FRAMES_OFF = "frames off"
 
 
 Feedback = Outcome | Message | UiStep
@@ -110,52 +75,6 @@ class RowView:
         return str(self.var)
 
 
-@dataclass(frozen=True, slots=True)
-class Status:
-    """The figures of the status line and prompt; each replaces the last one."""
-
-    target: str  # "SIMULATOR (built-in)", "LIVE host:port" or "NOT CONNECTED"
-    is_simulator: bool
-    has_session: bool
-    host: str | None
-    port: int
-    timeout: float
-    read_only: bool
-    connection: Connection
-    retry_at: float | None  # time.monotonic() of the next try, during a backoff
-    rtt: float | None
-    paused: bool
-    watched: int
-    interval: float
-    period: float
-    cycle_seconds: float | None
-    polls_per_second: float | None
-    interval_met: bool
-    record_failure: str | None
-    seen: frozenset[tuple[str, int]]
-    csv_log: str | None = None  # the CSV log's path while logging
-    csv_failure: str | None = None  # why a CSV log failed, kept after a new one starts
-    transcript_failure: str | None = None  # why the --log transcript stopped
-    profile: str | None = None  # the target profile's name (-H cell3, connect cell3)
-    label: str | None = None  # its label: "Cell 3 — welding"
-    colour: str | None = None  # its colour, a Rich colour name or #rrggbb
-    writes: WritesShown = "open"  # the profile's, or --read-only
-    verify: bool = True  # every PUT is read back (off: --no-verify)
-    target_id: int = 0  # changes when another target is opened (connect): trends restart
-    ever_connected: bool = False  # a connection to this target opened at least once
-    recording: str | None = None  # where frames are recorded (--record, record FILE)
-    transcribing: str | None = None  # where the transcript goes (--log, transcript FILE)
-
-    def exit_status(self, status: int) -> int:
-        """A front end's exit status: 4 (a local I/O error) when it would be 0 but the
-        recording, the --log transcript or the CSV log stopped on the way."""
-        failed = any(
-            failure is not None
-            for failure in (self.record_failure, self.transcript_failure, self.csv_failure)
-        )
-        return 4 if status == 0 and failed else status
-
-
 #: A watched variable's read in a cycle: the reply, or how the exchange failed.
 Reading = tuple[VarRef, "Reply | TransportError"]
 
@@ -200,3 +119,25 @@ class ConfirmWrite:
 
 
 Event = Frame | Note | Alert | Result | Cycle | ConfirmWrite
+
+__all__ = [
+    "CONFIRM_GUARD_SECONDS",
+    "LABEL_WIDTH",
+    "OK",
+    "WAITING",
+    "Alert",
+    "ConfirmWrite",
+    "Connection",
+    "Cycle",
+    "Event",
+    "Feedback",
+    "Measured",
+    "Message",
+    "Note",
+    "Reading",
+    "Result",
+    "RowView",
+    "Status",
+    "UiStep",
+    "shown_label",
+]

@@ -10,7 +10,8 @@ from __future__ import annotations
 from ..commands.language import Command
 from ..protocol import InputError
 from .events import Feedback, Message
-from .registry import Registry, Where
+from .registry import Registry
+from .where import Where
 
 
 def run_job(

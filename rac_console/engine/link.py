@@ -16,14 +16,10 @@ from ..session import ConnectFailed, Disconnected, Session, State, TransportErro
 from .backoff import Backoff
 from .events import Connection
 from .publisher import Publisher
+from .status import described
 
 if TYPE_CHECKING:  # asyncio and the simulator load only when a target names no host
     from ..sim.thread import SimulatorThread
-
-
-def described(host: str | None, port: int) -> str:
-    """The status line's name of a target that is open: no host is the simulator."""
-    return "SIMULATOR (built-in)" if host is None else f"LIVE {host}:{port}"
 
 
 class Link:

@@ -12,10 +12,12 @@ import contextlib
 import threading
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
-from ..commands.language import VarRef
-from ..session import Frame
-from .events import Cycle, Event, RowView, Status
+if TYPE_CHECKING:  # the console makes its outbox before its first paint, without these
+    from ..commands.language import VarRef
+    from .events import Event, RowView
+    from .status import Status
 
 #: Events kept for a reader that does not drain; past it the oldest frames and cycles go.
 MAX_EVENTS = 100_000
@@ -115,6 +117,9 @@ class Outbox:
     def _shed_frames(self) -> None:
         """Drop the oldest half of the frames and of the cycles (never a result, note or
         alert): a reader that stopped draining costs a bounded queue, not all memory."""
+        from ..session import Frame
+        from .events import Cycle
+
         batch = self._batch
         events = batch.events
         frames = sum(1 for event in events if isinstance(event, Frame))

@@ -12,7 +12,6 @@ from __future__ import annotations
 
 from collections.abc import Callable, Iterable, Iterator, Sequence
 from dataclasses import dataclass, field
-from enum import Enum
 from typing import Any
 
 from ..commands.language import (
@@ -29,18 +28,10 @@ from ..protocol import KINDS, InputError
 from ..protocol.text import close_match
 from .events import Feedback
 
-
-class Where(Enum):
-    """Where a command can run."""
-
-    CONSOLE = "console"
-    REPL = "REPL"
-    RUN = "run"  # a line of rac-console run FILE
-    COMMAND_LINE = "command line"  # rac-console get, put, send, latency
-
-
-AT_A_TERMINAL = frozenset({Where.CONSOLE, Where.REPL})
-EVERYWHERE = frozenset(Where)
+# Kept here too, where the commands' modules find them with the rest of a command's spec.
+from .where import AT_A_TERMINAL as AT_A_TERMINAL
+from .where import EVERYWHERE as EVERYWHERE
+from .where import Where as Where
 
 #: (completion text, what it means)
 Option = tuple[str, str]

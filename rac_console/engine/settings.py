@@ -19,11 +19,14 @@ import tempfile
 from collections.abc import Collection, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING
 
-from ..commands.settings import Value, read_settings, update_settings_text
-from ..protocol import InputError
+from ..protocol.errors import InputError
 from .config import load_config
 from .textfile import BOM, read_text_file
+
+if TYPE_CHECKING:
+    from ..commands.settings import Value
 
 
 @dataclass(frozen=True)
@@ -45,6 +48,10 @@ class SettingsFile:
         """The settings (a theme only among ``themes``, when given); InputError (one
         line) when the file cannot be read or parsed."""
         config = load_config(self.path)
+        if not config.settings:
+            return LoadedSettings()  # no [settings]: their rules need not load (the start)
+        from ..commands.settings import read_settings
+
         values, problems = read_settings(config.settings, str(self.path), themes)
         return LoadedSettings(values, problems)
 
@@ -52,6 +59,8 @@ class SettingsFile:
         """Set ``values`` in the file's ``[settings]``, keeping every other byte;
         InputError (one line) when it cannot, the file then left as it was."""
         path = self.path
+        from ..commands.settings import update_settings_text
+
         real = Path(os.path.realpath(path))  # a symlink's target: the link stays
         try:
             text, mode = _read(real, path)

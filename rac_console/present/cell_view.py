@@ -3,10 +3,14 @@ targets completion offers (the badges are :mod:`.cell_status`'s)."""
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 from rich.text import Text
 
-from ..engine.cell import Cell
 from ..protocol.text import terminal_safe
+
+if TYPE_CHECKING:
+    from ..engine.cell import Cell
 
 
 def by_target(name: str | None, text: Text) -> Text:

@@ -3,12 +3,17 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 from rich.text import Text
 
-from ..engine.events import OK, RowView
-from ..protocol import Variant, vt_name
+from ..engine.status import OK
 from ..protocol.text import scalar_text
+from ..protocol.vartypes import vt_name
+
+if TYPE_CHECKING:
+    from ..engine.events import RowView
+    from ..protocol.variant import Variant
 
 HIGHLIGHT_SECONDS = 1.0
 

@@ -4,12 +4,15 @@ table (rows by name or label) and the frame log (frames by text or by variable).
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 from rich.text import Text
 
-from ..commands.language import parse_var
-from ..protocol import InputError, RequestLine
+from ..protocol.errors import InputError
 from ..protocol.text import terminal_safe
+
+if TYPE_CHECKING:
+    from ..protocol.request import RequestLine
 
 
 def needle_of(typed: str) -> str:
@@ -37,6 +40,8 @@ class FrameFilter:
 
     @classmethod
     def of(cls, typed: str) -> FrameFilter:
+        from ..commands.language import parse_var  # the grammar, at the first filter typed
+
         target = None
         text = typed.strip()
         if text[:1] in ("@", "/") and len(text) > 1:

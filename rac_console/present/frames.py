@@ -4,10 +4,12 @@ from __future__ import annotations
 
 import time
 from functools import lru_cache
+from typing import TYPE_CHECKING
 
-from ..protocol import ProtocolError, decode_frame, parse_response, wire_text
-from ..protocol.text import describe_response
-from ..session import Frame
+from ..protocol.text import describe_response, wire_text
+
+if TYPE_CHECKING:
+    from ..session import Frame
 
 ARROWS = {"tx": "→", "rx": "←"}
 
@@ -37,7 +39,11 @@ def decoding(frame: Frame) -> str:
 
 @lru_cache(maxsize=4096)
 def _decode(body: bytes) -> str:
-    """Cached: polled replies repeat, and the log decodes thousands a second."""
+    """Cached: polled replies repeat, and the log decodes thousands a second. (Replies
+    come parsed: only a line nobody asked for is parsed here, so the parser loads late.)"""
+    from ..protocol.errors import ProtocolError
+    from ..protocol.messages import decode_frame, parse_response
+
     try:
         return describe_response(parse_response(decode_frame(body)))
     except ProtocolError as exc:

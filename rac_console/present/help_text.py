@@ -13,9 +13,6 @@ from __future__ import annotations
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 
-from ..engine.commands import BUILTIN
-from ..engine.registry import RAW_HELP
-
 
 @dataclass(frozen=True)
 class HelpEntry:
@@ -37,9 +34,6 @@ class HelpSection:
 
 
 KeyGroup = tuple[str, Sequence[tuple[str, str]]]  # ("watch table", [("Space", "Toggle"), ...])
-
-#: The help's line for Tab and Shift+Tab in a pane (one line for both: the same text).
-PANE_KEYS = "Next or previous pane"
 
 #: Key names as printed on the keyboard.
 _KEY_NAMES = {
@@ -102,6 +96,9 @@ _ARROWS = frozenset("←→↑↓")
 
 def command_entries() -> tuple[HelpEntry, ...]:
     """Every command of the registry: usage, summary, example and notes."""
+    from ..engine.commands import BUILTIN
+    from ..engine.registry import RAW_HELP
+
     entries = [
         HelpEntry(
             spec.usage,

@@ -21,10 +21,10 @@ import os
 import time
 from collections.abc import Iterator
 from pathlib import Path
+from typing import TYPE_CHECKING
 
-from ..commands.outcome import ExitStatus, Outcome
-from ..engine.events import Message, Result
-from ..engine.recorder import open_private
+if TYPE_CHECKING:  # the console opens its history before its first paint, without these
+    from ..engine.events import Result
 
 DEFAULT_LIMIT = 1000
 
@@ -101,6 +101,8 @@ class History:
         return None
 
     def _write(self, line: str) -> None:
+        from ..engine.recorder import open_private
+
         try:
             self.path.parent.mkdir(parents=True, exist_ok=True)
             with _locked(self.path):
@@ -115,6 +117,8 @@ class History:
 
     def _trim(self) -> None:
         """Keep the newest ``limit`` lines of the file as it is now (the lock is held)."""
+        from ..engine.recorder import open_private
+
         lines = self._read()
         if len(lines) < 2 * self.limit:
             return
@@ -134,6 +138,9 @@ def is_refused(result: Result) -> bool:
     parse (a word no command has, bad syntax), or a write the target's rules (or the
     user, at a confirm question) refused. A line that failed for the state it met
     (not connected, a timeout) is right, and kept."""
+    from ..commands.outcome import ExitStatus, Outcome
+    from ..engine.events import Message
+
     if any(isinstance(f, Outcome) and f.status == ExitStatus.REFUSED for f in result.feedback):
         return True
     return result.command is None and any(

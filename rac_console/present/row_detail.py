@@ -12,12 +12,16 @@ for the finished text), so it is tested without a screen.
 from __future__ import annotations
 
 from collections.abc import Collection
+from typing import TYPE_CHECKING
 
 from rich.text import Text
 
-from ..engine.events import OK, RowView
+from ..engine.status import OK
 from ..protocol.text import scalar_text, terminal_safe
 from .cells import CHANGED_DARK, ChangeStyle, age_text, type_text
+
+if TYPE_CHECKING:
+    from ..engine.events import RowView
 
 #: Fields a column holds when they do not fit a line each: X Y Z | Rx Ry Rz | Fig.
 GROUP = 3

@@ -13,8 +13,7 @@ from rich.style import Style
 from rich.text import Text
 
 from ..commands.policy import TargetProfile
-from ..commands.profiles import completion_targets
-from ..engine.events import LABEL_WIDTH, Status, shown_label
+from ..engine.status import LABEL_WIDTH, Status, shown_label
 from ..protocol.text import terminal_safe
 
 #: A reply is shown as awaited once it is this late (seconds): quicker ones would flicker.
@@ -93,6 +92,10 @@ def label_text(label: str, width: int = LABEL_WIDTH) -> str:
 def connect_targets(profiles: Mapping[str, TargetProfile]) -> list[tuple[str, str]]:
     """What ``connect`` completes to besides sim: each profile's name, with its label (or
     its address) cut as a label is shown, as the candidate's help."""
+    if not profiles:
+        return []  # no config file: the profiles' rules need not load
+    from ..commands.profiles import completion_targets
+
     return [(name, label_text(about)) for name, about in completion_targets(profiles)]
 
 

@@ -9,13 +9,15 @@ from __future__ import annotations
 import math
 from collections.abc import Iterable, Mapping
 from enum import Enum
+from typing import TYPE_CHECKING
 
-from ..commands.language import VarRef
-from ..engine.events import RowView
+if TYPE_CHECKING:
+    from ..commands.language import VarRef
+    from ..engine.events import RowView
 
 #: A row of a cell's table: its target's name and its variable (``I 10`` on two targets
 #: is two rows).
-RowKey = tuple[str, VarRef]
+RowKey = tuple[str, "VarRef"]
 
 
 def table_key(name: str, var: VarRef, cell: bool) -> str:

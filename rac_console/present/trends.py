@@ -31,11 +31,10 @@ from dataclasses import dataclass, field
 from itertools import islice
 from typing import TYPE_CHECKING, Any
 
-from ..commands.language import VarRef
-from ..protocol.variables import VarKind
-
 if TYPE_CHECKING:  # the store reads a cycle; it needs no engine to be tested
+    from ..commands.language import VarRef
     from ..engine.events import Cycle
+    from ..protocol.variables import VarKind
 
 #: Types with a trend: numbers, IO as 0/1, and each field of V P J T (S has none).
 TREND_KINDS = frozenset({"I", "F", "D", "IO", "V", "P", "J", "T"})

@@ -1,16 +1,19 @@
-"""Plain-text renderings of values and wire bytes, shared by every front end."""
+"""Plain-text renderings of values and wire bytes, shared by every front end.
+
+:func:`terminal_safe` is used everywhere, the console's first paint included: the value
+types and their names load with the first value shown.
+"""
 
 from __future__ import annotations
 
 import difflib
 from collections.abc import Iterable
 from decimal import Decimal
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-from .hresult import describe_hresult
-from .messages import Response
-from .variant import Variant, float_text
-from .vartypes import vt_name
+if TYPE_CHECKING:
+    from .messages import Response
+    from .variant import Variant
 
 CR_MARK = "↵"
 
@@ -87,15 +90,23 @@ def scalar_text(value: Any) -> str:
     if isinstance(value, bool):
         return "true" if value else "false"
     if isinstance(value, float):
+        from .variant import float_text
+
         return float_text(value)
     if isinstance(value, Decimal):
         return format(value.normalize(), "f")
-    if isinstance(value, Variant):
-        return f"({vt_name(value.vt)} {value_text(value)})"
     if value is None:
         return "(empty)"
     if isinstance(value, str):
         return terminal_safe(value)
+    if isinstance(value, int):
+        return str(value)
+    from .variant import Variant  # a value inside a value: rare
+
+    if isinstance(value, Variant):
+        from .vartypes import vt_name
+
+        return f"({vt_name(value.vt)} {value_text(value)})"
     return str(value)
 
 
@@ -108,6 +119,9 @@ def value_text(variant: Variant) -> str:
 
 def describe_response(response: Response) -> str:
     """A reply decoded in one line: ``S_OK  VT_I4  123`` or the HRESULT explained."""
+    from .hresult import describe_hresult
+    from .vartypes import vt_name
+
     if not response.ok:
         return describe_hresult(response.code)
     if response.variant is None:

@@ -4,9 +4,12 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Literal, NamedTuple
+from typing import TYPE_CHECKING, Literal, NamedTuple
 
-from ..protocol import RacError, RequestLine, Response
+from ..protocol.errors import RacError
+
+if TYPE_CHECKING:
+    from ..protocol import RequestLine, Response
 
 DEFAULT_PORT = 5006
 DEFAULT_TIMEOUT = 2.0

@@ -13,10 +13,10 @@ import signal
 import sys
 import time
 from collections import deque
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from contextlib import suppress
 from functools import partial
-from typing import ClassVar
+from typing import TYPE_CHECKING, ClassVar
 
 from rich.text import Text
 from textual import on
@@ -26,47 +26,24 @@ from textual.containers import Horizontal
 from textual.message import Message as TextualMessage
 from textual.reactive import reactive
 from textual.timer import Timer
+from textual.widget import AwaitMount
 from textual.widgets import Input, Static
 from textual.worker import Worker, WorkerState
 
 from .. import __version__
-from ..commands.cells import split_address
-from ..commands.language import Command, Simple, Step, Use, WatchFile
-from ..commands.outcome import Outcome
-from ..engine import (
-    SIMULATOR_NOTICE,
-    Alert,
-    Batch,
-    ConfirmWrite,
-    Cycle,
-    Engine,
-    Feedback,
-    Message,
-    Result,
-    Status,
-    UiStep,
-)
-from ..engine.cell import Cell
-from ..engine.config import config_path
-from ..engine.settings import SettingsFile
-from ..present.banner import cell_banner, live_banner
-from ..present.completion import shown_candidates
+from ..engine.feedback import Message, UiStep
 from ..present.glyphs import ascii_wanted
 from ..present.heap import keep_full_collections_rare
-from ..present.history import History, is_refused
-from ..present.render import echo_text, error_text, notice_text, outcome_text
+from ..present.history import is_refused
 from ..present.status import connect_targets, target_label
-from ..present.type_ahead import may_ask
 from ..protocol.text import counted, terminal_safe
 from .ascii_screen import ascii_driver
 from .cell_state import CellMembers, MemberState
 from .command_line import CommandLine
-from .confirm_screen import ConfirmWriteScreen, border_colour
 from .file_writes import FileWrites
 from .footer import FittingFooter
 from .frame_log import FrameLog, log_filter_line
 from .hangup import HANGUP_STATUS, TerminalWatch
-from .help_screen import key_of
 from .io_panel import IoPanel, WatchArea
 from .log_actions import LogActions
 from .palette import ConsoleCommands, PaletteActions, Providers
@@ -77,6 +54,16 @@ from .status_bar import StatusBar
 from .table_actions import TableActions, toggle
 from .trend_view import TrendView
 from .watch_table import TableFilter, WatchTable, writes_refused
+
+if TYPE_CHECKING:  # what the first paint does not need loads when first used, after it
+    from ..commands.language import Command
+    from ..engine import Engine
+    from ..engine.cell import Cell
+    from ..engine.events import ConfirmWrite, Feedback, Result
+    from ..engine.outbox import Batch
+    from ..engine.settings import SettingsFile
+    from ..engine.status import Status
+    from ..present.history import History
 
 #: Under a flood of frames the screen is brought up to date at most this often; the
 #: drains in between are put off by a one-shot timer, so keys are answered meanwhile.
@@ -219,6 +206,8 @@ class RacConsoleApp(CellMembers, PaletteActions, TableActions, LogActions, App[i
         settings: SettingsFile | None = None,
     ) -> None:
         super().__init__()
+        from ..engine.cell import Cell
+
         #: The console's targets: one engine each (a plain console is a cell of one).
         self.cell = cell if isinstance(cell, Cell) else Cell.of(cell)
         self.states = {member.name: MemberState(member) for member in self.cell.members}
@@ -277,18 +266,18 @@ class RacConsoleApp(CellMembers, PaletteActions, TableActions, LogActions, App[i
         #: The line whose question keys typed ahead must not answer (see CommandLine).
         self._held_seq: int | None = None
         self.terminal_watch: TerminalWatch | None = None  # in a terminal: see hangup.py
+        #: Called once the first screen is painted, before the engine starts (the
+        #: command line's start turns the garbage collector back on there).
+        self.after_first_paint: Callable[[], object] | None = None
+        self._hidden_mounted = False
 
     def compose(self) -> ComposeResult:
+        """What the first screen shows; the panes hidden at start join it later (see
+        :meth:`mount_hidden_panes`)."""
         yield self.status_bar
         yield self.watch_area  # the table and the I/O grid
-        yield self.table_filter
         yield self.frame_log
-        yield self.log_filter
-        yield self.trend_view
-        yield self.row_detail
-        yield self.completions
         yield self.results
-        yield self.hint
         if self.cell_mode:  # the prompt names the target a line without @NAME goes to
             with Horizontal(id="command-row"):
                 yield self.prompt
@@ -299,9 +288,31 @@ class RacConsoleApp(CellMembers, PaletteActions, TableActions, LogActions, App[i
 
     def action_next_target(self) -> None:
         """F8: ``use`` the next target of the cell, as typed."""
+        from ..commands.language import Use
+
         names = self.cell.names
         following = names[(names.index(self.cell.current) + 1) % len(names)]
         self.submit_line(f"use {following}", Use(following))
+
+    def mount_hidden_panes(self) -> list[AwaitMount]:
+        """The panes nobody sees at start (the filter lines, the trend, the detail, the
+        completions, the hint), in their places: mounted once the first screen is
+        painted, which they are not on, or at once by a key that opens one before that.
+        Returns what to await for them to be mounted (nothing once they are)."""
+        if self._hidden_mounted:
+            return []
+        self._hidden_mounted = True
+        return [
+            self.mount(self.table_filter, after=self.watch_area),
+            self.mount(
+                self.log_filter,
+                self.trend_view,
+                self.row_detail,
+                self.completions,
+                after=self.frame_log,
+            ),
+            self.mount(self.hint, after=self.results),
+        ]
 
     async def on_mount(self) -> None:
         self.kept.apply()
@@ -319,7 +330,9 @@ class RacConsoleApp(CellMembers, PaletteActions, TableActions, LogActions, App[i
             self.refresh_table()
             self.run_worker(self._start_after_first_paint(), name="engine start")
             return
-        await self._start_engine()  # no screen to paint first: as the tests see it
+        for mounting in self.mount_hidden_panes():  # no screen to paint first: as the
+            await mounting  # tests see it, every pane is there before the engine starts
+        await self._start_engine()
 
     def _watch_terminal(self) -> None:
         """The console ends when its terminal goes: a SIGHUP (a controlling terminal
@@ -348,6 +361,9 @@ class RacConsoleApp(CellMembers, PaletteActions, TableActions, LogActions, App[i
         self.call_after_refresh(painted.set)
         with suppress(TimeoutError):
             await asyncio.wait_for(painted.wait(), FIRST_PAINT_WAIT)
+        self.mount_hidden_panes()
+        if self.after_first_paint is not None:
+            self.after_first_paint()
         await self._start_engine()
 
     async def _start_engine(self) -> None:
@@ -358,6 +374,8 @@ class RacConsoleApp(CellMembers, PaletteActions, TableActions, LogActions, App[i
         self._welcome()
         self.kept.say_problems()
         if self.watch_file:
+            from ..commands.language import WatchFile
+
             self.engine.submit_command(WatchFile("load", self.watch_file))
         # The one timer left: nothing comes from the engine while a reply, a retry or a
         # typed line is waited for, or while polling is paused, yet their clocks and the
@@ -385,6 +403,10 @@ class RacConsoleApp(CellMembers, PaletteActions, TableActions, LogActions, App[i
         return status
 
     def _welcome(self) -> None:
+        from ..engine import SIMULATOR_NOTICE
+        from ..present.banner import cell_banner, live_banner
+        from .help_screen import key_of
+
         results = self.results
         status = self.status
         if self.cell_mode:
@@ -497,6 +519,8 @@ class RacConsoleApp(CellMembers, PaletteActions, TableActions, LogActions, App[i
             self.forget_rows(batch.removed - batch.rows.keys(), state.name)
             state.removed -= batch.rows.keys()
         name = state.name if state is not None and self.cell_mode else None
+        if batch.events:  # none before the engines start: the first paint loads no event
+            from ..engine.events import Alert, ConfirmWrite, Cycle, Result
         for event in batch.events:
             if isinstance(event, Result):
                 if event.line is not None:  # a typed line: kept by the history unless refused
@@ -528,6 +552,8 @@ class RacConsoleApp(CellMembers, PaletteActions, TableActions, LogActions, App[i
                 )
                 if n
             ]
+            from ..engine.events import Alert
+
             self.frame_log.add(Alert(f"{' and '.join(lost)} not shown: the screen fell behind"))
 
     def _take_status(self, state: MemberState, status: Status) -> None:
@@ -606,6 +632,9 @@ class RacConsoleApp(CellMembers, PaletteActions, TableActions, LogActions, App[i
         """Whether this line, run now, may stop to ask before it writes: a write on a
         ``confirm`` target with nothing running before it (a write queued behind a
         long wait must not hold the keys typed meanwhile)."""
+        from ..commands.cells import split_address
+        from ..present.type_ahead import may_ask
+
         name, _ = split_address(line) if line.lstrip().startswith("@") else (None, line)
         status = self.state_of(name).status
         return (
@@ -694,6 +723,8 @@ class RacConsoleApp(CellMembers, PaletteActions, TableActions, LogActions, App[i
         if selected:
             self.copy_to_clipboard(selected)
             return
+        from .help_screen import key_of
+
         quit_key = key_of(type(self), "quit") or "Ctrl+Q"
         self.notify(
             f"Nothing is running to cancel. {quit_key} quits.",
@@ -704,6 +735,8 @@ class RacConsoleApp(CellMembers, PaletteActions, TableActions, LogActions, App[i
     def _show_result(self, result: Result, target: str | None = None) -> None:
         """The line echoed, then what came of it; in a cell, after the target it ran
         on (``robotB › put I 10 5``: an ``@robotB`` is said by the name)."""
+        from ..present.render import echo_text
+
         if result.line is not None:
             self.results.write(echo_text(result.line, target))
         for feedback in result.feedback:
@@ -711,7 +744,10 @@ class RacConsoleApp(CellMembers, PaletteActions, TableActions, LogActions, App[i
 
     @on(CommandLine.Completions)
     def list_completions(self, event: CommandLine.Completions) -> None:
+        from ..present.completion import shown_candidates
+
         shown, more = shown_candidates(event.candidates)
+        self.mount_hidden_panes()
         width = max(len(c.text) for c in shown)
         text = Text()
         for n, candidate in enumerate(shown):
@@ -736,12 +772,16 @@ class RacConsoleApp(CellMembers, PaletteActions, TableActions, LogActions, App[i
         if event.value != self.command_line.value:
             return  # made for a line already changed
         if event.text:
+            self.mount_hidden_panes()
             self.hint.update(Text.assemble(("needs: ", "dim"), (event.text, "italic")))
             self.hint.add_class("-visible")
         else:
             self.hint.remove_class("-visible")
 
     def show(self, feedback: Feedback) -> None:
+        from ..commands.outcome import Outcome
+        from ..present.render import error_text, notice_text, outcome_text
+
         results = self.results
         if isinstance(feedback, Outcome):
             if feedback.ok:
@@ -768,6 +808,8 @@ class RacConsoleApp(CellMembers, PaletteActions, TableActions, LogActions, App[i
     # -------------------------------------------------------------- actions
 
     def action_toggle_polling(self, _shown: str = "") -> None:
+        from ..commands.language import Simple, Step
+
         paused = not (self.status is not None and self.status.paused)
         for name in self.cell.names:  # in a cell: every target's polls
             self.cell.submit_command(Simple(Step.PAUSE if paused else Step.RESUME), None, name)
@@ -810,6 +852,8 @@ class RacConsoleApp(CellMembers, PaletteActions, TableActions, LogActions, App[i
 
     def _close_question(self, seq: int) -> None:
         """A write that ended (a cancel came before its answer) asks nothing any more."""
+        from .confirm_screen import ConfirmWriteScreen
+
         screen = self.screen
         if isinstance(screen, ConfirmWriteScreen) and screen.question.seq == seq:
             screen.dismiss(False)
@@ -818,6 +862,8 @@ class RacConsoleApp(CellMembers, PaletteActions, TableActions, LogActions, App[i
         """A write on a ``confirm`` target asks first: old → new, ``[y/N]``, default No;
         the engine polls on until the answer, then the focus is back where it was (a
         table row or a grid bit: the next Space toggles the next one)."""
+        from .confirm_screen import ConfirmWriteScreen
+
         state = self.state_of(target)
         colour = state.status.colour if state.status is not None else state.colour
         held = question.seq == self._held_seq
@@ -841,7 +887,11 @@ class RacConsoleApp(CellMembers, PaletteActions, TableActions, LogActions, App[i
         screen = self.screen_stack[0]
         label = target_label(status)
         screen.set_class(label is not None, "-profile")
-        colour = border_colour(status.colour) if label is not None else None
+        colour = None
+        if label is not None:
+            from .confirm_screen import border_colour
+
+            colour = border_colour(status.colour)
         if colour is not None:
             screen.styles.border = ("heavy", colour)
         else:
@@ -862,13 +912,20 @@ def run_console(
     history: History,
     watch_file: str | None,
     profile_names: Sequence[str] = (),
+    after_first_paint: Callable[[], object] | None = None,
 ) -> int:
     """The console on a cell (one target: the console as it always was; an engine is
     taken as a cell of one); ``profile_names`` are the config file's targets (the
-    palette's ``connect NAME`` entries)."""
+    palette's ``connect NAME`` entries); ``after_first_paint`` is called once its first
+    screen is painted. Its settings are read here, before the app runs its loop."""
+    from ..engine.config import config_path
+    from ..engine.settings import SettingsFile
+
     app = RacConsoleApp(
         cell, history, watch_file, profile_names, settings=SettingsFile(config_path())
     )
+    app.kept.load(app.available_themes)
+    app.after_first_paint = after_first_paint
     if ascii_wanted():  # RAC_CONSOLE_ASCII=1, or Windows' old console host
         app.driver_class = ascii_driver(app.driver_class)
     keep_full_collections_rare()  # the start-up's objects frozen: no key waits on a full pass

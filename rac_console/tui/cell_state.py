@@ -4,18 +4,21 @@ trend samples and the toggles under way, by target name (a cell of one holds one
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 from rich.text import Text
 from textual.widgets import Static
 
-from ..commands.language import VarRef
-from ..engine import Engine, RowView, Status
-from ..engine.cell import Cell, Member
 from ..present.cell_status import Badge
-from ..present.row_actions import PendingToggles
 from ..present.table_rows import RowKey
+from ..present.toggles import PendingToggles
 from ..present.trends import TrendStore
 from ..protocol.text import terminal_safe
+
+if TYPE_CHECKING:  # the first paint loads no engine module
+    from ..commands.language import VarRef
+    from ..engine import Engine, RowView, Status
+    from ..engine.cell import Cell, Member
 
 
 @dataclass

@@ -1,9 +1,13 @@
-"""The command line: history on Up/Down, Tab completion, grey argument hints."""
+"""The command line: history on Up/Down, Tab completion, grey argument hints.
+
+Completion and hints read the command registry, loaded at the first key that needs
+them: the console paints its command line before any command is loaded.
+"""
 
 from __future__ import annotations
 
 from collections.abc import Callable, Iterable
-from typing import ClassVar
+from typing import TYPE_CHECKING, ClassVar
 
 from textual import events
 from textual.binding import Binding, BindingType
@@ -11,9 +15,11 @@ from textual.message import Message
 from textual.suggester import Suggester
 from textual.widgets import Input
 
-from ..present.completion import Candidate, common_prefix, complete, hint
-from ..present.history import History
 from .compat import input_suggestion, key_bindings
+
+if TYPE_CHECKING:
+    from ..present.completion import Candidate
+    from ..present.history import History
 
 
 class HintSuggester(Suggester):
@@ -30,6 +36,8 @@ class HintSuggester(Suggester):
         self._show_hint = show_hint
 
     async def get_suggestion(self, value: str) -> str | None:
+        from ..present.completion import hint
+
         needs = hint(value)
         entry = self._history.suggest(value)  # never a line refused in this session
         if entry is not None:
@@ -273,6 +281,8 @@ class CommandLine(Input):
         self.post_message(self.Entered(line, held=holds))
 
     def action_cursor_right(self, select: bool = False) -> None:
+        from ..present.completion import hint
+
         needs = hint(self.value)
         if self.cursor_at_end and needs and input_suggestion(self) == self.value + needs:
             return  # an argument hint describes, it is not text to insert
@@ -298,6 +308,8 @@ class CommandLine(Input):
         self.cursor_position = len(self.value)
 
     def action_complete(self) -> None:
+        from ..present.completion import common_prefix, complete
+
         text = self.value[: self.cursor_position]
         candidates = complete(text, self._seen(), self.targets, cell=self.cell)
         if not candidates:

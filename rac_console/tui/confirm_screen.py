@@ -53,6 +53,7 @@ class ConfirmWriteScreen(ModalScreen[bool]):
     """Dismissed with True only for y (or Yes clicked) once the guard time is over."""
 
     AUTO_FOCUS = None  # nothing here takes the focus: keys come to the screen
+    CSS_PATH = "confirm_screen.tcss"
 
     def __init__(
         self, question: ConfirmWrite, colour: str | None = None, member: str | None = None

@@ -20,7 +20,7 @@ import re
 import time
 from collections import deque
 from operator import itemgetter
-from typing import ClassVar
+from typing import TYPE_CHECKING, ClassVar
 
 from rich.cells import cell_len
 from rich.highlighter import Highlighter
@@ -28,14 +28,16 @@ from rich.text import Text
 from textual.binding import Binding, BindingType
 from textual.message import Message as TextualMessage
 
-from ..engine import Alert, Note
 from ..present.filtering import FrameFilter, add_filter_title
 from ..present.frames import clock_text, frame_body, gap_text, hex_text
 from ..protocol.text import counted, terminal_safe
-from ..session import Frame
+from ..session.types import Frame
 from .compat import InlineWidthLog, forget_drawn_lines
 from .filter_line import FilterLine
 from .pane_keys import pane_bindings
+
+if TYPE_CHECKING:
+    from ..engine.events import Alert, Note
 
 MAX_LINES = 5000
 MAX_PENDING = 50_000
@@ -239,6 +241,8 @@ class FrameLog(InlineWidthLog):
                 self._origin[id(event)] = terminal_safe(target)
             self._pending.append(event)
             return
+        from ..engine.events import Note  # notes and alerts are few: loaded with the first
+
         text = event.text if target is None else f"{target}: {event.text}"
         when = event.time if isinstance(event, Note) else time.time()
         self._pending.append((when, text))

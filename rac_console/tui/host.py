@@ -8,28 +8,29 @@ imports them, and no import goes back (``lint-imports`` keeps ``tui/`` free of c
 from __future__ import annotations
 
 from collections.abc import Callable, Iterable, Mapping
-from typing import Any, Protocol, cast
+from typing import TYPE_CHECKING, Any, Protocol, cast
 
 from textual.app import App, SystemCommand
 from textual.screen import Screen
 from textual.timer import Timer
 from textual.widget import Widget
 
-from ..commands.language import Command
-from ..commands.policy import TargetProfile
-from ..engine import Engine, Feedback, Status
-from ..engine.cell import Cell
-from ..present.row_actions import PendingToggles
-from ..present.trends import TrendStore
-from .cell_state import MemberState
-from .command_line import CommandLine
-from .file_writes import FileWrites
-from .filter_line import FilterLine
-from .frame_log import FrameLog
-from .io_panel import IoPanel
-from .row_detail import RowDetail
-from .trend_view import TrendView
-from .watch_table import TableFilter, WatchTable
+if TYPE_CHECKING:  # for the type checker only: the parts import this module
+    from ..commands.language import Command
+    from ..commands.policy import TargetProfile
+    from ..engine import Engine, Feedback, Status
+    from ..engine.cell import Cell
+    from ..present.toggles import PendingToggles
+    from ..present.trends import TrendStore
+    from .cell_state import MemberState
+    from .command_line import CommandLine
+    from .file_writes import FileWrites
+    from .filter_line import FilterLine
+    from .frame_log import FrameLog
+    from .io_panel import IoPanel
+    from .row_detail import RowDetail
+    from .trend_view import TrendView
+    from .watch_table import TableFilter, WatchTable
 
 
 class ConsoleHost(Protocol):
@@ -120,6 +121,8 @@ class ConsoleHost(Protocol):
     def action_toggle_detail(self) -> None: ...
     def action_help(self) -> None: ...
     def put_on_command_line(self, text: str) -> None: ...
+    def mount_hidden_panes(self) -> list[Any]:
+        """The panes hidden at start, mounted (before one of them opens)."""
 
 
 def host_of(app: App[Any]) -> ConsoleHost:

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable, Mapping
-from typing import ClassVar
+from typing import TYPE_CHECKING, ClassVar
 
 from rich.text import Text
 from textual import events
@@ -22,19 +22,27 @@ from textual.message import Message
 from textual.widget import Widget
 from textual.widgets import DataTable, Static
 
-from ..commands.language import VarRef
-from ..engine import RowView
 from ..present.cells import change_style
-from ..present.iogrid import Grid, build_grid, widths_wanted
-from ..protocol import kind_of
 from ..protocol.text import terminal_safe
+
+if TYPE_CHECKING:  # the grid is hidden until F5: its modules load when it first shows
+    from ..commands.language import VarRef
+    from ..engine.events import RowView
+    from ..present.iogrid import Grid
 
 #: From this many columns the panel sits beside the table; below, under it.
 WIDE_COLUMNS = 160
 
-IO = kind_of("IO")
 TITLE = "I/O (word: bit 0 = lowest index)"
 EMPTY_TEXT = Text("No IO bits watched: try watch IO 128-143", style="dim", end="")
+
+
+def _io(index: int) -> VarRef:
+    """Bit ``index`` of the IO variables, as the rows are keyed."""
+    from ..commands.language import VarRef
+    from ..protocol.variables import kind_of
+
+    return VarRef(kind_of("IO"), index)
 
 
 def state_word(row: RowView) -> str:
@@ -128,6 +136,8 @@ class IoPanel(VerticalScroll, can_focus=True):
 
     def widths_wanted(self) -> tuple[int, int]:
         """The panel's width for its grid at its best without labels, and with them."""
+        from ..present.iogrid import widths_wanted
+
         plain, labelled = widths_wanted(self._rows)
         if not plain:
             plain = labelled = EMPTY_TEXT.cell_len
@@ -155,13 +165,17 @@ class IoPanel(VerticalScroll, can_focus=True):
             self._draw(now)
 
     def _draw(self, now: float) -> None:
+        from ..present.iogrid import build_grid
+        from ..protocol.variables import kind_of
+
         rows = self._rows
+        io = kind_of("IO")
         grid = build_grid(
             rows,
             now,
             self.scrollable_content_region.width,
             self.cursor if self.has_focus else None,
-            frozenset(var.index for var in rows if var.kind is IO and self._busy(var)),
+            frozenset(var.index for var in rows if var.kind is io and self._busy(var)),
             change_style(self.app.current_theme.dark),  # legible on a light theme too
         )
         self.grid = grid
@@ -175,7 +189,7 @@ class IoPanel(VerticalScroll, can_focus=True):
         """The bit under the cursor, its state and its label in the bottom border: said
         in words there however narrow the cells are (the cursor's colour is its own)."""
         subtitle = Text()
-        row = self._rows.get(VarRef(IO, self.cursor)) if self.cursor is not None else None
+        row = self._rows.get(_io(self.cursor)) if self.cursor is not None else None
         if self.has_focus and self.cursor is not None:
             subtitle.append(f"IO {self.cursor}")
             if row is None:
@@ -229,7 +243,7 @@ class IoPanel(VerticalScroll, can_focus=True):
         index = self.cursor
         if index is None or not self.has_focus:
             return
-        row = self._rows.get(VarRef(IO, index))
+        row = self._rows.get(_io(index))
         if row is None:
             self.notify(f"IO {index} is not watched: nothing to toggle", severity="warning")
             return

@@ -2,8 +2,12 @@
 
 from __future__ import annotations
 
-from ..engine import Message
-from .host import ConsoleHost
+from typing import TYPE_CHECKING
+
+from ..engine.feedback import Message
+
+if TYPE_CHECKING:
+    from .host import ConsoleHost
 
 
 class LogActions:
@@ -39,4 +43,5 @@ class LogActions:
 
     def action_filter_frames(self: ConsoleHost) -> None:
         """``/`` in the frame log: its filter line, with the filter as it is."""
+        self.mount_hidden_panes()
         self.log_filter.open()

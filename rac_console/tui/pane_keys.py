@@ -4,7 +4,8 @@ from __future__ import annotations
 
 from textual.binding import Binding
 
-from ..present.help_text import PANE_KEYS
+#: The help's line for Tab and Shift+Tab in a pane (one line for both: the same text).
+PANE_KEYS = "Next or previous pane"
 
 
 def pane_bindings(pane: str) -> list[Binding]:

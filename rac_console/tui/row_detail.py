@@ -9,14 +9,18 @@ focus, so the arrows keep moving the table's cursor while it shows.
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 from rich.text import Span, Text
 from textual import events
 from textual.widgets import Static
 
-from ..commands.language import VarRef
-from ..engine import RowView
 from ..present.cells import HIGHLIGHT_SECONDS, change_style
 from ..present.row_detail import detail_fields, detail_text, header_text
+
+if TYPE_CHECKING:
+    from ..commands.language import VarRef
+    from ..engine.events import RowView
 
 EMPTY_TEXT = Text("No rows: watch P 0 adds one; d on a row shows it here", style="dim")
 SUBTITLE = "d closes · ↑↓ in the table: another row"

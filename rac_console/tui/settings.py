@@ -7,7 +7,9 @@ last change (a burst of key presses is one write), and once more as the console 
 It writes only the keys changed in this session, reading the file afresh each time, so
 two consoles or an editor open on the same file lose nothing of each other's. Nothing
 is saved while the palette is open (the theme picker previews each theme it passes).
-The file is written by the console's file-writing thread, never on the screen's loop.
+The file is written by the console's file-writing thread, never on the screen's loop,
+and read before the app runs (:meth:`SettingsKeeper.load`): the first paint is in the
+theme saved, and no file is read on the screen's loop.
 
 A problem is one line in the results, said once: a bad value at start (ignored, left in
 the file), a file that cannot be written (the session goes on, its settings unsaved).
@@ -16,17 +18,21 @@ the file), a file that cannot be written (the session goes on, its settings unsa
 from __future__ import annotations
 
 from asyncio import Future
+from collections.abc import Collection
 from functools import partial
+from typing import TYPE_CHECKING
 
 from textual.app import ScreenStackError
 from textual.command import CommandPalette
 from textual.timer import Timer
 
-from ..commands.settings import Value
-from ..engine import Message
-from ..engine.settings import SettingsFile
-from ..protocol import InputError
-from .host import ConsoleHost
+from ..engine.feedback import Message
+from ..protocol.errors import InputError
+
+if TYPE_CHECKING:
+    from ..commands.settings import Value
+    from ..engine.settings import LoadedSettings, SettingsFile
+    from .host import ConsoleHost
 
 #: Seconds after the last change that the settings are saved.
 SAVE_AFTER = 0.5
@@ -43,6 +49,18 @@ class SettingsKeeper:
         self._said = False  # a failure already said
         self._problems: list[str] = []
         self._due: Timer | None = None  # the save after the last change
+        self._loaded: LoadedSettings | None = None  # read by load(), applied by apply()
+
+    def load(self, themes: Collection[str]) -> None:
+        """Read the file now (before the app runs: no file is read on its loop); a
+        problem is kept to be said once the console has started."""
+        if self.store is None:
+            return
+        try:
+            self._loaded = self.store.load(themes)
+        except InputError as exc:
+            self._problems = [f"settings not read, and not saved this session: {exc}"]
+            self.store = None  # a file the console cannot read, it does not write
 
     def current(self) -> dict[str, Value]:
         """The settings as the console shows them now."""
@@ -58,16 +76,14 @@ class SettingsKeeper:
         }
 
     def apply(self) -> None:
-        """Read the file and apply what it holds (at mount, before anything is drawn);
-        then watch for changes. Problems are said by :meth:`say_problems`."""
-        if self.store is None:
-            return
+        """Apply what the file holds (at mount, before anything is drawn; read here if
+        :meth:`load` was not called); then watch for changes. Problems are said by
+        :meth:`say_problems`."""
         host = self.host
-        try:
-            loaded = self.store.load(host.available_themes)
-        except InputError as exc:
-            self._problems = [f"settings not read, and not saved this session: {exc}"]
-            self.store = None  # a file the console cannot read, it does not write
+        if self._loaded is None:
+            self.load(host.available_themes)
+        loaded, self._loaded = self._loaded, None
+        if self.store is None or loaded is None:
             return
         values = dict(loaded.values)
         self._problems = list(loaded.problems)

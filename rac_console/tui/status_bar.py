@@ -3,13 +3,17 @@ the widget's width: whole fields, built again when the width changes."""
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 from rich.text import Text
 from textual import events
 from textual.widgets import Static
 
-from ..engine.events import Status
 from ..present.cell_status import Badge, cell_status_text
 from ..present.status import status_text
+
+if TYPE_CHECKING:
+    from ..engine.status import Status
 
 
 class StatusBar(Static):

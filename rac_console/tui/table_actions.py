@@ -12,19 +12,23 @@ command line is never sent without the user's own Enter.
 from __future__ import annotations
 
 import time
+from typing import TYPE_CHECKING
 
 from textual.widget import Widget
 from textual.widgets import DataTable
 
-from ..commands.language import Unwatch, VarRef
-from ..engine import Cycle, Message, Result, RowView, Status
-from ..present.row_actions import put_line, toggle_command
+from ..engine.feedback import Message
 from ..present.trends import has_trend
 from ..protocol.text import terminal_safe
 from .filter_line import FilterLine, focus_now
-from .host import ConsoleHost
 from .trend_view import TrendView
 from .watch_table import WatchTable, writes_refused
+
+if TYPE_CHECKING:
+    from ..commands.language import VarRef
+    from ..engine.events import Cycle, Result, RowView
+    from ..engine.status import Status
+    from .host import ConsoleHost
 
 #: The command line's placeholder: examples that work on the target.
 PLACEHOLDER = "get P 1 · put IO 20 on · watch IO 0-7 · help"
@@ -72,6 +76,7 @@ class TableActions:
     def on_watch_table_row_action(self: ConsoleHost, event: WatchTable.RowAction) -> None:
         row = event.row
         if event.action == "filter":
+            self.mount_hidden_panes()
             self.table_filter.value = self.table.filter_text
             self.table_filter.open()
         elif row is None:
@@ -81,6 +86,8 @@ class TableActions:
         elif event.action == "toggle":
             toggle(self, row, event.target)
         elif event.action == "unwatch":
+            from ..commands.language import Unwatch
+
             shown = addressed(self, event.target, f"unwatch {row.var.kind.code} {row.var.index}")
             self.submit_line(shown, Unwatch((row.var,)), event.target or None)
         elif event.action in ("trend", "overlay") and not has_trend(row.var.kind):
@@ -135,6 +142,7 @@ class TableActions:
         if detail.is_open:
             close_detail(self)
             return
+        self.mount_hidden_panes()
         if self.trend_view.has_class("-open"):
             close_trend(self)
         detail.add_class("-open")
@@ -187,6 +195,8 @@ def addressed(host: ConsoleHost, target: str, line: str) -> str:
 
 def put_on_line(host: ConsoleHost, row: RowView, target: str = "") -> None:
     """``p`` on a row: a ``put`` of its value on the command line, to edit and enter."""
+    from ..present.row_actions import put_line
+
     line = put_line(row.var, row.variant)
     if line.problem:
         host.show(Message(line.problem, "error"))
@@ -204,6 +214,8 @@ def toggle(host: ConsoleHost, row: RowView, target: str = "") -> None:
     While the row has not shown the effect of the last toggle, another Space is
     refused: it would toggle from a value already being replaced.
     """
+    from ..present.row_actions import toggle_command
+
     var = row.var
     toggled = toggle_command(var, row.variant)
     if toggled is None:
@@ -245,6 +257,7 @@ def open_trend(host: ConsoleHost, row: RowView, target: str = "") -> None:
     if view.has_class("-open") and view.var == row.var and view.target == target:
         close_trend(host)
         return
+    host.mount_hidden_panes()
     if host.row_detail.is_open:
         close_detail(host)  # the same place: one at a time
     field = host.table.field_of((target, row.var))

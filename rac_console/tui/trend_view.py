@@ -13,7 +13,7 @@ fast-toggling bit is never drawn steady) is in :mod:`rac_console.present.trends`
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import ClassVar
+from typing import TYPE_CHECKING, ClassVar
 
 from rich.text import Text
 from textual.app import ComposeResult
@@ -23,17 +23,12 @@ from textual.message import Message
 from textual.widget import Widget
 from textual.widgets import Static
 
-from ..commands.language import VarRef
-from ..present.trends import (
-    TrendStore,
-    Window,
-    bar_lines,
-    bin_window,
-    field_labels,
-    number_text,
-    span_text,
-)
+from ..present.trends import bar_lines, bin_window, field_labels, number_text, span_text
 from .pane_keys import pane_bindings
+
+if TYPE_CHECKING:
+    from ..commands.language import VarRef
+    from ..present.trends import TrendStore, Window
 
 #: The windows `w` steps through, in seconds (the store reaches back 5 minutes).
 WINDOWS = (10.0, 60.0, 300.0)

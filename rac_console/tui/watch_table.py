@@ -13,7 +13,7 @@ from __future__ import annotations
 import itertools
 from collections.abc import Callable, Mapping, Sequence
 from itertools import islice
-from typing import ClassVar
+from typing import TYPE_CHECKING, ClassVar
 
 from rich.text import Text
 from textual import events
@@ -22,16 +22,20 @@ from textual.message import Message
 from textual.reactive import reactive
 from textual.widgets import DataTable
 
-from ..commands.language import VarRef
-from ..engine import RowView, Status
 from ..present.cells import age_text, change_style, status_cell, type_text, value_cell
 from ..present.filtering import add_filter_title, needle_of
 from ..present.status import label_style
 from ..present.table_rows import RowKey, SortMode, ordered_keys, table_key
-from ..present.trends import TrendStore, field_labels, has_trend, sparkline_text
+from ..present.trends import field_labels, has_trend, sparkline_text
 from ..protocol.text import terminal_safe
 from .filter_line import FilterLine
 from .pane_keys import pane_bindings
+
+if TYPE_CHECKING:
+    from ..commands.language import VarRef
+    from ..engine.events import RowView
+    from ..engine.status import Status
+    from ..present.trends import TrendStore
 
 #: Status, age and trend before the value, so they stay in view when a long P or J
 #: value is cut off on a narrow terminal.
@@ -215,7 +219,8 @@ class WatchTable(DataTable[object]):
 
     def on_mount(self) -> None:
         for key, label in self.columns_shown:
-            self.add_column(label, key=key)
+            # As Text: a str label is read as markup, which loads Rich's emoji table.
+            self.add_column(Text(label), key=key)
         self._update_title()
         self.show_cursor = False
 
