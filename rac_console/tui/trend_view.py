@@ -98,7 +98,7 @@ class TrendBars(Widget):
 
 
 #: One series of an overlay: its name as shown, its window, its scale.
-Lane = tuple[str, Window, tuple[float | None, float | None]]
+Lane = tuple[str, "Window", tuple[float | None, float | None]]
 
 
 def lane_lines(lanes: tuple[Lane, ...], width: int, height: int) -> list[str]:
@@ -120,7 +120,7 @@ def lane_lines(lanes: tuple[Lane, ...], width: int, height: int) -> list[str]:
 
 
 #: A series of the view: its target (a cell's member), its variable, its label.
-Series = tuple[str, VarRef, str]
+Series = tuple[str, "VarRef", str]
 
 
 class TrendView(Vertical, can_focus=True):
