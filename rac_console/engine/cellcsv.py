@@ -64,9 +64,12 @@ class CellCsv:
 
     @property
     def path(self) -> str | None:
-        """Where rows go (or will, once every target has polled); None: not logging."""
-        log = self.log
-        return log.path if log is not None else self.pending
+        """Where rows go (or will, once every target has polled); None: not logging.
+        Read under the lock: another target's thread may be starting the log, between
+        its pending path and its log (a cycle that read None there lost its row)."""
+        with self._lock:
+            log = self.log
+            return log.path if log is not None else self.pending
 
     def waiting_for(self) -> list[str]:
         """The targets whose first poll cycle the log still waits for."""
