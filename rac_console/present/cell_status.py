@@ -11,13 +11,16 @@ from __future__ import annotations
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 from rich.style import Style
 from rich.text import Text
 
-from ..engine.events import Status
 from ..protocol.text import terminal_safe
 from .status import CANNOT_CONNECT, RUNNING_SHOWN_AFTER, RUNNING_STYLE, label_style
+
+if TYPE_CHECKING:
+    from ..engine.status import Status
 
 SEPARATOR = " │ "
 #: Names are cut to this many cells when the line is still too wide.
