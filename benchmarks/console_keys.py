@@ -155,7 +155,12 @@ def type_line(control: Control, name: str, line: str) -> None:
     control.command(f"send-keys -t {name} Enter")
 
 
-def start_console(control: Control, socket: str, console: Console, port: int, home: Path) -> None:
+def start_console(
+    control: Control, socket: str, console: Console, port: int, home: Path, cell: list[int]
+) -> None:
+    """The console in tmux, watching 200 rows at interval 0: on one target at ``port``,
+    or with ``cell`` (more ports) on a cell of them, the 200 rows shared out."""
+    names = [f"127.0.0.1:{p}" for p in (port, *cell)] if cell else []
     env = {
         "HOME": home,
         "XDG_CONFIG_HOME": home,
@@ -165,7 +170,8 @@ def start_console(control: Control, socket: str, console: Console, port: int, ho
     command = (
         f"cd {shlex.quote(str(console.package))} && exec env -u COLUMNS -u LINES "
         + " ".join(f"{k}={shlex.quote(str(v))}" for k, v in env.items())
-        + f" {shlex.quote(sys.executable)} -m rac_console -H 127.0.0.1 -p {port}"
+        + f" {shlex.quote(sys.executable)} -m rac_console "
+        + (f"-H 127.0.0.1 -p {port}" if not cell else "-H " + ",".join(names))
         + f" --history {shlex.quote(str(home / 'history'))}"
     )
     subprocess.run(
@@ -174,11 +180,20 @@ def start_console(control: Control, socket: str, console: Console, port: int, ho
         check=True,
     )  # fmt: skip
     console.pid = int(screen_value(control, console.name, "#{pane_pid}"))
-    wait_for(control, console.name, "type help")  # the welcome: the engine runs
-    type_line(control, console.name, "watch I 0-199")
-    wait_for(control, console.name, "200 rows")
-    type_line(control, console.name, "interval 0")
-    wait_for(control, console.name, "polls/s")
+    if not cell:
+        wait_for(control, console.name, "type help")  # the welcome: the engine runs
+        type_line(control, console.name, "watch I 0-199")
+        wait_for(control, console.name, "200 rows")
+        type_line(control, console.name, "interval 0")
+        wait_for(control, console.name, "polls/s")
+    else:
+        wait_for(control, console.name, "Next target")  # the cell's console runs
+        share = 200 // len(names)
+        for name in names:
+            type_line(control, console.name, f"@{name} watch I 0-{share - 1}")
+        wait_for(control, console.name, f"{share * len(names)} rows")
+        for name in names:
+            type_line(control, console.name, f"@{name} interval 0")
     before = received_bytes(console.pid)
     time.sleep(1.0)
     if received_bytes(console.pid) <= before:
@@ -282,6 +297,13 @@ def main() -> None:
         help="another checkout's console, measured beside this one's (repeatable)",
     )
     parser.add_argument("--json", metavar="FILE")
+    parser.add_argument(
+        "--cell",
+        type=int,
+        default=1,
+        metavar="N",
+        help="the console on a cell of N targets (a C responder each), the 200 rows shared",
+    )
     args = parser.parse_args()
 
     socket = f"rac-keys-{os.getpid()}"
@@ -292,6 +314,7 @@ def main() -> None:
     load_before = loadavg()
     programs = CPrograms()
     server: Server | None = None
+    more: list[Server] = []
     control: Control | None = None
     session_rates: list[float] = []
     session_cpu: list[float] = []
@@ -302,12 +325,16 @@ def main() -> None:
             else:
                 server, what = SimServer(), "rac-console sim (no C compiler)"
             port = server.port
+            more = [start_responder(programs)[0] for _ in range(args.cell - 1)]
+            cell = [extra.port for extra in more]
             print(f"against the {what} on 127.0.0.1:{port}; load {load_before}", flush=True)
+            if cell:
+                print(f"a cell of {args.cell} targets, the 200 rows shared", flush=True)
             control = Control(socket)
             for console in consoles:
                 home = Path(tmp) / console.name
                 home.mkdir()
-                start_console(control, socket, console, port, home)
+                start_console(control, socket, console, port, home, cell)
                 os.kill(console.pid, signal.SIGSTOP)
             sides: list[Console | None] = [None, *consoles]  # None: the session client
             for n in range(args.rounds):
@@ -334,6 +361,8 @@ def main() -> None:
                         os.kill(console.pid, signal.SIGKILL)  # gone with its terminal, or now
             if server is not None:
                 server.stop()
+            for extra in more:
+                extra.stop()
             programs.cleanup()
 
     session = statistics.median(session_rates)
