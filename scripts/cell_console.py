@@ -17,7 +17,7 @@ from pathlib import Path
 from rac_console.commands.policy import TargetProfile, WritePolicy, Writes
 from rac_console.commands.target import Target
 from rac_console.engine.cell import Cell
-from rac_console.engine.engine import EngineOptions
+from rac_console.engine.options import EngineOptions
 from rac_console.engine.registry import Where
 from rac_console.present.history import History
 from rac_console.sim.cell import SimulatedCellThread

@@ -16,7 +16,7 @@ from rac_console.commands.policy import TargetProfile, WritePolicy, Writes, pars
 from rac_console.commands.target import Target
 from rac_console.engine import Engine
 from rac_console.engine.cell import Cell
-from rac_console.engine.engine import EngineOptions
+from rac_console.engine.options import EngineOptions
 from rac_console.present.history import History
 from rac_console.sim.cell import SimulatedCellThread
 from rac_console.sim.thread import SimulatorThread

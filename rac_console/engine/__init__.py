@@ -25,7 +25,7 @@ from typing import TYPE_CHECKING
 from ..lazy import exports
 
 if TYPE_CHECKING:
-    from .engine import DEFAULT_INTERVAL, SIMULATOR_NOTICE, Engine, EngineOptions
+    from .engine import SIMULATOR_NOTICE, Engine
     from .events import (
         CONFIRM_GUARD_SECONDS,
         Alert,
@@ -38,13 +38,15 @@ if TYPE_CHECKING:
         RowView,
     )
     from .feedback import Message, UiStep
+    from .options import DEFAULT_INTERVAL, EngineOptions
     from .outbox import Batch, Outbox
     from .status import Status
 
 #: Where each name lives: imported when first used, so ``engine.config`` (read to settle
 #: a target) or the outbox load neither the events nor the engine's parts.
 _WHERE = {
-    **dict.fromkeys(("DEFAULT_INTERVAL", "SIMULATOR_NOTICE", "Engine", "EngineOptions"), ".engine"),
+    **dict.fromkeys(("SIMULATOR_NOTICE", "Engine"), ".engine"),
+    **dict.fromkeys(("DEFAULT_INTERVAL", "EngineOptions"), ".options"),
     **dict.fromkeys(
         (
             "CONFIRM_GUARD_SECONDS",

@@ -23,8 +23,9 @@ from typing import TYPE_CHECKING
 
 from ..protocol import InputError
 from ..protocol.text import terminal_safe
-from .engine import CellFiles, Engine, EngineOptions
+from .engine import CellFiles, Engine
 from .feedback import Message
+from .options import EngineOptions
 from .outbox import Batch, Outbox
 from .where import Where
 

@@ -24,14 +24,15 @@ from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING
 
-from ..commands.policy import TargetProfile, WritePolicy, Writes
 from ..commands.target import Target
+from .options import EngineOptions, options_of, target_of
 from .outbox import Outbox
-from .status import Status, described
+from .status import Status, described, status_before_start
 from .where import Where
 
 if TYPE_CHECKING:
     from ..commands.language import Command
+    from ..commands.policy import TargetProfile
     from ..session import Frame
     from .cellcsv import CellCsv
     from .context import EngineParts
@@ -44,7 +45,6 @@ if TYPE_CHECKING:
     from .publisher import Publisher
     from .registry import Registry
 
-DEFAULT_INTERVAL = 0.5
 SIMULATOR_NOTICE = "no -H given: talking to the built-in RC8 simulator, not a controller"
 #: The status is published at most this often while polling flat out (and on every change
 #: a user causes).
@@ -54,23 +54,6 @@ LINK_CHECK_EVERY = 1.0
 #: How often a write waiting for its confirmation looks for the answer (polling between).
 CONFIRM_CHECK_EVERY = 0.02
 NOT_RUN = "not run: cancelled (Esc, Ctrl+C) before it started"
-
-
-@dataclass(frozen=True)
-class EngineOptions:
-    """How an engine runs, besides its target."""
-
-    timeout: float = 2.0
-    interval: float = DEFAULT_INTERVAL
-    verify: bool = True  # every PUT is read back
-    cycles: bool = False  # publish a Cycle after each poll cycle (the console's trends)
-    record: str | None = None  # --record FILE
-    transcript: str | None = None  # --log FILE
-    log_csv: str | None = None  # a CSV log from the first poll cycle
-    frames: bool = True  # publish every frame (the CLI's watch shows none)
-    cut_cycles: bool = False  # a poll cycle ends at its first failed exchange (the CLI)
-    max_cycles: int | None = None  # polling pauses after this many cycles (--count N)
-    readings: bool = False  # each Cycle carries how each read went (the CLI's lines)
 
 
 @dataclass(frozen=True)
@@ -108,8 +91,8 @@ class Engine:
         (before any thread starts). ``numbers`` gives submitted jobs their numbers:
         the engines of a cell share one, so a number names one job in the cell, and
         ``cell_files`` gives each the cell's files in place of its own."""
-        self._rules, self._plain_policy = _target_of(host, port, target, words)
-        self.options = options if options is not None else _options_of(words)
+        self._rules, self._plain_policy = target_of(host, port, target, words)
+        self.options = options if options is not None else options_of(words)
         self.outbox = outbox if outbox is not None else Outbox()
         self.where, self._registry = where, registry
         self._cell_files = cell_files
@@ -449,7 +432,7 @@ class Engine:
 
     def _status(self) -> Status:
         if not self._built:
-            return self._status_before_start()
+            return status_before_start(self._rules, self.options)
         link, poller, files, rules = self._link, self._poller, self._files, self._rules
         session = link.session
         profile = rules.profile
@@ -486,76 +469,3 @@ class Engine:
             recording=files.path("record"),
             transcribing=files.path("transcript"),
         )
-
-    def _status_before_start(self) -> Status:
-        """:meth:`_status` of an engine whose parts are not made yet: as they begin
-        (no session, nothing watched, no file), without making them."""
-        rules, options = self._rules, self.options
-        profile = rules.profile
-        return Status(
-            target="NOT CONNECTED",
-            is_simulator=False,
-            has_session=False,
-            host=None,
-            port=5006,
-            timeout=options.timeout,
-            read_only=rules.read_only,
-            connection="closed",
-            retry_at=None,
-            rtt=None,
-            paused=False,
-            watched=0,
-            interval=options.interval,
-            period=options.interval,
-            cycle_seconds=None,
-            polls_per_second=None,
-            interval_met=True,
-            record_failure=None,
-            transcript_failure=None,
-            csv_log=None,
-            csv_failure=None,
-            seen=frozenset(),
-            profile=profile.name if profile is not None else None,
-            label=profile.label if profile is not None else None,
-            colour=profile.colour if profile is not None else None,
-            writes=rules.writes,
-            verify=options.verify,
-        )
-
-
-_TARGET_WORDS = ("read_only", "policy", "profile", "profiles")
-
-
-def _target_of(
-    host: str | None, port: int, target: Target | None, words: dict[str, object]
-) -> tuple[Target, WritePolicy]:
-    """The engine's first target and what ``connect HOST`` (no profile) allows."""
-    given = {name: words.pop(name) for name in _TARGET_WORDS if name in words}
-    if target is not None:
-        return target, target.policy if target.profile is None else WritePolicy()
-    read_only = bool(given.get("read_only", False))
-    policy = given.get("policy") or WritePolicy()
-    profile = given.get("profile")
-    profiles = given.get("profiles") or {}
-    assert isinstance(policy, WritePolicy)
-    assert profile is None or isinstance(profile, TargetProfile)
-    assert isinstance(profiles, Mapping)
-    target = Target(
-        host,
-        port,
-        profile,
-        policy,
-        read_only=read_only or policy.writes is Writes.READ_ONLY,
-        read_only_flag=read_only,
-        profiles=profiles,
-    )
-    return target, policy if profile is None else WritePolicy()
-
-
-def _options_of(words: dict[str, object]) -> EngineOptions:
-    """The options given as words (the tests' and the front ends' way of saying them)."""
-    known = set(EngineOptions.__dataclass_fields__)
-    unknown = set(words) - known
-    if unknown:
-        raise TypeError(f"Engine got unexpected words: {', '.join(sorted(unknown))}")
-    return EngineOptions(**words)  # type: ignore[arg-type]

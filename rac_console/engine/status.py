@@ -13,8 +13,9 @@ from typing import TYPE_CHECKING, Literal, Union
 from ..protocol.text import terminal_safe
 
 if TYPE_CHECKING:
-    from ..commands.target import WritesShown
+    from ..commands.target import Target, WritesShown
     from ..session.types import ConnectProblem, State
+    from .options import EngineOptions
 
 #: The connection as the status line says it: the session's state, lost (found dead
 #: while idle, or a poll's connection failed after one had opened), dropped (closed
@@ -84,3 +85,38 @@ class Status:
             for failure in (self.record_failure, self.transcript_failure, self.csv_failure)
         )
         return 4 if status == 0 and failed else status
+
+
+def status_before_start(rules: Target, options: EngineOptions) -> Status:
+    """The status of an engine whose parts are not made yet (a front end paints it before
+    the engine starts): as the parts begin, no session, nothing watched, no file."""
+    profile = rules.profile
+    return Status(
+        target="NOT CONNECTED",
+        is_simulator=False,
+        has_session=False,
+        host=None,
+        port=5006,
+        timeout=options.timeout,
+        read_only=rules.read_only,
+        connection="closed",
+        retry_at=None,
+        rtt=None,
+        paused=False,
+        watched=0,
+        interval=options.interval,
+        period=options.interval,
+        cycle_seconds=None,
+        polls_per_second=None,
+        interval_met=True,
+        record_failure=None,
+        transcript_failure=None,
+        csv_log=None,
+        csv_failure=None,
+        seen=frozenset(),
+        profile=profile.name if profile is not None else None,
+        label=profile.label if profile is not None else None,
+        colour=profile.colour if profile is not None else None,
+        writes=rules.writes,
+        verify=options.verify,
+    )
