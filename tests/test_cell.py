@@ -238,3 +238,25 @@ def test_a_wait_after_needs_a_cell(sims: list[SimulatorThread]) -> None:
         assert "no target named robotB is open here; open: robotA" in text(drained.result(seq)[1])
     finally:
         cell.stop()
+
+
+async def test_the_repl_asks_a_cells_confirm_question_naming_its_target(
+    tmp_path: Path, sims: list[SimulatorThread]
+) -> None:
+    confirm = Target(
+        sims[1].host, sims[1].port, policy=WritePolicy(Writes.CONFIRM), read_only=False
+    )
+    cell = Cell([("robotA", Target(sims[0].host, sims[0].port)), ("robotB", confirm)])
+    driver = Driver(tmp_path, screen=True)
+    driver.engine = cell  # type: ignore[assignment]
+
+    async def steps(d: Driver) -> None:
+        await d.until(lambda out: "robotA\x1b[0m ›" in out, "the prompt")
+        d.type("@robotB put I 10 5\r")
+        await d.until(lambda out: "Write I10:" in out, "the confirm question")
+        await d.until(lambda out: " on robotB (" in out, "the question naming robotB")
+        d.type("n\r")
+        await d.until(lambda out: "robotB › PUT I10 not confirmed" in out, "the No, named")
+
+    await driver.run(steps)
+    assert sims[1].server.controller.value(I, 10) != 5

@@ -199,16 +199,18 @@ class Repl:
                 else:
                     self._show_result(event, name)
             elif isinstance(event, ConfirmWrite):
-                task = asyncio.get_running_loop().create_task(self.confirm(event))
+                by = None if self.cell.single else name
+                task = asyncio.get_running_loop().create_task(self.confirm(event, by))
                 self._questions.add(task)
                 task.add_done_callback(self._questions.discard)
             else:
                 self._echo(event, name)
 
-    async def confirm(self, question: ConfirmWrite) -> None:
+    async def confirm(self, question: ConfirmWrite, target: str | None = None) -> None:
         """A write on a ``confirm`` target: ``Write I10: 14 → 15 on Cell 3? [y/N]``; only
         y or yes writes. Keys typed ahead before the question are dropped, not taken as
-        its answer; Ctrl-C or Ctrl-D is a No. (Without a terminal, ``run`` refuses.)"""
+        its answer; Ctrl-C or Ctrl-D is a No. (Without a terminal, ``run`` refuses.) In a
+        cell, ``target`` (the one the write goes to) leads the target's label."""
         if self._confirm_prompt is None:
             self._confirm_prompt = PromptSession(
                 style=STYLE, input=self.prompt.input, output=self.prompt.output
@@ -220,7 +222,7 @@ class Repl:
                 clear_typeahead(self.prompt.input)
                 asked_at = time.monotonic()
                 answer = await self._confirm_prompt.prompt_async(
-                    confirm_message(question, self._member_of(question.seq))
+                    confirm_message(question, target)
                 )
                 yes = answer.strip().lower() in ("y", "yes")
                 if not yes or time.monotonic() - asked_at >= CONFIRM_GUARD_SECONDS:
@@ -356,10 +358,6 @@ class Repl:
             await self.live_watch(result.command, name, watched_before)
             return True
         return self._show_result(result, name)
-
-    def _member_of(self, seq: int) -> str | None:
-        """The target a job ran on, when several are open (None: one is)."""
-        return None if self.cell.single else self._ran_on.get(seq)
 
     def _show_result(self, result: Result, name: str | None = None) -> bool:
         """Print a result (named by its target when several are open); False when it
