@@ -220,3 +220,30 @@ def test_watch_logs_one_csv_column_per_target_and_variable(
     cell3 = [r for r in rows[1:] if r.split(",")[1] == "33"]
     assert len(cell3) == 2 and all(r.endswith(",,") for r in cell3)  # cell4's left empty
     assert any("'=cmd|" in r for r in rows[1:])  # a formula is text, not a formula
+
+
+def test_run_on_a_cell_records_one_file_whose_lines_name_their_target(
+    env: dict[str, str],  # noqa: F811
+    two: tuple[SimulatorThread, SimulatorThread],
+    config: Callable[[str], Path],
+    tmp_path: Path,
+) -> None:
+    config(cell_config(*two))
+    record, transcript = tmp_path / "cell.jsonl", tmp_path / "cell.log"
+    done = cli(
+        env,
+        "--cell",
+        "line2",
+        "--record",
+        str(record),
+        "--log",
+        str(transcript),
+        "run",
+        "-",
+        stdin="get I 5\n@cell4 get I 5\n",
+    )
+    assert done.returncode == 0, done.stderr
+    lines = [json.loads(line) for line in record.read_text(encoding="utf-8").splitlines()]
+    assert [line["target"] for line in lines] == ["cell3", "cell3", "cell4", "cell4"]
+    text = transcript.read_text(encoding="utf-8")
+    assert " cell3 " in text and " cell4 " in text

@@ -183,12 +183,18 @@ def _run_on_cell(
     numbered: Iterator[tuple[int, str]],
 ) -> ExitStatus:
     """``run`` on a cell: each line on its ``@NAME`` or the current target (``use NAME``
-    changes it), each target's session opened when a line first needs it."""
+    changes it), each target's session opened when a line first needs it. ``--record``
+    and ``--log`` are one file each for the cell, every line naming its target."""
+    from ..engine.frame_files import FrameFiles
+
     targets = dict(members)
     names = list(targets)
     current = names[0]
     status = ExitStatus.OK
+    files = FrameFiles(args.record, getattr(args, "transcript", None), output.local_failure)
+    plain = argparse.Namespace(**{**vars(args), "record": None, "transcript": None})
     with ExitStack() as stack:
+        stack.callback(files.close)
         sessions: dict[str, Session] = {}
         for number, raw_line in numbered:
             line = raw_line.rstrip("\r\n")
@@ -216,8 +222,9 @@ def _run_on_cell(
             ) -> list[Outcome | Message]:
                 if target not in sessions:
                     sessions[target] = stack.enter_context(
-                        open_session(args, output.local_failure, targets[target])
+                        open_session(plain, output.local_failure, targets[target])
                     )
+                    sessions[target].add_frame_observer(files.view(target).frame)
                 on = argparse.Namespace(**{**vars(args), "target": targets[target]})
                 return _results(sessions[target], what, on, line, Where.RUN)
 
