@@ -2,13 +2,17 @@
 
 from __future__ import annotations
 
+import threading
+import time
+from collections.abc import Callable
 from pathlib import Path
 
 from rac_console.commands.policy import TargetProfile, WritePolicy, Writes
 from rac_console.commands.target import Target
-from rac_console.engine import RowView
+from rac_console.engine import Alert, Result, RowView
 from rac_console.engine.cell import Cell
 from rac_console.engine.options import EngineOptions
+from rac_console.engine.outbox import Batch
 from rac_console.engine.registry import Where
 from rac_console.present.history import History
 from rac_console.sim.cell import SimulatedCellThread
@@ -48,3 +52,53 @@ def make_cell_app(
 def row(app: RacConsoleApp, name: str, var: str) -> RowView | None:
     """A target's row of the variable named ``var`` (``IO128``), as the console holds it."""
     return next((r for r in app.states[name].rows.values() if str(r.var) == var), None)
+
+
+#: A wait this long means hung: never a figure a test checks.
+DEADLINE = 10.0
+#: A wait on the cell's notify asks its condition again at least this often (a file the
+#: engines write, which no event announces).
+RECHECK = 0.5
+
+
+class CellFront:
+    """A front end in miniature for a cell: woken by the cell's notify, as the console
+    and the REPL are; keeps what it published. Every wait has a deadline."""
+
+    def __init__(self, cell: Cell) -> None:
+        self.cell = cell
+        self.woke = threading.Event()
+        cell.set_notify(self.woke.set)
+        self.results: dict[int, tuple[str | None, Result]] = {}
+        self.batches: dict[str | None, list[Batch]] = {}
+        self.alerts: list[tuple[str | None, str]] = []
+
+    def drain(self) -> None:
+        for name, batch in self.cell.drain():
+            self.batches.setdefault(name, []).append(batch)
+            for event in batch.events:
+                if isinstance(event, Result):
+                    self.results[event.seq] = (name, event)
+                elif isinstance(event, Alert):
+                    self.alerts.append((name, event.text))
+
+    def until(self, holds: Callable[[], bool], what: str, timeout: float = DEADLINE) -> None:
+        deadline = time.monotonic() + timeout
+        while True:
+            self.woke.clear()  # before the drain: a publish after it wakes the wait
+            self.drain()
+            if holds():
+                return
+            remaining = deadline - time.monotonic()
+            assert remaining > 0, f"timed out waiting for {what}"
+            self.woke.wait(min(remaining, RECHECK))
+
+    def result(self, seq: int) -> tuple[str | None, Result]:
+        """The Result numbered ``seq``, and the target it came from (None: the cell's)."""
+        self.until(lambda: seq in self.results, f"result {seq}")
+        return self.results[seq]
+
+    def run(self, line: str) -> list[str]:
+        """Submit a line and wait for its answer: what it said, as text."""
+        _, result = self.result(self.cell.submit(line))
+        return [getattr(f, "text", None) or str(f) for f in result.feedback]

@@ -5,11 +5,11 @@ REPL driven through prompt-toolkit's pipe input."""
 
 from __future__ import annotations
 
-import time
-from collections.abc import Callable, Iterator
+from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
+from cell_helpers import CellFront
 from test_repl import Driver
 
 from rac_console.commands.cells import parse_cells, route, split_address, split_hosts
@@ -17,7 +17,6 @@ from rac_console.commands.policy import WritePolicy, Writes
 from rac_console.commands.target import Target
 from rac_console.engine import Result
 from rac_console.engine.cell import Cell
-from rac_console.engine.outbox import Batch
 from rac_console.protocol import InputError, kind_of
 from rac_console.sim.thread import SimulatorThread
 
@@ -38,38 +37,13 @@ def open_cell(sims: list[SimulatorThread], **rules: Target) -> Cell:
     return cell
 
 
-class Drained:
-    """What a cell published, by target, gathered until a condition holds."""
-
-    def __init__(self, cell: Cell) -> None:
-        self.cell = cell
-        self.results: dict[int, tuple[str | None, Result]] = {}
-        self.batches: dict[str | None, list[Batch]] = {}
-
-    def until(self, holds: Callable[[Drained], bool], what: str, timeout: float = 10) -> None:
-        deadline = time.monotonic() + timeout
-        while not holds(self):
-            if time.monotonic() > deadline:
-                raise AssertionError(f"timed out waiting for {what}")
-            for name, batch in self.cell.drain():
-                self.batches.setdefault(name, []).append(batch)
-                for event in batch.events:
-                    if isinstance(event, Result):
-                        self.results[event.seq] = (name, event)
-            time.sleep(0.01)
-
-    def result(self, seq: int) -> tuple[str | None, Result]:
-        self.until(lambda d: seq in d.results, f"result {seq}")
-        return self.results[seq]
-
-
 def text(result: Result) -> str:
     return " ".join(str(getattr(f, "text", f)) for f in result.feedback)
 
 
 def test_lines_go_to_their_at_name_or_to_the_current_target(sims: list[SimulatorThread]) -> None:
     cell = open_cell(sims)
-    drained = Drained(cell)
+    drained = CellFront(cell)
     try:
         put_b = cell.submit("@robotB put I 10 7")
         put_current = cell.submit("put I 11 8")
@@ -93,7 +67,7 @@ def test_a_line_for_a_target_that_is_not_open_is_refused_and_nothing_is_sent(
     sims: list[SimulatorThread],
 ) -> None:
     cell = open_cell(sims[:2])
-    drained = Drained(cell)
+    drained = CellFront(cell)
     try:
         before = [s.server.controller.requests for s in sims[:2]]
         seq = cell.submit("@robotZ put I 10 7")
@@ -112,7 +86,7 @@ def test_each_targets_rules_apply_to_it_alone(sims: list[SimulatorThread]) -> No
         sims[1].host, sims[1].port, policy=WritePolicy(Writes.READ_ONLY), read_only=True
     )
     cell = open_cell(sims[:2], robotB=read_only)
-    drained = Drained(cell)
+    drained = CellFront(cell)
     try:
         refused = cell.submit("@robotB put I 10 7")
         written = cell.submit("@robotA put I 10 7")
@@ -126,7 +100,7 @@ def test_each_targets_rules_apply_to_it_alone(sims: list[SimulatorThread]) -> No
 
 def test_one_controller_down_leaves_the_others_polling(sims: list[SimulatorThread]) -> None:
     cell = open_cell(sims[:2])
-    drained = Drained(cell)
+    drained = CellFront(cell)
     try:
         for name in ("robotA", "robotB"):
             drained.result(cell.submit(f"@{name} watch I 0"))  # I 0 counts at 10 Hz
@@ -138,11 +112,11 @@ def test_one_controller_down_leaves_the_others_polling(sims: list[SimulatorThrea
             rows = [b.rows for b in drained.batches.get(name, []) if b.rows]
             return next((r for batch in reversed(rows) for r in batch.values()), None)
 
-        drained.until(lambda d: (r := row("robotB")) is not None and r.stale, "robotB's row stale")
+        drained.until(lambda: (r := row("robotB")) is not None and r.stale, "robotB's row stale")
         seen = row("robotA")
         assert seen is not None and not seen.stale
         drained.until(
-            lambda d: (r := row("robotA")) is not None and r.variant != seen.variant,
+            lambda: (r := row("robotA")) is not None and r.variant != seen.variant,
             "robotA's value still moving",
         )
     finally:
@@ -214,7 +188,7 @@ def test_a_wait_after_another_targets_condition_says_the_delay_between_them() ->
         (a, host_a, port_a), (b, host_b, port_b) = simulated.cell.addresses
         cell = Cell([(a, Target(host_a, port_a)), (b, Target(host_b, port_b))])
         cell.start()
-        drained = Drained(cell)
+        drained = CellFront(cell)
         try:
             seq = cell.submit(f"@{b} wait IO 64 on within 3 after @{a} IO 128 on")
             name, result = drained.result(seq)
@@ -232,7 +206,7 @@ def test_a_wait_after_another_targets_condition_says_the_delay_between_them() ->
 
 def test_a_wait_after_needs_a_cell(sims: list[SimulatorThread]) -> None:
     cell = open_cell(sims[:1])
-    drained = Drained(cell)
+    drained = CellFront(cell)
     try:
         seq = cell.submit("wait IO 64 on within 1 after @robotB IO 128 on")
         assert "no target named robotB is open here; open: robotA" in text(drained.result(seq)[1])

@@ -11,15 +11,15 @@ from __future__ import annotations
 import csv
 import io
 import json
-import time
-from collections.abc import Callable, Iterator
+from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
+from cell_helpers import CellFront
 from servers import RecordingServer
 
 from rac_console.commands.target import Target
-from rac_console.engine import Alert, EngineOptions, Result
+from rac_console.engine import EngineOptions
 from rac_console.engine.cell import Cell
 from rac_console.sim.replay import load_recordings
 from rac_console.sim.thread import SimulatorThread
@@ -36,37 +36,6 @@ def hostile(line: bytes) -> bytes:
     if line.endswith(b":I:"):
         return b"0,3,7\r"
     return b"0,3,0\r"
-
-
-class CellFront:
-    """A front end in miniature for a cell: drains it, keeps results and alerts."""
-
-    def __init__(self, cell: Cell) -> None:
-        self.cell = cell
-        self.results: dict[int, Result] = {}
-        self.alerts: list[tuple[str | None, str]] = []
-
-    def drain(self) -> None:
-        for name, batch in self.cell.drain():
-            for event in batch.events:
-                if isinstance(event, Result):
-                    self.results[event.seq] = event
-                elif isinstance(event, Alert):
-                    self.alerts.append((name, event.text))
-
-    def until(self, predicate: Callable[[], bool], what: str) -> None:
-        deadline = time.monotonic() + DEADLINE
-        while True:
-            self.drain()
-            if predicate():
-                return
-            assert time.monotonic() < deadline, f"timed out waiting for {what}"
-            time.sleep(0.01)
-
-    def run(self, line: str) -> list[str]:
-        seq = self.cell.submit(line)
-        self.until(lambda: seq in self.results, f"the answer to {line!r}")
-        return [getattr(f, "text", None) or str(f) for f in self.results[seq].feedback]
 
 
 @pytest.fixture

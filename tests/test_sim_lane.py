@@ -40,6 +40,16 @@ READS = [
 ]
 
 
+async def until(holds: Any, what: str) -> None:
+    """Wait on the event loop until ``holds()``, DEADLINE at most; asked again after each
+    turn of the loop, so a state that lasts one turn (a session between the lane and its
+    transport) is seen."""
+    deadline = asyncio.get_running_loop().time() + DEADLINE
+    while not holds():
+        assert asyncio.get_running_loop().time() < deadline, f"timed out waiting for {what}"
+        await asyncio.sleep(0)
+
+
 async def exchange(sim: SimulatorServer) -> tuple[list[bytes], bytes]:
     """The replies to READS, and what follows them (b"": the server closed)."""
     reader, writer = await asyncio.open_connection(sim.host, sim.port)
@@ -48,8 +58,8 @@ async def exchange(sim: SimulatorServer) -> tuple[list[bytes], bytes]:
         writer.write(data)
         await writer.drain()
         expected = data.count(b"\r") or (1 if len(data) > 256 else 0)
-        if not expected:
-            await asyncio.sleep(0.05)  # half a line: let it arrive as a read of its own
+        if not expected:  # half a line: read by the server as a read of its own
+            await until(lambda: any(s.partial for s in sim.sessions), "the half line read")
         for _ in range(expected):
             replies.append(await asyncio.wait_for(reader.readuntil(b"\r"), DEADLINE))
     after = await asyncio.wait_for(reader.read(100), DEADLINE)
@@ -89,7 +99,8 @@ def test_a_client_that_does_not_read_gets_every_reply_in_order() -> None:
             sock.connect((sim.host, sim.port))
             reader, writer = await asyncio.open_connection(sock=sock)
             writer.write(b"".join(line + b"\r" for line in lines))
-            await asyncio.sleep(0.2)  # unread meanwhile
+            # Unread meanwhile: the lane hands the session over once its socket is full.
+            await until(lambda: any(s.lane is None for s in sim.sessions), "the handover")
             replies = b""
             while len(replies) < len(expected):
                 replies += await asyncio.wait_for(reader.read(1 << 16), DEADLINE)
@@ -111,8 +122,10 @@ def test_stop_closes_a_session_on_its_way_from_the_lane_to_a_transport() -> None
             client.sendall(b"SIM:SET:delay_ms=1\r")  # faults on: the next read leaves the lane
             await asyncio.to_thread(client.recv, 100)
             client.sendall(b"GET:RC8:1:S:\r")
-            while not any(s.lane is None and s.sock is not None for s in sim.sessions):
-                await asyncio.sleep(0)  # until it has left the lane, before its transport
+            await until(  # it has left the lane, and has no transport yet
+                lambda: any(s.lane is None and s.sock is not None for s in sim.sessions),
+                "the session between the lane and its transport",
+            )
             await sim.stop()
             left = len(sim.sessions)
             return left, await asyncio.to_thread(client.recv, 100)
