@@ -12,7 +12,7 @@ import atexit
 import sys
 from typing import TYPE_CHECKING
 
-from ..commands.cells import DEMO_CELL, split_hosts
+from ..commands.cells import DEMO_CELL, not_open, split_hosts
 from ..protocol import InputError
 from ..protocol.text import terminal_safe
 
@@ -60,9 +60,7 @@ def pick_member(args: argparse.Namespace) -> str | None:
         )
     found = dict(members).get(first[1:])
     if found is None:
-        raise InputError(
-            f"no target named {terminal_safe(first[1:])} is open here; open: {', '.join(names)}"
-        )
+        raise not_open(first[1:], names)
     args.words = args.words[1:]
     args.target, args.cell_targets = found, None
     args.host, args.port, args.read_only = found.host, found.port, found.read_only

@@ -12,7 +12,7 @@ from contextlib import ExitStack
 from dataclasses import replace
 
 from ..commands.argv import exchange_from_words, input_line
-from ..commands.cells import route
+from ..commands.cells import not_open, route
 from ..commands.language import Command, Latency, Use, Wait
 from ..commands.outcome import ExitStatus, Outcome, refused, worst
 from ..commands.policy import Writes
@@ -209,7 +209,7 @@ def _run_on_cell(
             output.target = name
             if isinstance(command, Use):
                 if command.name not in targets:
-                    text = f"no target named {command.name} is open here; open: {', '.join(names)}"
+                    text = str(not_open(command.name, names))
                     output.show(refused(line, text), {"line": number}, prefix=f"line {number}: ")
                     status = worst([status, ExitStatus.REFUSED])
                 else:
@@ -247,8 +247,7 @@ def _chained(
     after = command.after
     assert after is not None
     if after.target not in names:
-        text = f"no target named {after.target} is open here; open: {', '.join(names)}"
-        return [Message(text, "error")]
+        return [Message(str(not_open(after.target, names)), "error")]
     first = next((r for r in run_on(after.target, after.wait) if isinstance(r, Outcome)), None)
     if first is None:
         return [Message(f"{after.target}: the wait did not run", "error")]

@@ -87,10 +87,15 @@ def route(line: str, names: Sequence[str], current: str) -> tuple[str, str]:
     if name is None:
         return current, line
     if name not in names:
-        raise InputError(
-            f"no target named {terminal_safe(name)} is open here; open: {', '.join(names)}"
-        )
+        raise not_open(name, names)
     return name, rest
+
+
+def not_open(name: str, names: Sequence[str]) -> InputError:
+    """What is said of a name that is none of the open targets ``names``: which are."""
+    return InputError(
+        f"no target named {terminal_safe(name)} is open here; open: {', '.join(names)}"
+    )
 
 
 def parse_cells(

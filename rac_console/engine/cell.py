@@ -182,10 +182,9 @@ class Cell:
         open targets when there is none by that name."""
         found = self._by_name.get(self.current if name is None else name)
         if found is None:
-            raise InputError(
-                f"no target named {terminal_safe(str(name))} is open here; "
-                f"open: {', '.join(self.names)}"
-            )
+            from ..commands.cells import not_open
+
+            raise not_open(str(name), self.names)
         return found
 
     def start(self, connect: bool = True) -> None:

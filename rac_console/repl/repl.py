@@ -192,7 +192,7 @@ class Repl:
         for event in batch.events:
             if isinstance(event, Result):
                 waiter = self._waiting.pop(event.seq, None)
-                if name is not None:
+                if waiter is not None and name is not None:  # read once the line's answer is in
                     self._ran_on[event.seq] = name
                 if waiter is not None and not waiter.done():
                     waiter.set_result(event)
@@ -221,9 +221,7 @@ class Repl:
             while True:
                 clear_typeahead(self.prompt.input)
                 asked_at = time.monotonic()
-                answer = await self._confirm_prompt.prompt_async(
-                    confirm_message(question, target)
-                )
+                answer = await self._confirm_prompt.prompt_async(confirm_message(question, target))
                 yes = answer.strip().lower() in ("y", "yes")
                 if not yes or time.monotonic() - asked_at >= CONFIRM_GUARD_SECONDS:
                     break

@@ -32,6 +32,7 @@ from textual.worker import Worker, WorkerState
 
 from .. import __version__
 from ..engine.feedback import Message, UiStep
+from ..present.cell_view import cell_targets
 from ..present.glyphs import ascii_wanted
 from ..present.heap import keep_full_collections_rare
 from ..present.history import is_refused
@@ -257,10 +258,7 @@ class RacConsoleApp(CellMembers, PaletteActions, TableActions, LogActions, App[i
             placeholder="get P 1 · put IO 20 on · watch IO 0-7 · help",
         )
         self.command_line.targets = tuple(connect_targets(self.engine.profiles))
-        if self.cell_mode:
-            self.command_line.cell = tuple(
-                (state.name, terminal_safe(state.label or "")) for state in self.states.values()
-            )
+        self.command_line.cell = tuple(cell_targets(self.cell))  # none for one target
         self.prompt = Static(id="prompt")
         self.command_line.may_ask = self.may_ask
         #: The line whose question keys typed ahead must not answer (see CommandLine).
