@@ -268,6 +268,8 @@ TOP_OPTIONS = OPTIONS | {
     "--log-csv": Option("--log-csv", "FILE"),
     "--history": Option("--history", "FILE"),
     "--interval": Option("--interval", "SECONDS"),
+    "--mqtt": Option("--mqtt", "URL"),
+    "--metrics": Option("--metrics", "[HOST:]PORT"),
 }
 
 

@@ -33,6 +33,7 @@ COMMAND_NAMES = [
     "latency",
     "wait",
     "log",
+    "publish",
     "record",
     "transcript",
     "clear",
@@ -62,7 +63,7 @@ def test_an_empty_line_offers_every_command_with_its_summary() -> None:
     [
         ("g", ["get"]),
         ("GE", ["get"]),
-        ("p", ["put", "pause"]),
+        ("p", ["put", "pause", "publish"]),
         ("dis", ["disconnect"]),
         ("l", ["load", "latency", "log"]),
         ("x", []),

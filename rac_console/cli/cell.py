@@ -111,6 +111,7 @@ def _members(args: argparse.Namespace) -> Members | None:
             f'targets = ["cell3", "cell4"], or try --cell {DEMO_CELL}'
         )
     args.cell_watch = spec.watch
+    args.cell_publish = spec.publish
     return [_named(name, resolved(name)) for name in spec.targets]
 
 

@@ -99,6 +99,7 @@ def run_live(
         cut_cycles=True,
         max_cycles=count,
         readings=True,
+        **getattr(args, "plant", {}),
     )
     try:
         cell = Cell(members, options=options, notify=woke.set, where=Where.COMMAND_LINE)
@@ -116,7 +117,7 @@ def run_live(
         woke.clear()
         for event in cell.outbox.drain().events:  # a file of the cell's that failed
             if isinstance(event, Alert):
-                output.local_failure(event.text)
+                output.alert(event)
         for run in runs:
             run.take(run.engine.outbox.drain())
 
@@ -142,7 +143,7 @@ def run_live(
         cell.stop()
     for event in cell.outbox.drain().events:
         if isinstance(event, Alert):
-            output.local_failure(event.text)
+            output.alert(event)
     for run in runs:
         run.ended = True
         run.take(run.engine.outbox.drain())  # the last alerts (a file that failed at the end)
@@ -210,7 +211,7 @@ class _LiveRun:
             print_error(self.output.err, f"{SIMULATOR_NOTICE} (at {status.host}:{status.port})")
         for event in batch.events:
             if isinstance(event, Alert):  # a --record, --log or CSV file that failed
-                self.output.local_failure(event.text)
+                self.output.alert(event)
             elif isinstance(event, Result):
                 self._results.append(event)
             elif isinstance(event, Cycle) and not self.ended:

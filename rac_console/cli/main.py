@@ -69,6 +69,11 @@ def _dispatch(args: argparse.Namespace) -> int:
             return 2
         if in_cell is None and not settle_target(args):  # a broken config: one line, exit 2
             return 2
+        if args.command in ("watch", "repl", None):
+            from .plant import settle_plant
+
+            if not settle_plant(args):
+                return 2
         if in_cell and args.command in ("latency", "check"):
             print(
                 f"rac-console: {args.command} measures one target: name it with -H NAME",
@@ -138,6 +143,7 @@ def _interactive(args: argparse.Namespace) -> int:
         record=args.record,
         transcript=args.transcript,
         log_csv=getattr(args, "log_csv", None),
+        **args.plant,
     )
     where = Where.CONSOLE if args.command is None else Where.REPL
     members = getattr(args, "cell_targets", None) or [(member_name(args.target), args.target)]

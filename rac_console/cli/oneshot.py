@@ -17,7 +17,7 @@ from ..commands.language import Command, Latency, Use, Wait
 from ..commands.outcome import ExitStatus, Outcome, refused, worst
 from ..commands.policy import Writes
 from ..commands.target import Target
-from ..engine import Measured, Message
+from ..engine import Alert, Measured, Message
 from ..engine.chained_wait import chained_feedback, met
 from ..engine.commands import BUILTIN
 from ..engine.jobs import run_job
@@ -54,6 +54,14 @@ class Output:
         the work goes on, and the exit status says so at the end."""
         print_error(self.err, message)
         self.local_failed = True
+
+    def alert(self, alert: Alert) -> None:
+        """An engine's alert: a local file that failed, or news (the plant's), said
+        on stderr without changing the status."""
+        if alert.local_failure:
+            self.local_failure(alert.text)
+        else:
+            print_error(self.err, alert.text)
 
     def status(self, status: ExitStatus) -> ExitStatus:
         """4 when the commands succeeded but a local file failed; a controller or

@@ -32,6 +32,12 @@ def refusal(args: argparse.Namespace) -> str | None:
             f"--history names the console's and the REPL's history file: "
             f"{_name(command)} keeps no history"
         )
+    for option in ("mqtt", "metrics"):
+        if getattr(args, option, None) is not None and command not in (None, "repl", "watch"):
+            return (
+                f"--{option} feeds the plant the watched values: the console, the REPL and "
+                f"watch take it, not {_name(command)}"
+            )
     interval = getattr(args, "interval", None)
     if interval is not None and command not in (None, "repl"):
         own = _INTERVAL_OF.get(command) if command is not None else None
@@ -75,6 +81,8 @@ _TOP_DEFAULTS = {
     "log_csv": None,
     "history": None,
     "interval": None,
+    "mqtt": None,
+    "metrics": None,
 }
 
 

@@ -158,6 +158,27 @@ def global_options(parser: argparse.ArgumentParser, suppress: bool) -> list[argp
     ]
 
 
+def plant_options(parser: argparse._ActionsContainer, suppress: bool) -> list[argparse.Action]:
+    """``--mqtt`` and ``--metrics``: the console's, the REPL's and watch's."""
+    default = argparse.SUPPRESS if suppress else None
+    return [
+        parser.add_argument(
+            "--mqtt",
+            metavar="URL",
+            default=default,
+            help="publish the watched values to an MQTT broker: mqtt://HOST[:PORT]/PREFIX "
+            "(or mqtts://), retained, one topic a variable",
+        ),
+        parser.add_argument(
+            "--metrics",
+            metavar="[HOST:]PORT",
+            default=default,
+            help="serve the watched values to Prometheus at http://HOST:PORT/metrics "
+            "(127.0.0.1 unless another address is written out)",
+        ),
+    ]
+
+
 ONE_SHOT = ("get", "put", "send")
 """The commands whose words are sorted by :mod:`rac_console.commands.argv`, not argparse."""
 

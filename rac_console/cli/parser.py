@@ -23,6 +23,7 @@ from .options import (
     count_of,
     global_options,
     help_option,
+    plant_options,
     port_number,
     repeat_options,
     seconds_of,
@@ -82,6 +83,7 @@ def build_cli(commands: bool = True) -> CliParser:
             help="time between poll cycles (default 0.5); before get -r, latency or watch, "
             "their own interval",
         ),
+        *plant_options(console, suppress=False),
     ]
     subparsers = parser.add_subparsers(dest="command", metavar="COMMAND")
     if not commands:
@@ -176,6 +178,7 @@ def build_cli(commands: bool = True) -> CliParser:
     )
     watch, _ = command("watch", WATCH_HELP, usage="%(prog)s [options] VAR...")
     watch_options(watch)
+    plant_options(watch, suppress=True)
     repl, _ = command("repl", "a line-oriented console for plain terminals, ssh and serial")
     repl.add_argument(
         "--history",
@@ -196,6 +199,7 @@ def build_cli(commands: bool = True) -> CliParser:
         default=argparse.SUPPRESS,
         help="log the watched values to FILE, one CSV row per poll cycle",
     )
+    plant_options(repl, suppress=True)
     sim = subparsers.add_parser(
         "sim",
         help="run the RC8 simulator as a server",

@@ -26,7 +26,7 @@ MOST_TARGETS = 8
 #: ``--cell demo`` with no [cell.demo] in the config: simulators playing a handshake.
 DEMO_CELL = "demo"
 _NAME = re.compile(r"[A-Za-z0-9_][A-Za-z0-9_.:-]*", re.ASCII)
-_CELL_KEYS = ("targets", "watch")
+_CELL_KEYS = ("targets", "watch", "publish")
 
 
 @dataclass(frozen=True)
@@ -36,6 +36,7 @@ class CellSpec:
     name: str
     targets: tuple[str, ...]
     watch: tuple[str, ...] = ()
+    publish: str | None = None  # mqtt://HOST/PREFIX: every target's values to the plant
 
 
 def split_hosts(text: str | None) -> list[str] | None:
@@ -116,7 +117,7 @@ def parse_cells(
             raise fail(f"cell name {name!r}: use letters, digits, - and _, e.g. [cell.line2]")
         for key in table:
             if key not in _CELL_KEYS:
-                raise fail(f"{where} unknown key {key!r}: use targets and watch")
+                raise fail(f"{where} unknown key {key!r}: use targets, watch and publish")
         targets = table.get("targets")
         if not isinstance(targets, list) or not all(isinstance(t, str) for t in targets):
             raise fail(f'{where} targets: write targets = ["cell3", "cell4"] (profile names)')
@@ -145,5 +146,8 @@ def parse_cells(
                     f"{where} watch {terminal_safe(line)!r}: start with one of its targets "
                     f'({", ".join(targets)}), e.g. "{targets[0]} IO 128 part placed"'
                 )
-        cells[name] = CellSpec(name, tuple(targets), tuple(watch))
+        from .plant import publish_setting
+
+        publish = publish_setting(where, table.get("publish"), fail)
+        cells[name] = CellSpec(name, tuple(targets), tuple(watch), publish)
     return cells

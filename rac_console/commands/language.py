@@ -25,6 +25,7 @@ from ..protocol import (
 )
 from ..protocol.request import Request, get_for, put_for, raw_request
 from ..protocol.variables import encode_value
+from .plant import Publish
 
 
 @dataclass(frozen=True)
@@ -262,6 +263,7 @@ Command = (
     | CsvLog
     | FrameFile
     | Simple
+    | Publish
 )
 
 MAX_LATENCY_COUNT = 100_000

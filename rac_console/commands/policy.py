@@ -118,3 +118,4 @@ class TargetProfile:
     label: str | None = None  # "Cell 3 — welding": shown on the status line and the border
     colour: str | None = None  # a Rich colour name or #rrggbb
     policy: WritePolicy = WritePolicy()
+    publish: str | None = None  # mqtt://HOST/PREFIX: its watched values go to the plant

@@ -9,8 +9,11 @@ The file (read by :mod:`rac_console.engine.config`) names targets::
     colour = "red"                      # or color; a colour name or "#rrggbb"
     writes = "confirm"                  # open | confirm | read-only (default open)
     allow = ["I 100-199", "IO 64-71"]   # optional: the only variables writable
+    publish = "mqtt://broker/line2"     # optional: its watched values to the plant
 
-and may hold a ``[settings]`` table, kept as it is for the settings that persist.
+and may hold a ``[settings]`` table, kept as it is for the settings that persist, and an
+``[mqtt]`` table: the broker's ``username``, ``password`` and ``ca_file``, which are never
+typed on a command line.
 Nothing is guessed: every problem is an InputError of one line naming the file, the
 profile and the key, and saying how to write it.
 """
@@ -24,15 +27,17 @@ from dataclasses import dataclass, field
 from ..protocol import InputError
 from ..protocol.text import terminal_safe
 from .cells import CellSpec, parse_cells
+from .plant import NO_CREDENTIALS, Credentials, publish_setting
 from .policy import AllowRange, TargetProfile, WritePolicy, Writes, parse_allow
 
 DEFAULT_PORT = 5006
 #: ``connect sim`` and the status line's name for the built-in simulator.
 SIMULATOR_NAME = "sim"
 
-_PROFILE_KEYS = ("host", "port", "label", "colour", "color", "writes", "allow")
-_KEYS_TEXT = "host, port, label, colour (or color), writes, allow"
-_TOP_KEYS = ("target", "settings", "cell")
+_PROFILE_KEYS = ("host", "port", "label", "colour", "color", "writes", "allow", "publish")
+_KEYS_TEXT = "host, port, label, colour (or color), writes, allow, publish"
+_TOP_KEYS = ("target", "settings", "cell", "mqtt")
+_MQTT_KEYS = ("username", "password", "ca_file")
 _NAME = re.compile(r"[A-Za-z0-9_][A-Za-z0-9_-]*", re.ASCII)
 _BARE_KEY = re.compile(r"[A-Za-z0-9_-]+", re.ASCII)
 _COLOUR_NAME = re.compile(r"[A-Za-z][A-Za-z0-9_]*", re.ASCII)
@@ -50,6 +55,7 @@ class ParsedConfig:
     profiles: dict[str, TargetProfile] = field(default_factory=dict)
     settings: dict[str, object] = field(default_factory=dict)
     cells: dict[str, CellSpec] = field(default_factory=dict)
+    mqtt: Credentials = NO_CREDENTIALS
 
 
 def completion_targets(profiles: Mapping[str, TargetProfile]) -> list[tuple[str, str]]:
@@ -91,7 +97,7 @@ def parse_config(data: Mapping[str, object], source: str) -> ParsedConfig:
         if key not in _TOP_KEYS:
             raise fail(
                 f"unknown table or key {_shown(key)}: use [target.NAME] tables "
-                "(one per target), [cell.NAME] tables and [settings]"
+                "(one per target), [cell.NAME] tables, [settings] and [mqtt]"
             )
     settings = data.get("settings", {})
     if not isinstance(settings, dict):
@@ -110,7 +116,20 @@ def parse_config(data: Mapping[str, object], source: str) -> ParsedConfig:
                 'line of its own, then host = "..." under it'
             )
         found[name] = _profile(name, table, fail)
-    return ParsedConfig(found, dict(settings), parse_cells(data.get("cell"), found, fail))
+    cells = parse_cells(data.get("cell"), found, fail)
+    return ParsedConfig(found, dict(settings), cells, _mqtt(data.get("mqtt", {}), fail))
+
+
+def _mqtt(table: object, fail: _Fail) -> Credentials:
+    """``[mqtt]``: who the console is to the broker, and the CA that signs it."""
+    if not isinstance(table, dict):
+        raise fail('[mqtt] is a table: write [mqtt] on a line of its own, then username = "..."')
+    for key, value in table.items():
+        if key not in _MQTT_KEYS:
+            raise fail(f"[mqtt] unknown key {_shown(key)}: use username, password and ca_file")
+        if not isinstance(value, str):  # the value is not shown: it may be the password
+            raise fail(f'[mqtt] {key}: write {key} = "..." (text in quotes)')
+    return Credentials(table.get("username"), table.get("password"), table.get("ca_file"))
 
 
 def _profile(name: str, table: dict[str, object], fail: _Fail) -> TargetProfile:
@@ -151,6 +170,7 @@ def _profile(name: str, table: dict[str, object], fail: _Fail) -> TargetProfile:
         policy=WritePolicy(
             _writes(where, table, fail), _allow(where, table, fail), f"profile {name}"
         ),
+        publish=publish_setting(where, table.get("publish"), fail),
     )
 
 

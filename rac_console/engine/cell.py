@@ -34,7 +34,7 @@ if TYPE_CHECKING:  # the console's first paint loads none of these
     from ..commands.outcome import Outcome
     from ..commands.target import Target
     from .cellcsv import CellCsv
-    from .events import Event, Result
+    from .events import Event, Feedback, Result
     from .frame_files import FrameFiles
     from .registry import Registry
 
@@ -50,6 +50,17 @@ class _Chain:
     first: str  # the target waited for first
     second: str  # the target the line ran on
     first_outcome: Outcome | None = None
+
+
+@dataclass
+class _Gather:
+    """A line run by every target of the cell; the front end awaits ``seq``, answered
+    once every target's result is in (in the cell's order)."""
+
+    seq: int
+    line: str | None
+    command: Command
+    waiting: dict[str, tuple[Feedback, ...] | None]  # by target: its feedback, once in
 
 
 @dataclass(frozen=True)
@@ -116,13 +127,17 @@ class Cell:
             if files is None
             else replace(options, record=None, transcript=None, log_csv=None)
         )
+        named = {  # a name the user (or the demo) gave is the target's name in topics too
+            name: replace(own, plant_name=name) if name != member_name(target) else own
+            for name, target in targets
+        }
         self.members: tuple[Member, ...] = tuple(
             Member(
                 name,
                 target,
                 Engine(
                     target=target,
-                    options=own,
+                    options=named[name],
                     outbox=Outbox(notify),
                     where=where,
                     registry=registry,
@@ -139,6 +154,7 @@ class Cell:
         self._by_name = {member.name: member for member in self.members}
         self.current = self.members[0].name
         self._chains: dict[int, _Chain] = {}  # by the number of the job awaited now
+        self._gathers: dict[int, _Gather] = {}  # by the number of each member's job
 
     @classmethod
     def of(cls, engine: Engine, name: str | None = None) -> Cell:
@@ -153,6 +169,7 @@ class Cell:
         cell._by_name = {member.name: member}
         cell.current = member.name
         cell._chains = {}
+        cell._gathers = {}
         return cell
 
     @property
@@ -219,6 +236,7 @@ class Cell:
         line's ``@NAME``)."""
         from ..commands.cells import route
         from ..commands.language import Connect, Use, Wait
+        from ..commands.plant import Publish
 
         try:
             name, rest = route(line, self.names, self.current)
@@ -238,6 +256,8 @@ class Cell:
             return self._answer(line, Message(self._fixed(), "error"))
         if isinstance(command, Wait) and command.after is not None:
             return self._chain(command, member.name, line)
+        if isinstance(command, Publish) and len(self.members) > 1 and rest == line:
+            return self._to_every_target(command, line)
         if command is None:  # a blank line, a comment
             return member.engine.submit(rest)
         return member.engine.submit_command(command, line)
@@ -308,6 +328,23 @@ class Cell:
         )
         return [Result(chain.seq, feedback, chain.line, chain.command)]
 
+    def _to_every_target(self, command: Command, line: str | None) -> int:
+        """A line for the whole cell (``publish``): run by every target, answered once."""
+        gather = _Gather(next(self._numbers), line, command, {})
+        for member in self.members:
+            self._gathers[member.engine.submit_command(command)] = gather
+            gather.waiting[member.name] = None
+        return gather.seq
+
+    def _gathered(self, name: str, gather: _Gather, result: Result) -> list[Result]:
+        from .events import Result
+
+        gather.waiting[name] = result.feedback
+        if any(feedback is None for feedback in gather.waiting.values()):
+            return []
+        feedback = tuple(f for each in gather.waiting.values() for f in each or ())
+        return [Result(gather.seq, feedback, gather.line, gather.command)]
+
     def _answer(self, line: str | None, message: Message) -> int:
         from .events import Result
 
@@ -335,19 +372,21 @@ class Cell:
         then each target's batch, by name."""
         drained: list[tuple[str | None, Batch]] = [(None, self.outbox.drain())]
         drained.extend((member.name, member.engine.outbox.drain()) for member in self.members)
-        if self._chains:  # a chained wait's steps are the cell's, answered as one
+        if self._chains or self._gathers:  # steps of the cell's own, answered as one
             from .events import Result
 
             answers: list[Result] = []
-            for _, batch in drained[1:]:
+            for name, batch in drained[1:]:
                 kept: list[Event] = []
                 for event in batch.events:
-                    chain = self._chains.pop(event.seq, None) if isinstance(event, Result) else None
-                    if chain is None:
+                    if not isinstance(event, Result):
                         kept.append(event)
-                    else:
-                        assert isinstance(event, Result)
+                    elif (chain := self._chains.pop(event.seq, None)) is not None:
                         answers.extend(self._advance(chain, event))
+                    elif (gather := self._gathers.pop(event.seq, None)) is not None:
+                        answers.extend(self._gathered(str(name), gather, event))
+                    else:
+                        kept.append(event)
                 batch.events[:] = kept
             drained[0][1].events.extend(answers)
         return drained

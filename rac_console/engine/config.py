@@ -14,6 +14,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from ..commands.cells import CellSpec
+from ..commands.plant import CA_FILE_ENV, NO_CREDENTIALS, PASSWORD_ENV, USERNAME_ENV, Credentials
 from ..commands.policy import TargetProfile
 from ..protocol.errors import InputError
 from .textfile import read_text_file
@@ -45,6 +46,18 @@ class Config:
     profiles: Mapping[str, TargetProfile] = field(default_factory=dict)
     settings: Mapping[str, object] = field(default_factory=dict)
     cells: Mapping[str, CellSpec] = field(default_factory=dict)
+    mqtt: Credentials = NO_CREDENTIALS  # the [mqtt] table
+
+    def credentials(self) -> Credentials:
+        """Who the console is to an MQTT broker: the environment's
+        ``RAC_MQTT_USERNAME``, ``RAC_MQTT_PASSWORD`` and ``RAC_MQTT_CA_FILE`` where set,
+        else the config file's ``[mqtt]`` table."""
+        env = os.environ
+        return Credentials(
+            env.get(USERNAME_ENV) or self.mqtt.username,
+            env.get(PASSWORD_ENV) or self.mqtt.password,
+            env.get(CA_FILE_ENV) or self.mqtt.ca_file,
+        )
 
 
 def load_config(path: Path | None = None) -> Config:
@@ -65,4 +78,4 @@ def load_config(path: Path | None = None) -> Config:
 
     text = read_text_file(path, "a config file")
     parsed = parse_config(parse_toml(text, str(path)), str(path))
-    return Config(path, True, parsed.profiles, parsed.settings, parsed.cells)
+    return Config(path, True, parsed.profiles, parsed.settings, parsed.cells, parsed.mqtt)

@@ -27,6 +27,7 @@ if TYPE_CHECKING:  # the engine's parts, named here; a one-shot command loads no
     from .csvsink import CsvSink
     from .frame_files import FrameFiles
     from .link import Link
+    from .plant_tap import PlantTap
     from .poller import Poller
     from .publisher import Publisher
     from .registry import Registry
@@ -66,6 +67,8 @@ class EngineParts:
     plain_policy: WritePolicy  # what ``connect HOST`` (no profile) allows
     #: Publish a confirm question and poll until it is answered (False: No, or cancelled).
     ask_confirm: Callable[[ConfirmWrite, Callable[[], bool]], bool]
+    #: This engine's feed to the plant (``publish``), made on first use.
+    plant: Callable[[], PlantTap]
 
 
 class CommandContext:

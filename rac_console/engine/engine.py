@@ -41,6 +41,7 @@ if TYPE_CHECKING:
     from .frame_files import FrameFiles
     from .job import Job
     from .link import Link
+    from .plant_tap import PlantTap
     from .poller import Poller
     from .publisher import Publisher
     from .registry import Registry
@@ -157,7 +158,7 @@ class Engine:
             )
             self._parts: EngineParts = EngineParts(
                 self._link, self._poller, self._publisher, self._files, self._csv,
-                self._switch_target, self._plain_policy, self._ask_confirm,
+                self._switch_target, self._plain_policy, self._ask_confirm, self._plant,
             )  # fmt: skip
             self._built = True
             if options.log_csv:
@@ -270,6 +271,7 @@ class Engine:
     def _run(self) -> None:
         try:
             self._link.open(self._rules)
+            self._open_plant()
             self._poller.wake()
             self.publish_status(force=True)
             self._started.set()
@@ -298,6 +300,8 @@ class Engine:
         finally:
             self._started.set()
             self._link.close()
+            if self._publisher.tap is not None:
+                self._publisher.tap.close()
             self._files.close()
             self._csv.close()
             self._publisher.flush()
@@ -378,6 +382,40 @@ class Engine:
             self._poller.new_target()
         self._poller.wake()
 
+    def _plant(self) -> PlantTap:
+        """This engine's feed to the plant, made on first use (``publish``)."""
+        from .plant_tap import open_tap
+
+        if self._publisher.tap is None:
+            self._publisher.tap = open_tap(self.options, self._rules, self._alert_plant)
+        return self._publisher.tap
+
+    def _open_plant(self) -> None:
+        """Publishing from the start (--mqtt, or a cell's or profile's publish), and
+        --metrics: said as they begin, or why they cannot."""
+        options, profile = self.options, self._rules.profile
+        address = options.publish
+        if address is None and profile is not None and profile.publish is not None:
+            from ..commands.plant import parse_mqtt_address
+
+            address = parse_mqtt_address(profile.publish)
+        if address is None and options.metrics is None:
+            return
+        from ..protocol.errors import InputError
+
+        tap = self._plant()
+        if address is not None:
+            try:
+                tap.publish_to(address, ())
+            except InputError as exc:
+                self._alert_plant(str(exc))
+
+    def _alert_plant(self, text: str) -> None:
+        """The plant's news (any thread): said at once, not a failure of the reads."""
+        from .events import Alert
+
+        self.outbox.put(Alert(text, local_failure=False))
+
     def _went_down(self) -> None:
         self._poller.forget_figures()
 
@@ -411,7 +449,10 @@ class Engine:
             self._publisher.status_dirty = True
             return
         self._status_at, self._publisher.status_dirty = now, False
-        self.outbox.put_status(self._status())
+        status = self._status()
+        if self._built and self._publisher.tap is not None:
+            self._publisher.tap.status(status)
+        self.outbox.put_status(status)
 
     def publish_target(self) -> None:
         """Before :meth:`start`: publish the status of the target about to be opened,
@@ -468,4 +509,6 @@ class Engine:
             ever_connected=link.ever_connected,
             recording=files.path("record"),
             transcribing=files.path("transcript"),
+            reads=(poller.reads[0], poller.reads[1], poller.reads[2]),
+            publishing=self._publisher.tap.publishing if self._publisher.tap else None,
         )

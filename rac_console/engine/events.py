@@ -56,6 +56,8 @@ class Alert:
     """Something to tell the user at once, whatever they are doing: a recording stopped."""
 
     text: str
+    #: A local file failed (the CLI's exit status 4); False: news, such as the plant's.
+    local_failure: bool = True
 
 
 @dataclass(frozen=True, slots=True)

@@ -9,9 +9,14 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
+from ..commands.plant import NO_CREDENTIALS, Credentials, MqttAddress
 from ..commands.policy import TargetProfile, WritePolicy, Writes
 from ..commands.target import Target
+
+if TYPE_CHECKING:
+    from ..plant.metrics import MetricsBoard
 
 DEFAULT_INTERVAL = 0.5
 
@@ -31,6 +36,13 @@ class EngineOptions:
     cut_cycles: bool = False  # a poll cycle ends at its first failed exchange (the CLI)
     max_cycles: int | None = None  # polling pauses after this many cycles (--count N)
     readings: bool = False  # each Cycle carries how each read went (the CLI's lines)
+    #: The plant: the broker the watched values go to from the start (--mqtt, a cell's or
+    #: a profile's publish), who we are to it, the --metrics board, and the target's name
+    #: in topics and labels (None: the profile's name, or the host).
+    publish: MqttAddress | None = None
+    credentials: Credentials = NO_CREDENTIALS
+    metrics: MetricsBoard | None = None
+    plant_name: str | None = None
 
 
 _TARGET_WORDS = ("read_only", "policy", "profile", "profiles")

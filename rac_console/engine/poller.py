@@ -47,6 +47,8 @@ class Poller:
         self._keep_readings = cycles and readings
         self._max_cycles = max_cycles
         self.cycles_done = 0
+        #: Reads of watched rows by result: ok, error (the controller said no), no reply.
+        self.reads = [0, 0, 0]
         self.publish_status = publish_status
         self._publisher = publisher
         self.csv = csv
@@ -247,6 +249,7 @@ class Poller:
                 outbox.waiting_since = None
         if isinstance(reply, TransportError):
             exc = reply
+            self.reads[2] += 1
             self._link.mark_failure(exc)
             status = {RequestTimeout: "TIMEOUT", BadReply: "BAD REPLY"}.get(type(exc))
             if row.fail(status or "DISCONNECTED", time.monotonic()):
@@ -261,6 +264,7 @@ class Poller:
         self._link.backoff.good()
         response = reply.response
         variant = response.variant
+        self.reads[0 if response.ok else 1] += 1
         if response.ok and variant is not None:
             changed = row.update(variant, time.monotonic())
         else:

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable
+from typing import TYPE_CHECKING
 
 from ..commands.language import VarRef
 from ..session import Frame
@@ -15,6 +16,9 @@ from .events import Alert, Event, Note, RowView
 from .frame_files import FrameFiles
 from .outbox import Outbox
 from .watch import WatchRow
+
+if TYPE_CHECKING:
+    from .plant_tap import PlantTap
 
 #: Events are handed to the outbox in batches at least this often while polling (and at
 #: once when the engine goes idle or answers a line).
@@ -39,12 +43,16 @@ class Publisher:
         self._events_at = 0.0  # perf_counter() of the last flush
         #: Something the status line shows changed: published when the loop next idles.
         self.status_dirty = True
+        #: The plant's feed (MQTT, /metrics): handed the rows that changed at each flush.
+        self.tap: PlantTap | None = None
 
     def emit(self, event: Event) -> None:
         """Queue an event for the outbox (handed over by :meth:`flush`)."""
         self._events.append(event)
 
     def flush(self) -> None:
+        if self._rows and self.tap is not None:
+            self.tap.rows(self._rows.values())
         if self._events or self._rows:
             self.outbox.put_many(self._events, self._rows)
             self._events, self._rows = [], {}
@@ -95,5 +103,7 @@ class Publisher:
         """Rows unwatched: none of their views still to go out may bring them back."""
         for var in variables:
             self._rows.pop(var, None)
+        if self.tap is not None:
+            self.tap.removed(variables)
         self.flush()
         self.outbox.put_removed(variables)

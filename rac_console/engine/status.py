@@ -76,6 +76,8 @@ class Status:
     ever_connected: bool = False  # a connection to this target opened at least once
     recording: str | None = None  # where frames are recorded (--record, record FILE)
     transcribing: str | None = None  # where the transcript goes (--log, transcript FILE)
+    reads: tuple[int, int, int] = (0, 0, 0)  # watched reads: ok, error, no reply
+    publishing: str | None = None  # the MQTT topics the watched values go to
 
     def exit_status(self, status: int) -> int:
         """A front end's exit status: 4 (a local I/O error) when it would be 0 but the

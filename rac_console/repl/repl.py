@@ -396,7 +396,7 @@ class Repl:
         an alert (a recording stopped) always. Named by its target when several are open."""
         by = None if self.cell.single else name
         if isinstance(event, Alert):
-            self._print(by_target(by, notice_text(event.text, error=True)))
+            self._print(by_target(by, notice_text(event.text, error=event.local_failure)))
         elif self.frames and isinstance(event, Note):  # a gap or a failed request, marked
             text = notice_text(f"── {event.text} ──", style="dim")
             self._print(by_target(by, text), soft_wrap=True)

@@ -540,7 +540,7 @@ class RacConsoleApp(CellMembers, PaletteActions, TableActions, LogActions, App[i
                 self.frame_log.add(event, name)
                 if isinstance(event, Alert):
                     text = event.text if name is None else f"{name}: {event.text}"
-                    self.show(Message(text, "error"))
+                    self.show(Message(text, "error" if event.local_failure else "info"))
         if batch.frames_dropped or batch.cycles_dropped:
             lost = [
                 counted(n, what)

@@ -7,7 +7,7 @@ one of them (or :meth:`~..registry.Registry.register` at run time).
 from __future__ import annotations
 
 from ..registry import Registry
-from . import connection, exchanges, frames, watching
+from . import connection, exchanges, frames, publishing, watching
 
 #: In the order ``help`` lists them.
 BUILTIN = Registry(
@@ -19,6 +19,7 @@ BUILTIN = Registry(
         frames.FRAMES_SPEC,
         *exchanges.SPECS[3:],  # latency, wait
         watching.LOG_SPEC,
+        publishing.PUBLISH_SPEC,
         *frames.FILE_SPECS,  # record, transcript
         *frames.CONSOLE_SPECS,  # clear, help, quit
     ]

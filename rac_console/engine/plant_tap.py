@@ -1,0 +1,145 @@
+"""One engine's feed to the plant: its watched rows and its status, as they change.
+
+Owned by the engine's thread, like the publisher that calls it. Nothing here waits on
+the network: the MQTT feed takes the latest payload of a topic into a dict, the metrics
+board takes numbers under a lock; their own threads do the rest. Nothing comes back
+from the plant: no topic is subscribed to, so nothing received can reach a controller.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Iterable
+from typing import TYPE_CHECKING
+
+from ..commands.language import VarRef
+from ..commands.plant import Credentials, MqttAddress, topic_level
+from .events import RowView
+from .status import WAITING, Status
+
+if TYPE_CHECKING:
+    from ..commands.target import Target
+    from ..plant.metrics import MetricsBoard
+    from ..plant.mqtt import MqttFeed
+    from .options import EngineOptions
+
+
+class PlantTap:
+    """The MQTT feed (while publishing) and the metrics board (with --metrics)."""
+
+    def __init__(
+        self,
+        name: str,
+        credentials: Credentials,
+        board: MetricsBoard | None,
+        say: Callable[[str], None],
+    ) -> None:
+        """``name``: the target in topics and labels; ``say``: tell the user (any thread)."""
+        self.name = name
+        self._credentials = credentials
+        self._board = board
+        self._say = say
+        self.mqtt: MqttFeed | None = None
+
+    @property
+    def publishing(self) -> str | None:
+        """Where the values go (``mqtt://broker:1883/line2/cell3/…``), None: nowhere."""
+        return str(self.mqtt) if self.mqtt is not None else None
+
+    def publish_to(self, address: MqttAddress, rows: Iterable[RowView]) -> str:
+        """Publish from now on to ``address`` (instead of any broker before), starting
+        with ``rows`` as they stand. InputError: the extra is missing, the target's name
+        cannot be a topic level, or the CA file cannot be used."""
+        from ..plant.mqtt import MqttFeed
+
+        topic_level(self.name, "the target's name")
+        feed = MqttFeed(address, self._credentials, self.name, self._say)
+        before = self.stop_publishing()
+        self.mqtt = feed
+        self._to_mqtt(feed, rows, time.time())
+        feed.start()
+        shown = f"publishing {self.name}'s watched values to {feed} (retained, QoS 1)"
+        return shown if before is None else f"{before}; {shown}"
+
+    def stop_publishing(self) -> str | None:
+        """Stop the MQTT feed (its status topic says ``offline``); what was stopped."""
+        feed, self.mqtt = self.mqtt, None
+        if feed is None:
+            return None
+        feed.stop()
+        return f"stopped publishing {self.name}'s values to {feed}"
+
+    # ------------------------------------------------------------ the publisher's calls
+
+    def rows(self, changed: Iterable[RowView]) -> None:
+        """Rows whose value or health changed since the last flush (a row not read yet
+        has nothing to say)."""
+        wall = time.time()
+        views = [view for view in changed if view.status != WAITING]
+        if self.mqtt is not None:
+            self._to_mqtt(self.mqtt, views, wall)
+        board = self._board
+        if board is not None:
+            from ..plant.payload import OK, numeric_fields
+
+            for view in views:
+                variant = view.variant
+                fields = (
+                    numeric_fields(view.var, variant)
+                    if view.status == OK and variant is not None
+                    else None
+                )
+                board.set_value(self.name, str(view.var), view.label, fields)
+
+    def removed(self, variables: Iterable[VarRef]) -> None:
+        """Rows unwatched: their numbers leave ``/metrics`` (their retained topics stay,
+        with the time of their last read)."""
+        if self._board is not None:
+            for var in variables:
+                self._board.remove(self.name, str(var))
+
+    def status(self, status: Status) -> None:
+        if self._board is not None:
+            from ..plant.metrics import TargetFigures
+
+            self._board.set_figures(
+                self.name,
+                TargetFigures(
+                    status.connection == "connected",
+                    status.rtt,
+                    status.cycle_seconds,
+                    status.reads,
+                ),
+            )
+
+    def close(self) -> None:
+        self.stop_publishing()
+
+    def _to_mqtt(self, feed: MqttFeed, views: Iterable[RowView], wall: float) -> None:
+        from ..plant.payload import payload
+
+        name = self.name
+        for view in views:
+            if view.status == WAITING:
+                continue
+            var = view.var
+            feed.update(str(var), payload(name, var, view.label, view.variant, view.status, wall))
+
+
+def plant_name(host: str | None, port: int, profile: str | None) -> str:
+    """A target's name in topics and labels: its profile's, ``sim`` for the built-in
+    simulator, else its host (with ``:PORT`` when not RAC's 5006)."""
+    if profile is not None:
+        return profile
+    if host is None:
+        return "sim"
+    return host if port == 5006 else f"{host}:{port}"
+
+
+def open_tap(options: EngineOptions, target: Target, say: Callable[[str], None]) -> PlantTap:
+    """An engine's tap, named as ``options`` say or after its target."""
+    profile = target.profile
+    name = options.plant_name or plant_name(
+        target.host, target.port, profile.name if profile is not None else None
+    )
+    return PlantTap(name, options.credentials, options.metrics, say)

@@ -1,0 +1,240 @@
+"""One target's watched values to an MQTT broker: retained topics, QoS 1, a last will.
+
+Each target has its own connection, so that its ``PREFIX/<target>/status`` topic has a
+last will of its own (``offline``, retained): a console killed, a cable pulled, and the
+plant sees that target's values are no longer live.
+
+Polling never waits on the broker. The engine's thread only puts the latest payload of a
+topic in a dict (:meth:`MqttFeed.update`); a thread of the feed's own hands them to
+paho-mqtt, at most :data:`IN_FLIGHT` unacknowledged at a time, and paho's thread does the
+network. While the broker is away the dict keeps the latest payload of every topic, so
+memory stays bounded whatever the outage; when it is back, every topic is published
+again (a broker that restarted without persistence has lost its retained messages).
+Each trouble is said once, and its end once.
+"""
+
+from __future__ import annotations
+
+import secrets
+import threading
+from collections.abc import Callable
+from typing import Any
+
+from ..commands.plant import Credentials, MqttAddress
+from ..protocol import InputError
+from ..protocol.text import terminal_safe
+from .extras import need
+
+#: Messages handed to paho and not yet acknowledged, at most (the rest wait, coalesced).
+IN_FLIGHT = 200
+QOS = 1
+#: Seconds between tries while the broker is away: from the first to the last, doubling.
+RETRY_FIRST, RETRY_MOST = 1, 30
+KEEPALIVE = 15
+ONLINE, OFFLINE = b"online", b"offline"
+
+
+class MqttFeed:
+    """Start it, :meth:`update` from the engine's thread, :meth:`stop` it."""
+
+    def __init__(
+        self,
+        address: MqttAddress,
+        credentials: Credentials,
+        target: str,
+        say: Callable[[str], None],
+    ) -> None:
+        """``say`` tells the user something (from paho's thread or the feed's)."""
+        mqtt = need("paho.mqtt.client", "publishing to MQTT")
+        self.address, self.target = address, target
+        self.base = f"{address.prefix}/{target}"
+        self.status_topic = f"{self.base}/status"
+        self._say = say
+        self._lock = threading.Condition()
+        self._latest: dict[str, bytes] = {}  # every topic's last payload
+        self._pending: dict[str, bytes] = {}  # to be handed to paho
+        self._in_flight = 0  # handed to paho, not yet acknowledged
+        self._topics: dict[int, str] = {}  # message id: topic, until acknowledged
+        self._early: dict[int, Any] = {}  # acknowledged before its id was noted
+        self._denied: set[str] = set()  # topics the broker refused (said once each)
+        self._connected = False
+        self._ever_connected = False
+        self._trouble: str | None = None  # what was said of the broker last
+        self._stopping = False
+        self.sent = 0  # messages acknowledged by the broker
+        client = mqtt.Client(
+            callback_api_version=mqtt.CallbackAPIVersion.VERSION2,
+            client_id=f"rac-console-{secrets.token_hex(6)}",
+            protocol=mqtt.MQTTv5,
+        )
+        client.will_set(self.status_topic, OFFLINE, qos=QOS, retain=True)
+        if credentials.username is not None:
+            client.username_pw_set(credentials.username, credentials.password)
+        if address.tls:
+            try:
+                client.tls_set(ca_certs=credentials.ca_file)
+            except (OSError, ValueError) as exc:
+                where = credentials.ca_file or "the system's certificates"
+                raise InputError(f"mqtts: cannot use {terminal_safe(where)}: {exc}") from None
+        client.reconnect_delay_set(RETRY_FIRST, RETRY_MOST)
+        client.on_connect = self._on_connect
+        client.on_connect_fail = self._on_connect_fail
+        client.on_disconnect = self._on_disconnect
+        client.on_publish = self._on_publish
+        self._client = client
+        self._feeder = threading.Thread(target=self._feed, name="rac-mqtt", daemon=True)
+
+    def __str__(self) -> str:
+        return f"{self.address}/{self.target}/…"
+
+    # ------------------------------------------------------------ any thread
+
+    def start(self) -> None:
+        """Connect in the background: nothing here waits on the network."""
+        self._client.connect_async(self.address.host, self.address.port, keepalive=KEEPALIVE)
+        self._client.loop_start()
+        self._feeder.start()
+
+    def update(self, variable: str, payload: bytes) -> None:
+        """The latest payload of ``PREFIX/<target>/<variable>`` (the engine's thread:
+        never blocks on the network)."""
+        topic = f"{self.base}/{variable}"
+        with self._lock:
+            self._latest[topic] = payload
+            self._pending[topic] = payload
+            self._lock.notify()
+
+    @property
+    def connected(self) -> bool:
+        return self._connected
+
+    def stop(self, timeout: float = 2.0) -> None:
+        """Hand over what is pending (for up to ``timeout``), say ``offline`` on the
+        status topic, and disconnect: a clean end sends no last will."""
+        with self._lock:
+            if self._connected:
+                self._lock.wait_for(lambda: not self._pending and not self._in_flight, timeout)
+            self._stopping = True
+            connected = self._connected
+            self._lock.notify_all()
+        if connected:
+            with self._lock:
+                self._in_flight += 1
+            self._publish(self.status_topic, OFFLINE)
+            with self._lock:
+                self._lock.wait_for(lambda: not self._in_flight, timeout)
+        self._client.disconnect()
+        self._client.loop_stop()
+        if self._feeder.is_alive():
+            self._feeder.join(timeout)
+
+    # ------------------------------------------------------------ the feed's thread
+
+    def _feed(self) -> None:
+        while True:
+            with self._lock:
+                self._lock.wait_for(self._ready)
+                if self._stopping:
+                    return
+                batch = list(self._pending.items())[: IN_FLIGHT - self._in_flight]
+                for topic, _ in batch:
+                    del self._pending[topic]
+                self._in_flight += len(batch)
+            # paho calls on_publish holding its own lock: never publish holding ours
+            for topic, data in batch:
+                self._publish(topic, data)
+
+    def _publish(self, topic: str, data: bytes) -> None:
+        """Hand one message to paho (counted in flight by the caller)."""
+        info = self._client.publish(topic, data, qos=QOS, retain=True)
+        with self._lock:
+            if info.rc != 0:  # no connection now: it goes out again when there is one
+                self._in_flight = max(0, self._in_flight - 1)
+                self._lock.notify_all()
+                return
+            reason = self._early.pop(info.mid, None)
+            if reason is None:
+                self._topics[info.mid] = topic
+        if reason is not None:
+            self._acknowledged(topic, reason)
+
+    def _ready(self) -> bool:
+        return self._stopping or (
+            self._connected and bool(self._pending) and self._in_flight < IN_FLIGHT
+        )
+
+    # ------------------------------------------------------------ paho's thread
+
+    def _on_connect(
+        self, client: Any, userdata: Any, flags: Any, reason: Any, properties: Any
+    ) -> None:
+        if reason.is_failure:
+            self._trouble_once(
+                f"the MQTT broker {self.address.host}:{self.address.port} refused {self.target}'s "
+                f"connection ({reason}); trying again every {RETRY_MOST} s at most"
+            )
+            return
+        with self._lock:
+            self._connected = True
+            self._in_flight = 1  # the status; paho sends again what it had in flight
+            self._topics.clear()
+            self._early.clear()
+            self._pending = dict(self._latest)  # the broker may have lost them all
+            count = len(self._pending)
+            self._lock.notify_all()
+        self._publish(self.status_topic, ONLINE)
+        if not self._ever_connected:
+            self._ever_connected = True
+            self._trouble = None
+            self._say(f"publishing {self.target}'s watched values to {self} (retained, QoS 1)")
+        elif self._trouble is not None:
+            self._trouble = None
+            self._say(
+                f"the MQTT broker is back: {self.target}'s {count} value"
+                f"{'s' * (count != 1)} published again"
+            )
+
+    def _on_connect_fail(self, client: Any, userdata: Any) -> None:
+        self._trouble_once(
+            f"cannot reach the MQTT broker {self.address.host}:{self.address.port} for "
+            f"{self.target}; trying again every {RETRY_MOST} s at most, polling goes on"
+        )
+
+    def _on_disconnect(
+        self, client: Any, userdata: Any, flags: Any, reason: Any, properties: Any
+    ) -> None:
+        with self._lock:
+            was = self._connected
+            self._connected = False
+            stopping = self._stopping
+            self._lock.notify_all()
+        if was and not stopping:
+            self._trouble_once(
+                f"lost the MQTT broker {self.address.host}:{self.address.port} ({reason}); "
+                f"retrying, polling goes on: the latest of each of {self.target}'s values "
+                "goes out when it is back"
+            )
+
+    def _on_publish(
+        self, client: Any, userdata: Any, mid: int, reason: Any, properties: Any
+    ) -> None:
+        with self._lock:
+            self._in_flight = max(0, self._in_flight - 1)
+            self.sent += 1
+            topic = self._topics.pop(mid, None)
+            if topic is None:
+                self._early[mid] = reason
+            self._lock.notify_all()
+        if topic is not None:
+            self._acknowledged(topic, reason)
+
+    def _acknowledged(self, topic: str, reason: Any) -> None:
+        if reason.is_failure and topic not in self._denied:
+            self._denied.add(topic)
+            self._say(f"the MQTT broker did not take {terminal_safe(topic)}: {reason}")
+
+    def _trouble_once(self, text: str) -> None:
+        kind = text.split(" ", 3)[:3]
+        if self._trouble != " ".join(kind):
+            self._trouble = " ".join(kind)
+            self._say(text)
