@@ -79,7 +79,7 @@ def test_command_names_complete_from_what_is_typed(text: str, expected: list[str
 def test_help_completes_command_names() -> None:
     assert texts("help ") == COMMAND_NAMES
     candidates = complete("help pu")
-    assert [(c.text, c.start) for c in candidates] == [("put", 2)]
+    assert [(c.text, c.start) for c in candidates] == [("put", 2), ("publish", 2)]
     assert texts("help put ") == []
 
 
