@@ -156,6 +156,8 @@ def _interactive(args: argparse.Namespace) -> int:
         for member in cell.members:
             for notice in member.target.notices:
                 member.engine.alert(notice)
+        for notice in getattr(args, "plant_notices", ()):
+            cell.members[0].engine.alert(notice)
     if args.watch:
         from ..engine.watchlist import load
 

@@ -23,15 +23,20 @@ PLANT_COMMANDS = (None, "repl", "watch")
 def settle_plant(args: argparse.Namespace) -> bool:
     """``args.plant``: the EngineOptions fields of the plant. False after one line on
     stderr when something asked for cannot be done."""
+    notices: list[str] = []
     try:
-        args.plant = _plant_options(args)
+        args.plant = _plant_options(args, notices)
     except InputError as exc:
         print(f"rac-console: {terminal_safe(str(exc))}", file=sys.stderr)
         return False
+    args.plant_notices = notices  # the console shows them in its results pane
+    if args.command is not None:
+        for notice in notices:
+            print(f"rac-console: {notice}", file=sys.stderr)
     return True
 
 
-def _plant_options(args: argparse.Namespace) -> dict[str, Any]:
+def _plant_options(args: argparse.Namespace, notices: list[str]) -> dict[str, Any]:
     from ..engine.config import load_config
 
     config = load_config()
@@ -59,10 +64,11 @@ def _plant_options(args: argparse.Namespace) -> dict[str, Any]:
         server = MetricsServer(where, board)
         atexit.register(server.stop)
         options["metrics"] = board
+        host = f"[{where.host}]" if ":" in where.host else where.host
+        notices.append(f"serving the watched values at http://{host}:{server.port}/metrics")
         if not where.loopback:
-            print(
-                f"rac-console: --metrics serves {where} to the network: anyone who reaches "
-                "this machine can read the watched values",
-                file=sys.stderr,
+            notices.append(
+                f"--metrics {where} is open to the network: anyone who reaches this "
+                "machine can read the watched values"
             )
     return options

@@ -132,7 +132,9 @@ class MetricsAddress:
         return f"{host}:{self.port}"
 
 
-METRICS_USAGE = "[HOST:]PORT, e.g. --metrics 9108 (this machine only) or 127.0.0.1:9108"
+METRICS_USAGE = (
+    "[HOST:]PORT, e.g. --metrics 9108 (this machine only) or 127.0.0.1:9108 (port 0: any free one)"
+)
 
 
 def parse_metrics_address(text: str) -> MetricsAddress:
@@ -144,7 +146,7 @@ def parse_metrics_address(text: str) -> MetricsAddress:
         host, _, port_text = text[1:].partition("]:")
     elif ":" in text:
         host, _, port_text = text.rpartition(":")
-    if not (port_text.isascii() and port_text.isdigit()) or not 0 < int(port_text) < 65536:
+    if not (port_text.isascii() and port_text.isdigit()) or not 0 <= int(port_text) < 65536:
         raise InputError(f"--metrics takes {METRICS_USAGE}, got {terminal_safe(text)!r}")
     if not host or not host.isprintable() or any(c.isspace() for c in host):
         raise InputError(f"--metrics takes {METRICS_USAGE}, got {terminal_safe(text)!r}")

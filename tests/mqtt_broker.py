@@ -1,0 +1,148 @@
+"""A real mosquitto for the plant's tests, and a subscriber that waits on what it saw.
+
+The broker is Debian's ``mosquitto`` (installed by ``.ci/run`` where missing), started
+here on 127.0.0.1 and a free port with a configuration of the test's own; a test that
+needs it skips when it is not installed (the Windows lane: it is a Linux program).
+"""
+
+from __future__ import annotations
+
+import getpass
+import json
+import shutil
+import socket
+import subprocess
+import threading
+import time
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+
+def mosquitto_path() -> str | None:
+    return shutil.which("mosquitto") or shutil.which("mosquitto", path="/usr/sbin:/usr/local/sbin")
+
+
+needs_mosquitto = pytest.mark.skipif(
+    mosquitto_path() is None, reason="mosquitto is not installed (.ci/run installs it)"
+)
+
+
+def free_port() -> int:
+    with socket.socket() as sock:
+        sock.bind(("127.0.0.1", 0))
+        return int(sock.getsockname()[1])
+
+
+class Broker:
+    """mosquitto on 127.0.0.1:``port``: :meth:`start`, :meth:`stop`, start again on the
+    same port (a restart loses its retained messages: persistence is off)."""
+
+    def __init__(self, folder: Path, lines: tuple[str, ...] = ("allow_anonymous true",)) -> None:
+        self.folder = folder
+        self.lines = lines
+        self.port = free_port()
+        self.process: subprocess.Popen[bytes] | None = None
+
+    @property
+    def url(self) -> str:
+        return f"mqtt://127.0.0.1:{self.port}"
+
+    def start(self, deadline: float = 10.0) -> Broker:
+        path = mosquitto_path()
+        assert path is not None
+        config = self.folder / "mosquitto.conf"
+        config.write_text(
+            "\n".join(
+                (
+                    f"listener {self.port} 127.0.0.1",
+                    "persistence false",
+                    f"user {getpass.getuser()}",  # it reads the test's files as the test
+                    *self.lines,
+                    "",
+                )
+            )
+        )
+        log = (self.folder / "mosquitto.log").open("ab")
+        self.process = subprocess.Popen(
+            [path, "-c", str(config)], stdout=log, stderr=subprocess.STDOUT
+        )
+        log.close()
+        until = time.monotonic() + deadline
+        while True:
+            if self.process.poll() is not None:
+                raise AssertionError(
+                    f"mosquitto ended: {(self.folder / 'mosquitto.log').read_text()}"
+                )
+            try:
+                socket.create_connection(("127.0.0.1", self.port), timeout=0.5).close()
+                return self
+            except OSError:
+                if time.monotonic() > until:
+                    raise AssertionError("mosquitto did not listen in time") from None
+                time.sleep(0.05)
+
+    def stop(self) -> None:
+        if self.process is not None and self.process.poll() is None:
+            self.process.terminate()
+            try:
+                self.process.wait(10)
+            except subprocess.TimeoutExpired:
+                self.process.kill()
+                self.process.wait(10)
+        self.process = None
+
+
+class Subscriber:
+    """A paho client subscribed to ``topic``: every message kept, in order, and the
+    last of each topic; :meth:`wait_for` waits on a condition with a deadline."""
+
+    def __init__(self, port: int, topic: str = "#", user: tuple[str, str] | None = None) -> None:
+        import paho.mqtt.client as mqtt
+
+        self.messages: list[tuple[str, bytes, bool]] = []
+        self.last: dict[str, bytes] = {}
+        self._changed = threading.Condition()
+        client = mqtt.Client(callback_api_version=mqtt.CallbackAPIVersion.VERSION2)
+        client.on_message = self._on_message
+        client.on_connect = lambda c, u, f, r, p: c.subscribe(topic, qos=1)
+        if user is not None:
+            client.username_pw_set(*user)
+        client.connect("127.0.0.1", port, keepalive=30)
+        client.loop_start()
+        self.client = client
+
+    def _on_message(self, client: Any, userdata: Any, message: Any) -> None:
+        with self._changed:
+            self.messages.append((message.topic, message.payload, bool(message.retain)))
+            self.last[message.topic] = message.payload
+            self._changed.notify_all()
+
+    def wait_for(
+        self, what: str, holds: Callable[[Subscriber], bool], deadline: float = 15
+    ) -> None:
+        with self._changed:
+            if not self._changed.wait_for(lambda: holds(self), deadline):
+                shown = "\n".join(f"{t} {p!r}" for t, p, _ in self.messages[-20:])
+                raise AssertionError(f"timed out waiting for {what}; last messages:\n{shown}")
+
+    def value(self, topic: str) -> Any:
+        """The ``value`` of the last JSON payload on ``topic`` (KeyError: none came)."""
+        return json.loads(self.last[topic])["value"]
+
+    def has_value(self, topic: str, value: Any) -> Callable[[Subscriber], bool]:
+        def holds(sub: Subscriber) -> bool:
+            payload = sub.last.get(topic)
+            return (
+                payload is not None
+                and payload[:1] == b"{"
+                and json.loads(payload)["value"] == value
+            )
+
+        return holds
+
+    def close(self) -> None:
+        self.client.loop_stop()
+        self.client.disconnect()

@@ -1,0 +1,414 @@
+"""Feeding the plant over MQTT: the real CLI as a subprocess, a real mosquitto started
+here (127.0.0.1, a free port), and a simulator on a thread of the test's whose values the
+test changes itself.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import json
+import os
+import queue
+import signal
+import subprocess
+import sys
+import threading
+import time
+from collections.abc import Callable, Iterator
+from pathlib import Path
+
+import pytest
+from mqtt_broker import Broker, Subscriber, needs_mosquitto
+from servers import RecordingServer
+from test_cli import cli, env, fixed_reply, one_error_line, recording
+
+from rac_console.protocol import KINDS, VT, Variant
+from rac_console.session import Session
+from rac_console.sim.thread import SimulatorThread
+
+pytestmark = [needs_mosquitto, pytest.mark.slow]
+env = env  # the fixtures: a private HOME for the CLI, servers that stop with the test
+recording = recording
+
+#: ASCII, as RAC's wire is: JSON's quotes and braces, terminal escapes, MQTT's wildcards.
+HOSTILE = '"},"value":666,"x":"\x1b[2J\x1b]0;owned\x07{#}+/\\'
+
+
+@pytest.fixture
+def broker(tmp_path: Path) -> Iterator[Broker]:
+    started = Broker(tmp_path).start()
+    try:
+        yield started
+    finally:
+        started.stop()
+
+
+@pytest.fixture
+def subscriber(broker: Broker) -> Iterator[Subscriber]:
+    watching = Subscriber(broker.port, "plant/#")
+    try:
+        yield watching
+    finally:
+        watching.close()
+
+
+@pytest.fixture
+def sim() -> Iterator[SimulatorThread]:
+    with SimulatorThread() as simulator:
+        yield simulator
+
+
+def put(sim: SimulatorThread, kind: str, index: int, value: Variant) -> None:
+    """Change a value on the simulator over a session of the test's own."""
+    session = Session(sim.host, sim.port, timeout=5)
+    try:
+        assert session.put(KINDS[kind], index, value).response.ok
+    finally:
+        session.close()
+
+
+class Running:
+    """A CLI command left running: its stdout and stderr lines as they come."""
+
+    def __init__(self, environment: dict[str, str], *args: str) -> None:
+        self.process = subprocess.Popen(
+            [sys.executable, "-m", "rac_console", *args],
+            env=environment,
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+            text=True,
+            encoding="utf-8",
+            errors="backslashreplace",
+        )
+        self.out: list[str] = []
+        self.err: list[str] = []
+        self._lines: queue.Queue[None] = queue.Queue()
+        self._lock = threading.Lock()
+        for stream, kept in ((self.process.stdout, self.out), (self.process.stderr, self.err)):
+            threading.Thread(target=self._read, args=(stream, kept), daemon=True).start()
+
+    def _read(self, stream: object, kept: list[str]) -> None:
+        for line in stream:  # type: ignore[attr-defined]
+            with self._lock:
+                kept.append(line.rstrip("\n"))
+            self._lines.put(None)
+
+    def wait_for(self, what: str, holds: Callable[[], bool], deadline: float = 20) -> None:
+        until = time.monotonic() + deadline
+        while True:
+            with self._lock:
+                if holds():
+                    return
+            left = until - time.monotonic()
+            if left <= 0 or (self.process.poll() is not None and self._lines.empty()):
+                with self._lock:
+                    if holds():
+                        return
+                raise AssertionError(f"timed out waiting for {what}:\n{self.out[-5:]}\n{self.err}")
+            with contextlib.suppress(queue.Empty):
+                self._lines.get(timeout=min(left, 0.5))
+
+    def stop(self) -> int:
+        if self.process.poll() is None:
+            self.process.send_signal(signal.SIGINT)
+            try:
+                return self.process.wait(20)
+            except subprocess.TimeoutExpired:
+                self.process.kill()
+        return self.process.wait(20)
+
+
+@pytest.fixture
+def running() -> Iterator[list[Running]]:
+    started: list[Running] = []
+    yield started
+    for command in started:
+        if command.process.poll() is None:
+            command.process.kill()
+            command.process.wait(20)
+
+
+# ------------------------------------------------------------------ topics and payloads
+
+
+def test_watched_values_arrive_on_retained_topics_with_their_fields(
+    env: dict[str, str], broker: Broker
+) -> None:
+    result = cli(
+        env, "watch", "I", "1", "P", "1", "IO", "3", "S", "1", "--count", "2",
+        "--mqtt", f"{broker.url}/plant/line2",
+    )  # fmt: skip
+    assert result.returncode == 0, result.stderr
+    assert "publishing sim's watched values to" in result.stderr
+    # A subscriber that comes afterwards gets them all: they are retained.
+    late = Subscriber(broker.port, "plant/#")
+    try:
+        topics = ("I1", "P1", "IO3", "S1", "status")
+        late.wait_for(
+            "every topic", lambda s: all(f"plant/line2/sim/{t}" in s.last for t in topics)
+        )
+        retained = {topic for topic, _, retain in late.messages if retain}
+        assert retained >= {f"plant/line2/sim/{t}" for t in topics}
+        i1 = json.loads(late.last["plant/line2/sim/I1"])
+        assert i1["value"] == 1 and i1["vartype"] == "VT_I4" and i1["status"] == "OK"
+        assert i1["target"] == "sim" and i1["variable"] == "I1"
+        assert i1["time"].endswith("Z")
+        p1 = json.loads(late.last["plant/line2/sim/P1"])["value"]
+        assert p1 == {
+            "X": 350.0,
+            "Y": 0.0,
+            "Z": 450.0,
+            "Rx": 180.0,
+            "Ry": 0.0,
+            "Rz": 180.0,
+            "Fig": 5.0,
+        }
+        assert json.loads(late.last["plant/line2/sim/IO3"])["value"] in (True, False)
+        assert json.loads(late.last["plant/line2/sim/S1"])["value"] == "RC8 simulator"
+        # The watch ended cleanly: its status says so (no last will needed).
+        assert late.last["plant/line2/sim/status"] == b"offline"
+    finally:
+        late.close()
+
+
+def test_a_change_is_published_and_an_unchanged_value_is_not_sent_again(
+    env: dict[str, str], broker: Broker, subscriber: Subscriber, sim: SimulatorThread,
+    running: list[Running],
+) -> None:  # fmt: skip
+    watch = Running(
+        env, "-H", sim.host, "-p", str(sim.port), "watch", "I", "7", "I", "8",
+        "--every", "0.05", "--mqtt", f"{broker.url}/plant",
+    )  # fmt: skip
+    running.append(watch)
+    topic = f"plant/{sim.host}:{sim.port}/I7"
+    subscriber.wait_for("the first value", subscriber.has_value(topic, 0))
+    watch.wait_for("ten cycles more", lambda: len(watch.out) >= 10)
+    assert [t for t, _, _ in subscriber.messages].count(topic) == 1
+    put(sim, "I", 7, Variant(VT.I4, 41))
+    subscriber.wait_for("the change", subscriber.has_value(topic, 41))
+    assert watch.stop() == 0
+    assert sum("publishing" in line for line in watch.err) == 1  # said once
+
+
+def test_the_last_will_says_offline_when_the_watch_is_killed(
+    env: dict[str, str], broker: Broker, subscriber: Subscriber, running: list[Running]
+) -> None:
+    watch = Running(env, "watch", "I", "1", "--every", "0.2", "--mqtt", f"{broker.url}/plant")
+    running.append(watch)
+    subscriber.wait_for("online", lambda s: s.last.get("plant/sim/status") == b"online")
+    watch.process.kill()  # no clean end: only the broker can say it
+    watch.process.wait(20)
+    subscriber.wait_for("the last will", lambda s: s.last.get("plant/sim/status") == b"offline")
+
+
+def test_a_broker_restarted_mid_watch_loses_no_change_and_never_stalls_polling(
+    env: dict[str, str], broker: Broker, sim: SimulatorThread, running: list[Running]
+) -> None:
+    watch = Running(
+        env, "-H", sim.host, "-p", str(sim.port), "--json", "watch", "I", "20", "I", "21",
+        "--every", "0.05", "--mqtt", f"{broker.url}/plant",
+    )  # fmt: skip
+    running.append(watch)
+    base = f"plant/{sim.host}:{sim.port}"
+    first = Subscriber(broker.port, "plant/#")
+    first.wait_for("the first values", first.has_value(f"{base}/I20", 0))
+    first.close()
+
+    broker.stop()
+    watch.wait_for("the loss said", lambda: any("lost the MQTT broker" in e for e in watch.err))
+    put(sim, "I", 20, Variant(VT.I4, 2020))  # changed while the broker is away
+    # Polling goes on without the broker: the watch's own lines show the change.
+    watch.wait_for(
+        "the change polled",
+        lambda: any(json.loads(line)["values"]["I20"] == 2020 for line in watch.out),
+    )
+    broker.start()  # the same port; it lost every retained message (no persistence)
+    back = Subscriber(broker.port, "plant/#")
+    try:
+        back.wait_for("the change kept over the outage", back.has_value(f"{base}/I20", 2020))
+        back.wait_for("the unchanged value too", back.has_value(f"{base}/I21", 0))
+        put(sim, "I", 21, Variant(VT.I4, 2121))  # and changes after it is back
+        back.wait_for("a change after", back.has_value(f"{base}/I21", 2121))
+        assert back.last[f"{base}/status"] == b"online"
+    finally:
+        back.close()
+    assert watch.stop() == 0
+    said = "\n".join(watch.err)
+    assert said.count("lost the MQTT broker") == 1
+    assert said.count("the MQTT broker is back") == 1
+    assert "Traceback" not in said
+
+
+def test_a_hostile_controller_string_arrives_intact_and_harmless(
+    env: dict[str, str],
+    broker: Broker,
+    subscriber: Subscriber,
+    recording: Callable[..., RecordingServer],
+) -> None:
+    server = recording(fixed_reply(b"0,8," + HOSTILE.encode("utf-8") + b"\r"))
+    result = cli(
+        env, *server.args, "--json", "watch", "S", "4", "--count", "1",
+        "--mqtt", f"{broker.url}/plant",
+    )  # fmt: skip
+    assert result.returncode == 0, result.stderr
+    shown = json.loads(result.stdout)["values"]["S4"]  # what --json says the string is
+    base = f"plant/127.0.0.1:{server.port}"
+    topic = f"{base}/S4"
+    subscriber.wait_for("the string", lambda s: topic in s.last)
+    payload = subscriber.last[topic]
+    assert payload.isascii() and b"\x1b" not in payload and b"\x07" not in payload
+    data = json.loads(payload)
+    assert data["value"] == shown and "\x1b[2J" in shown  # intact, as --json gives it
+    assert set(data) == {"value", "vartype", "status", "time", "target", "variable"}
+    # No topic other than the variable's and the status was made of it.
+    assert {t for t, _, _ in subscriber.messages} <= {topic, f"{base}/status"}
+    assert "\x1b" not in result.stderr
+
+
+def test_nothing_received_from_the_broker_reaches_the_controller(
+    env: dict[str, str], broker: Broker, subscriber: Subscriber, sim: SimulatorThread,
+    running: list[Running], tmp_path: Path,
+) -> None:  # fmt: skip
+    record = tmp_path / "wire.jsonl"
+    watch = Running(
+        env, "-H", sim.host, "-p", str(sim.port), "--record", str(record), "watch", "I", "30",
+        "--every", "0.05", "--mqtt", f"{broker.url}/plant",
+    )  # fmt: skip
+    running.append(watch)
+    base = f"plant/{sim.host}:{sim.port}"
+    subscriber.wait_for("the value", subscriber.has_value(f"{base}/I30", 0))
+    for topic in (f"{base}/I30", f"{base}/I30/set", f"{base}/set", f"{base}/I30/put"):
+        for payload in (b"99", b'{"value": 99}', b"PUT:RC8:30:I:3,99"):
+            subscriber.client.publish(topic, payload, qos=1).wait_for_publish(5)
+    watch.wait_for("twenty cycles more", lambda: len(watch.out) >= 20)
+    assert watch.stop() == 0
+    session = Session(sim.host, sim.port, timeout=5)
+    try:
+        assert session.get(KINDS["I"], 30).response.variant == Variant(VT.I4, 0)
+    finally:
+        session.close()
+    sent = [json.loads(line) for line in record.read_text().splitlines()]
+    assert sent and all("PUT" not in frame.get("text", "") for frame in sent)
+
+
+# ------------------------------------------------------------------ refusals, said once
+
+
+def test_a_broker_that_refuses_is_one_line_and_polling_goes_on(
+    env: dict[str, str], tmp_path: Path
+) -> None:
+    passwords = tmp_path / "passwords"
+    subprocess.run(
+        ["mosquitto_passwd", "-b", "-c", str(passwords), "rac", "right-password"], check=True
+    )
+    broker = Broker(tmp_path, ("allow_anonymous false", f"password_file {passwords}")).start()
+    try:
+        environment = env | {"RAC_MQTT_USERNAME": "rac", "RAC_MQTT_PASSWORD": "wrong-password"}
+        result = cli(
+            environment, "watch", "I", "1", "--every", "0.2", "--count", "8",
+            "--mqtt", f"{broker.url}/plant",
+        )  # fmt: skip
+    finally:
+        broker.stop()
+    assert result.returncode == 0, result.stderr
+    assert len(result.stdout.splitlines()) == 8  # every cycle polled and shown
+    refusals = [line for line in result.stderr.splitlines() if "refused" in line]
+    assert len(refusals) == 1, result.stderr
+    assert "wrong-password" not in result.stderr + result.stdout
+
+
+def test_the_right_password_from_the_config_file_is_used_and_never_printed(
+    env: dict[str, str], tmp_path: Path
+) -> None:
+    passwords = tmp_path / "passwords"
+    subprocess.run(
+        ["mosquitto_passwd", "-b", "-c", str(passwords), "rac", "s3cret-Pa55"], check=True
+    )
+    broker = Broker(tmp_path, ("allow_anonymous false", f"password_file {passwords}")).start()
+    config = Path(env["XDG_CONFIG_HOME"]) / "rac-console" / "config.toml"
+    config.parent.mkdir(parents=True)
+    config.write_text('[mqtt]\nusername = "rac"\npassword = "s3cret-Pa55"\n')
+    try:
+        result = cli(env, "watch", "I", "1", "--count", "2", "--mqtt", f"{broker.url}/plant")
+        late = Subscriber(broker.port, "plant/#", user=("rac", "s3cret-Pa55"))
+        try:  # anonymous is refused: read as the user
+            late.wait_for("the value", late.has_value("plant/sim/I1", 1))
+        finally:
+            late.close()
+    finally:
+        broker.stop()
+    assert result.returncode == 0, result.stderr
+    assert "s3cret-Pa55" not in result.stderr + result.stdout
+    assert "refused" not in result.stderr
+
+
+def test_a_denied_topic_is_one_line_and_polling_goes_on(
+    env: dict[str, str], tmp_path: Path
+) -> None:
+    acl = tmp_path / "acl"
+    acl.write_text("topic write plant/sim/status\ntopic write plant/sim/I1\n")
+    broker = Broker(tmp_path, ("allow_anonymous true", f"acl_file {acl}")).start()
+    try:
+        result = cli(
+            env, "watch", "I", "1", "I", "2", "--every", "0.2", "--count", "6",
+            "--mqtt", f"{broker.url}/plant",
+        )  # fmt: skip
+    finally:
+        broker.stop()
+    assert result.returncode == 0, result.stderr
+    assert len(result.stdout.splitlines()) == 6
+    denied = [line for line in result.stderr.splitlines() if "did not take" in line]
+    assert len(denied) == 1 and "plant/sim/I2" in denied[0], result.stderr
+
+
+def test_a_broker_that_is_not_there_is_one_line_and_polling_goes_on(
+    env: dict[str, str],
+) -> None:
+    from mqtt_broker import free_port
+
+    result = cli(
+        env, "watch", "I", "1", "--every", "0.2", "--count", "6",
+        "--mqtt", f"mqtt://127.0.0.1:{free_port()}/plant",
+    )  # fmt: skip
+    assert result.returncode == 0, result.stderr
+    assert len(result.stdout.splitlines()) == 6
+    assert len([e for e in result.stderr.splitlines() if "cannot reach" in e]) == 1
+
+
+# ------------------------------------------------------------------ refused before anything
+
+
+@pytest.mark.parametrize(
+    ("url", "says"),
+    [
+        ("mqtt://rac:hunter2@127.0.0.1/plant", "no user or password"),
+        ("mqtt://127.0.0.1", "give a topic prefix"),
+        ("mqtt://127.0.0.1/plant/+", "reserve"),
+        ("http://127.0.0.1/plant", "mqtt:// or mqtts://"),
+        ("mqtt://127.0.0.1:99999/plant", "port"),
+    ],
+)
+def test_an_address_that_cannot_be_used_is_refused_before_polling(
+    env: dict[str, str], url: str, says: str
+) -> None:
+    result = cli(env, "watch", "I", "1", "--count", "1", "--mqtt", url)
+    assert result.returncode == 2
+    line = one_error_line(result)
+    assert says in line and "hunter2" not in line
+    assert result.stdout == ""
+
+
+def test_without_the_extra_the_message_says_how_to_get_it(
+    env: dict[str, str], tmp_path: Path
+) -> None:
+    shadow = tmp_path / "shadow"
+    for package in ("paho", "prometheus_client"):
+        (shadow / package).mkdir(parents=True)
+        (shadow / package / "__init__.py").write_text("raise ImportError('not installed')\n")
+    environment = env | {"PYTHONPATH": os.pathsep.join([str(shadow), env.get("PYTHONPATH", "")])}
+    mqtt = cli(environment, "watch", "I", "1", "--mqtt", "mqtt://127.0.0.1/plant")
+    assert mqtt.returncode == 2
+    assert 'pip install "rac-console[mqtt]"' in one_error_line(mqtt)
+    metrics = cli(environment, "watch", "I", "1", "--metrics", "0")
+    assert metrics.returncode == 2
+    assert 'pip install "rac-console[metrics]"' in one_error_line(metrics)
