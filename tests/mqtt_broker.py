@@ -1,4 +1,5 @@
-"""A real mosquitto for the plant's tests, and a subscriber that waits on what it saw.
+"""A real mosquitto for the plant's tests, a subscriber that waits on what it saw, and
+a CLI command left running whose lines are waited on.
 
 The broker is Debian's ``mosquitto`` (installed by ``.ci/run`` where missing), started
 here on 127.0.0.1 and a free port with a configuration of the test's own; a test that
@@ -7,11 +8,15 @@ needs it skips when it is not installed (the Windows lane: it is a Linux program
 
 from __future__ import annotations
 
+import contextlib
 import getpass
 import json
+import queue
 import shutil
+import signal
 import socket
 import subprocess
+import sys
 import threading
 import time
 from collections.abc import Callable
@@ -146,3 +151,54 @@ class Subscriber:
     def close(self) -> None:
         self.client.loop_stop()
         self.client.disconnect()
+
+
+class Running:
+    """A CLI command left running: its stdout and stderr lines as they come."""
+
+    def __init__(self, environment: dict[str, str], *args: str) -> None:
+        self.process = subprocess.Popen(
+            [sys.executable, "-m", "rac_console", *args],
+            env=environment,
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+            text=True,
+            encoding="utf-8",
+            errors="backslashreplace",
+        )
+        self.out: list[str] = []
+        self.err: list[str] = []
+        self._lines: queue.Queue[None] = queue.Queue()
+        self._lock = threading.Lock()
+        for stream, kept in ((self.process.stdout, self.out), (self.process.stderr, self.err)):
+            threading.Thread(target=self._read, args=(stream, kept), daemon=True).start()
+
+    def _read(self, stream: object, kept: list[str]) -> None:
+        for line in stream:  # type: ignore[attr-defined]
+            with self._lock:
+                kept.append(line.rstrip("\n"))
+            self._lines.put(None)
+
+    def wait_for(self, what: str, holds: Callable[[], bool], deadline: float = 20) -> None:
+        until = time.monotonic() + deadline
+        while True:
+            with self._lock:
+                if holds():
+                    return
+            left = until - time.monotonic()
+            if left <= 0 or (self.process.poll() is not None and self._lines.empty()):
+                with self._lock:
+                    if holds():
+                        return
+                raise AssertionError(f"timed out waiting for {what}:\n{self.out[-5:]}\n{self.err}")
+            with contextlib.suppress(queue.Empty):
+                self._lines.get(timeout=min(left, 0.5))
+
+    def stop(self) -> int:
+        if self.process.poll() is None:
+            self.process.send_signal(signal.SIGINT)
+            try:
+                return self.process.wait(20)
+            except subprocess.TimeoutExpired:
+                self.process.kill()
+        return self.process.wait(20)

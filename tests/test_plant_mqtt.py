@@ -5,20 +5,14 @@ test changes itself.
 
 from __future__ import annotations
 
-import contextlib
 import json
 import os
-import queue
-import signal
 import subprocess
-import sys
-import threading
-import time
 from collections.abc import Callable, Iterator
 from pathlib import Path
 
 import pytest
-from mqtt_broker import Broker, Subscriber, needs_mosquitto
+from mqtt_broker import Broker, Running, Subscriber, needs_mosquitto
 from servers import RecordingServer
 from test_cli import cli, env, fixed_reply, one_error_line, recording
 
@@ -65,57 +59,6 @@ def put(sim: SimulatorThread, kind: str, index: int, value: Variant) -> None:
         assert session.put(KINDS[kind], index, value).response.ok
     finally:
         session.close()
-
-
-class Running:
-    """A CLI command left running: its stdout and stderr lines as they come."""
-
-    def __init__(self, environment: dict[str, str], *args: str) -> None:
-        self.process = subprocess.Popen(
-            [sys.executable, "-m", "rac_console", *args],
-            env=environment,
-            stdout=subprocess.PIPE,
-            stderr=subprocess.PIPE,
-            text=True,
-            encoding="utf-8",
-            errors="backslashreplace",
-        )
-        self.out: list[str] = []
-        self.err: list[str] = []
-        self._lines: queue.Queue[None] = queue.Queue()
-        self._lock = threading.Lock()
-        for stream, kept in ((self.process.stdout, self.out), (self.process.stderr, self.err)):
-            threading.Thread(target=self._read, args=(stream, kept), daemon=True).start()
-
-    def _read(self, stream: object, kept: list[str]) -> None:
-        for line in stream:  # type: ignore[attr-defined]
-            with self._lock:
-                kept.append(line.rstrip("\n"))
-            self._lines.put(None)
-
-    def wait_for(self, what: str, holds: Callable[[], bool], deadline: float = 20) -> None:
-        until = time.monotonic() + deadline
-        while True:
-            with self._lock:
-                if holds():
-                    return
-            left = until - time.monotonic()
-            if left <= 0 or (self.process.poll() is not None and self._lines.empty()):
-                with self._lock:
-                    if holds():
-                        return
-                raise AssertionError(f"timed out waiting for {what}:\n{self.out[-5:]}\n{self.err}")
-            with contextlib.suppress(queue.Empty):
-                self._lines.get(timeout=min(left, 0.5))
-
-    def stop(self) -> int:
-        if self.process.poll() is None:
-            self.process.send_signal(signal.SIGINT)
-            try:
-                return self.process.wait(20)
-            except subprocess.TimeoutExpired:
-                self.process.kill()
-        return self.process.wait(20)
 
 
 @pytest.fixture
