@@ -80,12 +80,13 @@ def parse_mqtt_address(text: str) -> MqttAddress:
     host = parts.hostname or ""
     if not host or not host.isprintable() or any(c.isspace() for c in host):
         raise InputError(f"the broker's address names no host: {MQTT_USAGE}")
-    if parts.query or parts.fragment:
-        raise InputError(f"the broker's address takes no ? or # part: {MQTT_USAGE}")
+    path = rest[len(authority) :]  # as typed: urlsplit would take a # for a fragment
+    if "?" in path:
+        raise InputError(f"the broker's address takes no ? part: {MQTT_USAGE}")
     tls = scheme.lower() == "mqtts"
     if port == 0:
         raise InputError(f"the broker's port is a number from 1 to 65535: {MQTT_USAGE}")
-    prefix = parts.path.strip("/")
+    prefix = path.strip("/")
     if not prefix:
         raise InputError(
             f"give a topic prefix after the broker, as in {'mqtts' if tls else 'mqtt'}://"

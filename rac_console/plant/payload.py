@@ -12,6 +12,7 @@ from __future__ import annotations
 import json
 import math
 from datetime import UTC, datetime
+from decimal import Decimal
 from typing import Any
 
 from ..commands.language import VarRef
@@ -70,7 +71,6 @@ def numeric_fields(var: VarRef, variant: Variant) -> list[tuple[str, float]]:
             if isinstance(item, bool | int | float) and not math.isnan(float(item)):
                 fields.append((labels[n] if labels else str(n), float(item)))
         return fields
-    try:  # a Decimal (VT_CY)
+    if isinstance(value, Decimal):  # VT_CY
         return [("", float(value))]
-    except (TypeError, ValueError):
-        return []
+    return []
