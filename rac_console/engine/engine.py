@@ -406,7 +406,7 @@ class Engine:
         tap = self._plant()
         if address is not None:
             try:
-                tap.publish_to(address, ())
+                self._alert_plant(tap.publish_to(address, ()))
             except InputError as exc:
                 self._alert_plant(str(exc))
 

@@ -58,7 +58,6 @@ class MqttFeed:
         self._early: dict[int, Any] = {}  # acknowledged before its id was noted
         self._denied: set[str] = set()  # topics the broker refused (said once each)
         self._connected = False
-        self._ever_connected = False
         self._trouble: str | None = None  # what was said of the broker last
         self._stopping = False
         self.sent = 0  # messages acknowledged by the broker
@@ -183,11 +182,7 @@ class MqttFeed:
             count = len(self._pending)
             self._lock.notify_all()
         self._publish(self.status_topic, ONLINE)
-        if not self._ever_connected:
-            self._ever_connected = True
-            self._trouble = None
-            self._say(f"publishing {self.target}'s watched values to {self} (retained, QoS 1)")
-        elif self._trouble is not None:
+        if self._trouble is not None:  # the start was said by whoever started the feed
             self._trouble = None
             self._say(
                 f"the MQTT broker is back: {self.target}'s {count} value"

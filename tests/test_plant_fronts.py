@@ -1,0 +1,113 @@
+"""``publish`` typed at the console and the REPL, against a real mosquitto: started,
+asked where, stopped; on a cell, one line publishes every target and ``@NAME`` one."""
+
+from __future__ import annotations
+
+import asyncio
+import json
+from collections.abc import Iterator
+from pathlib import Path
+
+import pytest
+from cell_helpers import make_cell_app
+from mqtt_broker import Broker, Subscriber, needs_mosquitto
+from test_repl import Driver
+from tui_helpers import results_text, type_line, until
+
+from rac_console.sim.cell import SimulatedCellThread
+
+pytestmark = [needs_mosquitto, pytest.mark.slow]
+QUICK = {"cycle": 0.8, "hold": 0.4, "reaction": 0.1}
+
+
+@pytest.fixture
+def broker(tmp_path: Path) -> Iterator[Broker]:
+    started = Broker(tmp_path).start()
+    try:
+        yield started
+    finally:
+        started.stop()
+
+
+@pytest.fixture
+def subscriber(broker: Broker) -> Iterator[Subscriber]:
+    watching = Subscriber(broker.port, "plant/#")
+    try:
+        yield watching
+    finally:
+        watching.close()
+
+
+# A subscriber's wait blocks: it runs on a thread, the console's loop goes on.
+
+
+def status_is(topic: str, state: bytes):  # type: ignore[no-untyped-def]
+    return lambda s: s.last.get(topic) == state
+
+
+async def test_publish_in_the_repl_starts_says_where_and_stops(
+    tmp_path: Path, broker: Broker, subscriber: Subscriber
+) -> None:
+    driver = Driver(tmp_path)
+    url = f"{broker.url}/plant"
+
+    async def steps(d: Driver) -> None:
+        d.type(f"publish {url}\r")
+        await d.until(lambda out: "publishing sim's watched values" in out, "publishing")
+        d.type("watch I 1\r")  # the REPL's watch: published while it is shown
+        await asyncio.to_thread(subscriber.wait_for, "I1", subscriber.has_value("plant/sim/I1", 1))
+        d.type("\r")  # back to the prompt
+        await d.until(lambda out: not d.repl.rows, "the watch to end")
+        d.type("publish\r")
+        await d.until(lambda out: "sim's watched values go to mqtt://" in out, "where")
+        d.type("publish off\r")
+        await d.until(lambda out: "stopped publishing sim's values" in out, "stopped")
+        await asyncio.to_thread(
+            subscriber.wait_for, "offline", status_is("plant/sim/status", b"offline")
+        )
+        d.type("publish mqtt://broker\r")  # refused, and said how to write it
+        await d.until(lambda out: "give a topic prefix" in out, "the refusal")
+
+    await driver.run(steps)
+
+
+async def test_publish_on_a_cell_feeds_every_target_and_at_name_one(
+    tmp_path: Path, broker: Broker, subscriber: Subscriber
+) -> None:
+    with SimulatedCellThread(2, **QUICK) as sims:
+        app = make_cell_app(tmp_path, sims)
+        async with app.run_test(size=(120, 40)) as pilot:
+            await type_line(pilot, "@robotA watch IO 128 part placed")
+            await type_line(pilot, "@robotB watch IO 64 go")
+            await type_line(pilot, f"publish {broker.url}/plant")
+            await until(
+                pilot,
+                lambda: "publishing robotB's" in results_text(app),
+                "one answer naming both targets",
+            )
+            said = results_text(app)
+            assert "publishing robotA's watched values" in said
+            # The handshake, as the plant sees it: both targets' topics, both values moving.
+            a_seen: set[object] = set()
+            b_seen: set[object] = set()
+
+            def moved(s: Subscriber) -> bool:
+                for topic, seen in (("plant/robotA/IO128", a_seen), ("plant/robotB/IO64", b_seen)):
+                    if topic in s.last:
+                        seen.add(json.loads(s.last[topic])["value"])
+                return len(a_seen) == 2 and len(b_seen) == 2
+
+            await asyncio.to_thread(subscriber.wait_for, "both handshake values moving", moved)
+            label = json.loads(subscriber.last["plant/robotA/IO128"])["label"]
+            assert label == "part placed"
+            await type_line(pilot, "@robotB publish off")
+            await asyncio.to_thread(
+                subscriber.wait_for, "robotB offline", status_is("plant/robotB/status", b"offline")
+            )
+            assert subscriber.last["plant/robotA/status"] == b"online"
+            await until(pilot, lambda: "stopped publishing robotB's" in results_text(app), "off")
+        await asyncio.to_thread(
+            subscriber.wait_for,
+            "robotA offline at the end",
+            status_is("plant/robotA/status", b"offline"),
+        )
