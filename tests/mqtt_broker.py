@@ -202,3 +202,73 @@ class Running:
             except subprocess.TimeoutExpired:
                 self.process.kill()
         return self.process.wait(20)
+
+
+class Cable:
+    """A TCP path from 127.0.0.1:``port`` to a broker, which can be pulled.
+
+    Pulled, the connections through it swallow what either side sends (nothing comes
+    back, nothing is closed) and a new connection waits; :meth:`cut` then closes the
+    swallowing ones, as each side's keepalive would in the end; :meth:`restore` lets
+    new connections through again. What was swallowed is kept in :attr:`swallowed`.
+    """
+
+    def __init__(self, broker_port: int) -> None:
+        self.broker_port = broker_port
+        self.swallowed = b""
+        self._lock = threading.Lock()
+        self._open = threading.Event()
+        self._open.set()
+        self._live: list[tuple[socket.socket, socket.socket, threading.Event]] = []
+        self._listener = socket.create_server(("127.0.0.1", 0))
+        self.port = int(self._listener.getsockname()[1])
+        threading.Thread(target=self._accept, daemon=True).start()
+
+    def _accept(self) -> None:
+        while True:
+            try:
+                client, _ = self._listener.accept()
+            except OSError:  # closed
+                return
+            self._open.wait()
+            upstream = socket.create_connection(("127.0.0.1", self.broker_port), timeout=10)
+            upstream.settimeout(None)
+            dead = threading.Event()
+            with self._lock:
+                self._live.append((client, upstream, dead))
+            for source, sink in ((client, upstream), (upstream, client)):
+                threading.Thread(target=self._pump, args=(source, sink, dead), daemon=True).start()
+
+    def _pump(self, source: socket.socket, sink: socket.socket, dead: threading.Event) -> None:
+        with contextlib.suppress(OSError):
+            while data := source.recv(65536):
+                if dead.is_set():
+                    with self._lock:
+                        self.swallowed += data
+                else:
+                    sink.sendall(data)
+
+    def pull(self) -> None:
+        self._open.clear()
+        with self._lock:
+            for _, _, dead in self._live:
+                dead.set()
+
+    def cut(self) -> None:
+        with self._lock:
+            cut = [(a, b) for a, b, dead in self._live if dead.is_set()]
+            self._live = [live for live in self._live if not live[2].is_set()]
+        for ends in cut:
+            for end in ends:
+                with contextlib.suppress(OSError):
+                    end.shutdown(socket.SHUT_RDWR)
+                end.close()
+
+    def restore(self) -> None:
+        self._open.set()
+
+    def close(self) -> None:
+        self.pull()
+        self.cut()
+        self._listener.close()
+        self.restore()
