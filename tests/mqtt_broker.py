@@ -4,6 +4,10 @@ a CLI command left running whose lines are waited on.
 The broker is Debian's ``mosquitto`` (installed by ``.ci/run`` where missing), started
 here on 127.0.0.1 and a free port with a configuration of the test's own; a test that
 needs it skips when it is not installed (the Windows lane: it is a Linux program).
+
+Run as a script, ``python tests/mqtt_broker.py HOST PORT TOPIC`` is a subscriber that
+prints what it gets as JSON lines (:func:`listen`): one that runs where the test itself
+cannot reach the broker, in another network namespace.
 """
 
 from __future__ import annotations
@@ -19,7 +23,7 @@ import subprocess
 import sys
 import threading
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -42,27 +46,34 @@ def free_port() -> int:
 
 
 class Broker:
-    """mosquitto on 127.0.0.1:``port``: :meth:`start`, :meth:`stop`, start again on the
+    """mosquitto on ``host``:``port``: :meth:`start`, :meth:`stop`, start again on the
     same port (a restart loses its retained messages: persistence is off)."""
 
-    def __init__(self, folder: Path, lines: tuple[str, ...] = ("allow_anonymous true",)) -> None:
+    def __init__(
+        self,
+        folder: Path,
+        lines: tuple[str, ...] = ("allow_anonymous true",),
+        host: str = "127.0.0.1",
+    ) -> None:
+        """``host``: the address it listens on (another namespace's, for a test that
+        starts it there from :meth:`write_config`)."""
         self.folder = folder
         self.lines = lines
+        self.host = host
         self.port = free_port()
         self.process: subprocess.Popen[bytes] | None = None
 
     @property
     def url(self) -> str:
-        return f"mqtt://127.0.0.1:{self.port}"
+        return f"mqtt://{self.host}:{self.port}"
 
-    def start(self, deadline: float = 10.0) -> Broker:
-        path = mosquitto_path()
-        assert path is not None
+    def write_config(self) -> Path:
+        """Its configuration file: listening on ``host:port``, no persistence."""
         config = self.folder / "mosquitto.conf"
         config.write_text(
             "\n".join(
                 (
-                    f"listener {self.port} 127.0.0.1",
+                    f"listener {self.port} {self.host}",
                     "persistence false",
                     f"user {getpass.getuser()}",  # it reads the test's files as the test
                     *self.lines,
@@ -70,6 +81,12 @@ class Broker:
                 )
             )
         )
+        return config
+
+    def start(self, deadline: float = 10.0) -> Broker:
+        path = mosquitto_path()
+        assert path is not None
+        config = self.write_config()
         log = (self.folder / "mosquitto.log").open("ab")
         self.process = subprocess.Popen(
             [path, "-c", str(config)], stdout=log, stderr=subprocess.STDOUT
@@ -82,7 +99,7 @@ class Broker:
                     f"mosquitto ended: {(self.folder / 'mosquitto.log').read_text()}"
                 )
             try:
-                socket.create_connection(("127.0.0.1", self.port), timeout=0.5).close()
+                socket.create_connection((self.host, self.port), timeout=0.5).close()
                 return self
             except OSError:
                 if time.monotonic() > until:
@@ -153,12 +170,24 @@ class Subscriber:
         self.client.disconnect()
 
 
+#: The CLI, as :class:`Running` starts it unless told another program.
+RAC = (sys.executable, "-m", "rac_console")
+
+
 class Running:
     """A CLI command left running: its stdout and stderr lines as they come."""
 
-    def __init__(self, environment: dict[str, str], *args: str) -> None:
+    def __init__(
+        self,
+        environment: dict[str, str],
+        *args: str,
+        wrap: Sequence[str] = (),
+        program: Sequence[str] = RAC,
+    ) -> None:
+        """``program`` with ``args``, behind ``wrap`` when given (``ip netns exec B``:
+        a command that runs it in place of itself, so that a signal reaches it)."""
         self.process = subprocess.Popen(
-            [sys.executable, "-m", "rac_console", *args],
+            [*wrap, *program, *args],
             env=environment,
             stdout=subprocess.PIPE,
             stderr=subprocess.PIPE,
@@ -202,3 +231,104 @@ class Running:
             except subprocess.TimeoutExpired:
                 self.process.kill()
         return self.process.wait(20)
+
+
+class Cable:
+    """A TCP path from 127.0.0.1:``port`` to a broker, which can be pulled.
+
+    Pulled, the connections through it swallow what either side sends (nothing comes
+    back, nothing is closed) and a new connection waits; :meth:`cut` then closes the
+    swallowing ones, as each side's keepalive would in the end; :meth:`restore` lets
+    new connections through again. What was swallowed is kept in :attr:`swallowed`.
+    """
+
+    def __init__(self, broker_port: int) -> None:
+        self.broker_port = broker_port
+        self.swallowed = b""
+        self._lock = threading.Lock()
+        self._open = threading.Event()
+        self._open.set()
+        self._live: list[tuple[socket.socket, socket.socket, threading.Event]] = []
+        self._listener = socket.create_server(("127.0.0.1", 0))
+        self.port = int(self._listener.getsockname()[1])
+        threading.Thread(target=self._accept, daemon=True).start()
+
+    def _accept(self) -> None:
+        while True:
+            try:
+                client, _ = self._listener.accept()
+            except OSError:  # closed
+                return
+            self._open.wait()
+            upstream = socket.create_connection(("127.0.0.1", self.broker_port), timeout=10)
+            upstream.settimeout(None)
+            dead = threading.Event()
+            with self._lock:
+                self._live.append((client, upstream, dead))
+            for source, sink in ((client, upstream), (upstream, client)):
+                threading.Thread(target=self._pump, args=(source, sink, dead), daemon=True).start()
+
+    def _pump(self, source: socket.socket, sink: socket.socket, dead: threading.Event) -> None:
+        with contextlib.suppress(OSError):
+            while data := source.recv(65536):
+                if dead.is_set():
+                    with self._lock:
+                        self.swallowed += data
+                else:
+                    sink.sendall(data)
+
+    def pull(self) -> None:
+        self._open.clear()
+        with self._lock:
+            for _, _, dead in self._live:
+                dead.set()
+
+    def cut(self) -> None:
+        with self._lock:
+            cut = [(a, b) for a, b, dead in self._live if dead.is_set()]
+            self._live = [live for live in self._live if not live[2].is_set()]
+        for ends in cut:
+            for end in ends:
+                with contextlib.suppress(OSError):
+                    end.shutdown(socket.SHUT_RDWR)
+                end.close()
+
+    def restore(self) -> None:
+        self._open.set()
+
+    def close(self) -> None:
+        self.pull()
+        self.cut()
+        self._listener.close()
+        self.restore()
+
+
+def listen(host: str, port: int, topic: str) -> None:
+    """Subscribe to ``topic`` on ``host:port`` and print, as JSON lines, each connection
+    (``{"connected": REASON}``) and each message (``{"topic", "payload", "retain"}``, the
+    payload as UTF-8 text), until interrupted or killed. Until the broker listens it
+    tries again every second."""
+    import paho.mqtt.client as mqtt
+
+    def say(**fields: Any) -> None:
+        print(json.dumps(fields), flush=True)
+
+    def on_connect(client: Any, userdata: Any, flags: Any, reason: Any, properties: Any) -> None:
+        say(connected=str(reason))
+        client.subscribe(topic, qos=1)
+
+    def on_message(client: Any, userdata: Any, message: Any) -> None:
+        text = message.payload.decode("utf-8", "backslashreplace")
+        say(topic=message.topic, payload=text, retain=bool(message.retain))
+
+    client = mqtt.Client(callback_api_version=mqtt.CallbackAPIVersion.VERSION2)
+    client.on_connect = on_connect
+    client.on_message = on_message
+    client.reconnect_delay_set(1, 1)
+    client.connect_async(host, port, keepalive=30)
+    with contextlib.suppress(KeyboardInterrupt):
+        client.loop_forever(retry_first_connection=True)
+
+
+if __name__ == "__main__":
+    listen(sys.argv[1], int(sys.argv[2]), sys.argv[3])

@@ -8,11 +8,14 @@ from __future__ import annotations
 import json
 import os
 import subprocess
+import threading
+import time
 from collections.abc import Callable, Iterator
 from pathlib import Path
+from typing import Any
 
 import pytest
-from mqtt_broker import Broker, Running, Subscriber, needs_mosquitto
+from mqtt_broker import Broker, Cable, Running, Subscriber, needs_mosquitto
 from servers import RecordingServer
 from test_cli import cli, env, fixed_reply, one_error_line, recording
 
@@ -355,3 +358,70 @@ def test_without_the_extra_the_message_says_how_to_get_it(
     metrics = cli(environment, "watch", "I", "1", "--metrics", "0")
     assert metrics.returncode == 2
     assert 'pip install "rac-console[metrics]"' in one_error_line(metrics)
+
+
+def until(what: str, holds: Callable[[], bool], deadline: float = 10) -> None:
+    """Wait for a condition that nothing signals, looking every 20 ms."""
+    end = time.monotonic() + deadline
+    while not holds():
+        assert time.monotonic() < end, f"timed out waiting for {what}"
+        time.sleep(0.02)
+
+
+def test_a_change_sent_into_a_pulled_cable_does_not_end_up_over_the_latest(
+    broker: Broker,
+) -> None:
+    """paho keeps what it sent unacknowledged and sends it again after reconnecting;
+    the feed sends the latest of every topic again too. When the latest goes first
+    (here: the feed's thread hands it over while paho's thread is still telling the
+    user the broker is back, as with a slow terminal), the broker must not be left
+    with the old value."""
+    from rac_console.commands.plant import Credentials, parse_mqtt_address
+    from rac_console.plant.mqtt import MqttFeed
+
+    cable = Cable(broker.port)
+    said: list[str] = []
+    latest = b'{"value": 3}'
+    handed = threading.Event()  # the feed's thread handed the latest to paho
+
+    def say(text: str) -> None:
+        said.append(text)
+        if text.startswith("the MQTT broker is back"):
+            handed.wait(10)  # paho's thread, in its on_connect: a slow terminal
+
+    address = parse_mqtt_address(f"mqtt://127.0.0.1:{cable.port}/plant")
+    feed = MqttFeed(address, Credentials(), "sim", say)
+    publish = feed._client.publish
+
+    def noting(topic: str, payload: bytes, *args: Any, **kwargs: Any) -> Any:
+        info = publish(topic, payload, *args, **kwargs)
+        if payload == latest:
+            handed.set()
+        return info
+
+    feed._client.publish = noting
+    topic = "plant/sim/I1"
+    watching = Subscriber(broker.port, "plant/#")
+    try:
+        feed.update("I1", b'{"value": 1}')
+        feed.start()
+        watching.wait_for("the first value", watching.has_value(topic, 1))
+        cable.pull()
+        feed.update("I1", b'{"value": 2}')  # into the void: never acknowledged
+        until("the change sent", lambda: b'{"value": 2}' in cable.swallowed)
+        cable.cut()  # the keepalive's end, without waiting for it
+        until("the loss seen", lambda: not feed.connected)
+        feed.update("I1", latest)  # changed while the broker is away
+        cable.restore()
+        watching.wait_for("back online", lambda s: s.last.get("plant/sim/status") == b"online")
+        watching.wait_for("the latest", watching.has_value(topic, 3))
+    finally:
+        feed.stop()  # offline goes last: the broker has taken everything before it
+        cable.close()
+    try:
+        watching.wait_for("offline", lambda s: s.last.get("plant/sim/status") == b"offline")
+        sent = [json.loads(p)["value"] for t, p, _ in watching.messages if t == topic]
+    finally:
+        watching.close()
+    assert sent[-1] == 3, f"the broker is left with {sent[-1]} (all it got: {sent})"
+    assert sum(line.startswith("the MQTT broker is back") for line in said) == 1, said

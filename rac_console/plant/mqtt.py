@@ -10,6 +10,9 @@ paho-mqtt, at most :data:`IN_FLIGHT` unacknowledged at a time, and paho's thread
 network. While the broker is away the dict keeps the latest payload of every topic, so
 memory stays bounded whatever the outage; when it is back, every topic is published
 again (a broker that restarted without persistence has lost its retained messages).
+paho also sends again what it had sent unacknowledged (a cable pulled: gone into the
+void), in no set order with those: an older value the broker takes after the latest of
+its topic is followed by the latest again, so that the latest is what stays retained.
 Each trouble is said once, and its end once.
 """
 
@@ -53,14 +56,15 @@ class MqttFeed:
         self._lock = threading.Condition()
         self._latest: dict[str, bytes] = {}  # every topic's last payload
         self._pending: dict[str, bytes] = {}  # to be handed to paho
-        self._in_flight = 0  # handed to paho, not yet acknowledged
-        self._topics: dict[int, str] = {}  # message id: topic, until acknowledged
+        self._in_flight = 0  # handed to paho, not yet acknowledged (over reconnections)
+        self._unacked: dict[int, tuple[str, bytes]] = {}  # message id: topic, payload
         self._early: dict[int, Any] = {}  # acknowledged before its id was noted
         self._denied: set[str] = set()  # topics the broker refused (said once each)
         self._connected = False
         self._trouble: str | None = None  # what was said of the broker last
         self._stopping = False
         self.sent = 0  # messages acknowledged by the broker
+        self._not_kept = mqtt.MQTT_ERR_QUEUE_SIZE  # the one refusal paho keeps nothing of
         client = mqtt.Client(
             callback_api_version=mqtt.CallbackAPIVersion.VERSION2,
             client_id=f"rac-console-{secrets.token_hex(6)}",
@@ -144,18 +148,33 @@ class MqttFeed:
                 self._publish(topic, data)
 
     def _publish(self, topic: str, data: bytes) -> None:
-        """Hand one message to paho (counted in flight by the caller)."""
+        """Hand one message to paho (counted in flight by the caller). Without a
+        connection now paho keeps it and sends it on the next: it stays in flight."""
         info = self._client.publish(topic, data, qos=QOS, retain=True)
         with self._lock:
-            if info.rc != 0:  # no connection now: it goes out again when there is one
+            if info.rc == self._not_kept:  # refused: it goes with the next change or connection
                 self._in_flight = max(0, self._in_flight - 1)
                 self._lock.notify_all()
                 return
             reason = self._early.pop(info.mid, None)
             if reason is None:
-                self._topics[info.mid] = topic
+                self._unacked[info.mid] = (topic, data)
+            else:
+                self._catch_up(topic, data)
         if reason is not None:
             self._acknowledged(topic, reason)
+
+    def _catch_up(self, topic: str, data: bytes) -> None:
+        """The broker took ``data`` on ``topic`` (holding the lock): when that is not the
+        latest, and the latest is neither waiting nor on its way, it was sent again by
+        paho after the latest, and the latest goes once more."""
+        latest = self._latest.get(topic)
+        if latest is None or latest == data or topic in self._pending:
+            return
+        if any(sent == (topic, latest) for sent in self._unacked.values()):
+            return  # sent after ``data`` (the broker acknowledges in order)
+        self._pending[topic] = latest
+        self._lock.notify_all()
 
     def _ready(self) -> bool:
         return self._stopping or (
@@ -175,9 +194,7 @@ class MqttFeed:
             return
         with self._lock:
             self._connected = True
-            self._in_flight = 1  # the status; paho sends again what it had in flight
-            self._topics.clear()
-            self._early.clear()
+            self._in_flight += 1  # the status; paho sends again what it had in flight
             self._pending = dict(self._latest)  # the broker may have lost them all
             count = len(self._pending)
             self._lock.notify_all()
@@ -216,12 +233,14 @@ class MqttFeed:
         with self._lock:
             self._in_flight = max(0, self._in_flight - 1)
             self.sent += 1
-            topic = self._topics.pop(mid, None)
-            if topic is None:
+            sent = self._unacked.pop(mid, None)
+            if sent is None:
                 self._early[mid] = reason
+            else:
+                self._catch_up(*sent)
             self._lock.notify_all()
-        if topic is not None:
-            self._acknowledged(topic, reason)
+        if sent is not None:
+            self._acknowledged(sent[0], reason)
 
     def _acknowledged(self, topic: str, reason: Any) -> None:
         if reason.is_failure and topic not in self._denied:
