@@ -104,10 +104,12 @@ def main() -> int:
             responder.stop()
         programs.cleanup()
     print(
-        f"\n{args.rounds} rounds of {args.seconds:g} s; 3 targets x 100 rows against 1 x 100; medians"
+        f"\n{args.rounds} rounds of {args.seconds:g} s; "
+        "3 targets x 100 rows against 1 x 100; medians"
     )
     print(
-        f"{'controllers':<28} {'one polls/s':>12} {'three polls/s':>14} {'three / (3 x one)':>18}  target"
+        f"{'controllers':<28} {'one polls/s':>12} {'three polls/s':>14} "
+        f"{'three / (3 x one)':>18}  target"
     )
     for kind in kinds:
         if (kind, "one") not in rates:
@@ -125,7 +127,8 @@ def main() -> int:
             else "reported (one interpreter's GIL)"
         )
         print(
-            f"{name:<28} {one:>12,.0f} {three:>14,.0f} {ratio:>12.2f} [{min(ratios):.2f}-{max(ratios):.2f}]  {goal}"
+            f"{name:<28} {one:>12,.0f} {three:>14,.0f} {ratio:>12.2f} "
+            f"[{min(ratios):.2f}-{max(ratios):.2f}]  {goal}"
         )
     return 0
 

@@ -7,11 +7,13 @@ timing threshold (a shared CI machine cannot promise one).
 from __future__ import annotations
 
 import json
+import shutil
 import subprocess
 import sys
 from pathlib import Path
 
 import pytest
+from mqtt_broker import needs_mosquitto
 
 #: Over half a second each (a terminal app, a subprocess, a timed server):
 #: `pytest -m "not slow"` skips them.
@@ -111,3 +113,25 @@ def test_the_floor_benchmark_reports_every_side_against_the_bare_loop(tmp_path: 
         assert figures[f"new.{side}.rate_to_bare"] > 0, side
         assert f"{side} " in result.stdout
     assert figures["new.bare.rate_to_bare"] == 1.0
+
+
+@needs_mosquitto
+@pytest.mark.skipif(
+    shutil.which("cc") is None and shutil.which("gcc") is None, reason="no C compiler"
+)
+def test_the_plant_benchmark_prints_every_side_and_the_published_rate() -> None:
+    pytest.importorskip("paho.mqtt.client")
+    result = subprocess.run(
+        [sys.executable, "plant_publish.py", "--quick"],
+        cwd=BENCHMARKS,
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+    assert result.returncode == 0, result.stderr[-2000:]
+    lines = result.stdout.splitlines()
+    assert any(line.startswith("values") and "msgs acked/s" in line for line in lines)
+    rows = {tuple(line.split()[:2]) for line in lines}
+    for values in ("fixed", "changing"):
+        for plant in ("off", "mqtt", "metrics"):
+            assert (values, plant) in rows, (values, plant)

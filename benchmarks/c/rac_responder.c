@@ -4,8 +4,10 @@
  * measures the client, not a Python server: a GET with a reply of its type (I:
  * "0,3,123\r", IO: "0,11,-1\r", P: seven numbers, ...), a PUT with "0\r".  Listens on 127.0.0.1;
  * prints the port it got (argument 0 or none: any free port) and serves until killed.
+ * With a second argument "changing", a GET of I answers a counter that grows at every
+ * request ("0,3,1\r", "0,3,2\r", ...): every poll of a watched I reads a new value.
  *
- *     cc -O2 -o rac_responder rac_responder.c && ./rac_responder 0
+ *     cc -O2 -o rac_responder rac_responder.c && ./rac_responder 0 [changing]
  */
 #include <arpa/inet.h>
 #include <netinet/in.h>
@@ -18,6 +20,10 @@
 #include <unistd.h>
 
 #define MAX_CONN 256
+
+static int changing;            /* argument "changing": I answers a growing counter */
+static unsigned long counter;   /* the last counter answered */
+static char counted[32];        /* "0,3,N\r" */
 
 /* What is known of the line being read on one connection. */
 struct line_state {
@@ -46,12 +52,17 @@ static const char *reply_for(const struct line_state *line, size_t *size) {
     else if (line->type[0] == 'J') PICK(j);
     else if (line->type[0] == 'T') PICK(t);
 #undef PICK
+    if (changing && out == i4) {
+        n = (size_t)snprintf(counted, sizeof counted, "0,3,%lu\r", ++counter % 2000000000UL);
+        out = counted;
+    }
     *size = n;
     return out;
 }
 
 int main(int argc, char **argv) {
     int port = argc > 1 ? atoi(argv[1]) : 0;
+    changing = argc > 2 && strcmp(argv[2], "changing") == 0;
     int listener = socket(AF_INET, SOCK_STREAM, 0);
     int one = 1;
     setsockopt(listener, SOL_SOCKET, SO_REUSEADDR, &one, sizeof one);
