@@ -116,14 +116,14 @@ class PlantTap:
         self.stop_publishing()
 
     def _to_mqtt(self, feed: MqttFeed, views: Iterable[RowView], wall: float) -> None:
-        from ..plant.payload import payload
+        from ..plant.payload import Reading
 
         name = self.name
-        for view in views:
-            if view.status == WAITING:
-                continue
-            var = view.var
-            feed.update(str(var), payload(name, var, view.label, view.variant, view.status, wall))
+        feed.update_many(
+            (str(view.var), Reading(name, view.var, view.label, view.variant, view.status, wall))
+            for view in views
+            if view.status != WAITING
+        )
 
 
 def plant_name(host: str | None, port: int, profile: str | None) -> str:

@@ -4,10 +4,15 @@ Each target has its own connection, so that its ``PREFIX/<target>/status`` topic
 last will of its own (``offline``, retained): a console killed, a cable pulled, and the
 plant sees that target's values are no longer live.
 
-Polling never waits on the broker. The engine's thread only puts the latest payload of a
-topic in a dict (:meth:`MqttFeed.update`); a thread of the feed's own hands them to
-paho-mqtt, at most :data:`IN_FLIGHT` unacknowledged at a time, and paho's thread does the
-network. While the broker is away the dict keeps the latest payload of every topic, so
+Polling never waits on the broker. The engine's thread only puts the latest reading of a
+topic in a dict (:meth:`MqttFeed.update_many`); a thread of the feed's own makes the
+payload and hands it to paho-mqtt, at most :data:`IN_FLIGHT` unacknowledged at a time,
+and paho's thread does the network. A topic gets a message at most every :data:`EVERY`
+seconds, always its latest reading: a value that changes at every poll of a fast
+controller would otherwise take the interpreter from polling (paho spends tens of
+microseconds on a message), and a dashboard reads no faster. A change after a quiet
+spell goes at once; a change within the pace goes at its end, so an I/O pulse shows
+both its edges. While the broker is away the dict keeps the latest payload of every topic, so
 memory stays bounded whatever the outage; when it is back, every topic is published
 again (a broker that restarted without persistence has lost its retained messages).
 paho also sends again what it had sent unacknowledged (a cable pulled: gone into the
@@ -20,8 +25,9 @@ from __future__ import annotations
 
 import secrets
 import threading
-from collections.abc import Callable
-from typing import Any
+import time
+from collections.abc import Callable, Iterable
+from typing import Any, Protocol
 
 from ..commands.plant import Credentials, MqttAddress
 from ..protocol import InputError
@@ -35,6 +41,18 @@ QOS = 1
 RETRY_FIRST, RETRY_MOST = 1, 30
 KEEPALIVE = 15
 ONLINE, OFFLINE = b"online", b"offline"
+#: Seconds between two messages of one topic, at least (the latest reading goes).
+EVERY = 0.1
+
+
+class Reading(Protocol):
+    """A value as read, made into its payload only when it is sent."""
+
+    def encode(self) -> bytes: ...
+
+
+#: What a topic holds: a payload, or a reading to be made into one.
+Held = bytes | Reading
 
 
 class MqttFeed:
@@ -54,10 +72,12 @@ class MqttFeed:
         self.status_topic = f"{self.base}/status"
         self._say = say
         self._lock = threading.Condition()
-        self._latest: dict[str, bytes] = {}  # every topic's last payload
-        self._pending: dict[str, bytes] = {}  # to be handed to paho
+        self._latest: dict[str, Held] = {}  # every topic's last reading
+        self._pending: dict[str, Held] = {}  # to be handed to paho
+        self._sent_at: dict[str, float] = {}  # when each topic last went (monotonic)
+        self._handed: dict[str, int] = {}  # each topic's last message id
         self._in_flight = 0  # handed to paho, not yet acknowledged (over reconnections)
-        self._unacked: dict[int, tuple[str, bytes]] = {}  # message id: topic, payload
+        self._unacked: dict[int, tuple[str, Held]] = {}  # message id: topic, reading
         self._early: dict[int, Any] = {}  # acknowledged before its id was noted
         self._denied: set[str] = set()  # topics the broker refused (said once each)
         self._connected = False
@@ -98,13 +118,19 @@ class MqttFeed:
         self._client.loop_start()
         self._feeder.start()
 
-    def update(self, variable: str, payload: bytes) -> None:
-        """The latest payload of ``PREFIX/<target>/<variable>`` (the engine's thread:
-        never blocks on the network)."""
-        topic = f"{self.base}/{variable}"
+    def update(self, variable: str, payload: Held) -> None:
+        """The latest of ``PREFIX/<target>/<variable>`` (never blocks on the network)."""
+        self.update_many(((variable, payload),))
+
+    def update_many(self, readings: Iterable[tuple[str, Held]]) -> None:
+        """The latest of several variables at once (the engine's thread, at a flush:
+        one lock for them all)."""
+        base = self.base
         with self._lock:
-            self._latest[topic] = payload
-            self._pending[topic] = payload
+            latest, pending = self._latest, self._pending
+            for variable, reading in readings:
+                topic = f"{base}/{variable}"
+                latest[topic] = pending[topic] = reading
             self._lock.notify()
 
     @property
@@ -136,50 +162,78 @@ class MqttFeed:
     def _feed(self) -> None:
         while True:
             with self._lock:
-                self._lock.wait_for(self._ready)
+                due = self._due()
+                while not due:
+                    if self._stopping:
+                        return
+                    self._lock.wait(self._rest())
+                    due = self._due()
                 if self._stopping:
                     return
-                batch = list(self._pending.items())[: IN_FLIGHT - self._in_flight]
-                for topic, _ in batch:
-                    del self._pending[topic]
+                now = time.monotonic()
+                batch = [(topic, self._pending.pop(topic)) for topic in due]
+                for topic in due:
+                    self._sent_at[topic] = now
                 self._in_flight += len(batch)
             # paho calls on_publish holding its own lock: never publish holding ours
-            for topic, data in batch:
-                self._publish(topic, data)
+            for topic, reading in batch:
+                self._publish(topic, reading)
 
-    def _publish(self, topic: str, data: bytes) -> None:
+    def _due(self) -> list[str]:
+        """The topics to send now (holding the lock): pending, their pace kept, within
+        the room left in flight."""
+        if self._stopping or not self._connected or not self._pending:
+            return []
+        room = IN_FLIGHT - self._in_flight
+        if room <= 0:
+            return []
+        ready_before = time.monotonic() - EVERY
+        sent_at = self._sent_at
+        due = [t for t in self._pending if sent_at.get(t, 0.0) <= ready_before]
+        return due[:room]
+
+    def _rest(self) -> float | None:
+        """How long the feed may sleep (holding the lock): until a pending topic's pace
+        ends; None (until woken) when nothing is pending or nothing can go."""
+        if self._stopping or not self._connected or not self._pending:
+            return None
+        if self._in_flight >= IN_FLIGHT:
+            return None  # an acknowledgement wakes it
+        sent_at = self._sent_at
+        first = min(sent_at.get(t, 0.0) for t in self._pending) + EVERY
+        return max(0.001, first - time.monotonic())
+
+    def _publish(self, topic: str, reading: Held) -> None:
         """Hand one message to paho (counted in flight by the caller). Without a
         connection now paho keeps it and sends it on the next: it stays in flight."""
+        data = reading if isinstance(reading, bytes) else reading.encode()
         info = self._client.publish(topic, data, qos=QOS, retain=True)
         with self._lock:
             if info.rc == self._not_kept:  # refused: it goes with the next change or connection
                 self._in_flight = max(0, self._in_flight - 1)
                 self._lock.notify_all()
                 return
+            self._handed[topic] = info.mid
             reason = self._early.pop(info.mid, None)
             if reason is None:
-                self._unacked[info.mid] = (topic, data)
+                self._unacked[info.mid] = (topic, reading)
             else:
-                self._catch_up(topic, data)
+                self._catch_up(topic, reading)
         if reason is not None:
             self._acknowledged(topic, reason)
 
-    def _catch_up(self, topic: str, data: bytes) -> None:
-        """The broker took ``data`` on ``topic`` (holding the lock): when that is not the
-        latest, and the latest is neither waiting nor on its way, it was sent again by
+    def _catch_up(self, topic: str, reading: Held) -> None:
+        """The broker took ``reading`` on ``topic`` (holding the lock): when that is not
+        the latest, and the latest is neither waiting nor on its way, it was sent again by
         paho after the latest, and the latest goes once more."""
         latest = self._latest.get(topic)
-        if latest is None or latest == data or topic in self._pending:
+        if latest is None or latest is reading or latest == reading or topic in self._pending:
             return
-        if any(sent == (topic, latest) for sent in self._unacked.values()):
-            return  # sent after ``data`` (the broker acknowledges in order)
+        on_its_way = self._unacked.get(self._handed.get(topic, -1))
+        if on_its_way is not None and on_its_way[1] is latest:
+            return  # handed after ``reading`` (the broker acknowledges in order)
         self._pending[topic] = latest
         self._lock.notify_all()
-
-    def _ready(self) -> bool:
-        return self._stopping or (
-            self._connected and bool(self._pending) and self._in_flight < IN_FLIGHT
-        )
 
     # ------------------------------------------------------------ paho's thread
 
@@ -196,6 +250,7 @@ class MqttFeed:
             self._connected = True
             self._in_flight += 1  # the status; paho sends again what it had in flight
             self._pending = dict(self._latest)  # the broker may have lost them all
+            self._sent_at.clear()
             count = len(self._pending)
             self._lock.notify_all()
         self._publish(self.status_topic, ONLINE)

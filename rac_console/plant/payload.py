@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import json
 import math
+from dataclasses import dataclass
 from datetime import UTC, datetime
 from decimal import Decimal
 from typing import Any
@@ -55,6 +56,22 @@ def payload(
     if label:
         data["label"] = label
     return json.dumps(data, ensure_ascii=True, allow_nan=False, default=str).encode("ascii")
+
+
+@dataclass(frozen=True, slots=True, eq=False)
+class Reading:
+    """A watched value as read: its payload is made only if it is sent (a value that
+    changes at every poll is sent at most every so often, its latest reading)."""
+
+    target: str
+    var: VarRef
+    label: str
+    variant: Variant | None
+    status: str
+    wall: float
+
+    def encode(self) -> bytes:
+        return payload(self.target, self.var, self.label, self.variant, self.status, self.wall)
 
 
 def numeric_fields(var: VarRef, variant: Variant) -> list[tuple[str, float]]:
