@@ -12,7 +12,7 @@ import pytest
 from cell_helpers import make_cell_app
 from mqtt_broker import Broker, Subscriber, needs_mosquitto
 from test_repl import Driver
-from tui_helpers import results_text, type_line, until
+from tui_helpers import make_app, results_text, type_line, until
 
 from rac_console.sim.cell import SimulatedCellThread
 
@@ -111,3 +111,19 @@ async def test_publish_on_a_cell_feeds_every_target_and_at_name_one(
             "robotA offline at the end",
             status_is("plant/robotA/status", b"offline"),
         )
+
+
+async def test_the_console_says_on_its_status_line_that_values_go_to_the_broker(
+    tmp_path: Path, broker: Broker, subscriber: Subscriber
+) -> None:
+    app = make_app(tmp_path)
+    async with app.run_test(size=(120, 40)) as pilot:
+        await type_line(pilot, "watch I 1")
+        assert "MQTT" not in app.status_bar.line.plain
+        await type_line(pilot, f"publish {broker.url}/plant")
+        await until(pilot, lambda: "MQTT" in app.status_bar.line.plain, "the MQTT badge")
+        await asyncio.to_thread(
+            subscriber.wait_for, "I1", subscriber.has_value("plant/sim/I1", 1)
+        )
+        await type_line(pilot, "publish off")
+        await until(pilot, lambda: "MQTT" not in app.status_bar.line.plain, "the badge gone")

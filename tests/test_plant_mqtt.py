@@ -425,3 +425,26 @@ def test_a_change_sent_into_a_pulled_cable_does_not_end_up_over_the_latest(
         watching.close()
     assert sent[-1] == 3, f"the broker is left with {sent[-1]} (all it got: {sent})"
     assert sum(line.startswith("the MQTT broker is back") for line in said) == 1, said
+
+
+def test_a_profile_and_a_cell_publish_from_the_config_file(
+    env: dict[str, str], broker: Broker, sim: SimulatorThread
+) -> None:
+    subscriber = Subscriber(broker.port, "#")
+    config = Path(env["XDG_CONFIG_HOME"]) / "rac-console" / "config.toml"
+    config.parent.mkdir(parents=True)
+    config.write_text(
+        f'[target.cell3]\nhost = "{sim.host}"\nport = {sim.port}\n'
+        f'publish = "{broker.url}/line3"\n'
+        f'[target.cell4]\nhost = "{sim.host}"\nport = {sim.port}\n'
+        f'[cell.line2]\ntargets = ["cell3", "cell4"]\npublish = "{broker.url}/line2"\n'
+    )
+    one = cli(env, "-H", "cell3", "watch", "I", "1", "--count", "2")
+    assert one.returncode == 0, one.stderr
+    subscriber.wait_for("the profile's topic", subscriber.has_value("line3/cell3/I1", 1))
+    both = cli(env, "--cell", "line2", "watch", "I", "2", "--count", "2")
+    assert both.returncode == 0, both.stderr
+    for name in ("cell3", "cell4"):  # the cell's publish wins over cell3's own
+        subscriber.wait_for(name, subscriber.has_value(f"line2/{name}/I2", 250))
+    assert "line3/cell3/I2" not in subscriber.last
+    subscriber.close()

@@ -391,24 +391,10 @@ class Engine:
         return self._publisher.tap
 
     def _open_plant(self) -> None:
-        """Publishing from the start (--mqtt, or a cell's or profile's publish), and
-        --metrics: said as they begin, or why they cannot."""
-        options, profile = self.options, self._rules.profile
-        address = options.publish
-        if address is None and profile is not None and profile.publish is not None:
-            from ..commands.plant import parse_mqtt_address
+        """Publishing from the start, and --metrics (see :func:`.plant_tap.open_at_start`)."""
+        from .plant_tap import open_at_start
 
-            address = parse_mqtt_address(profile.publish)
-        if address is None and options.metrics is None:
-            return
-        from ..protocol.errors import InputError
-
-        tap = self._plant()
-        if address is not None:
-            try:
-                self._alert_plant(tap.publish_to(address, ()))
-            except InputError as exc:
-                self._alert_plant(str(exc))
+        open_at_start(self.options, self._rules, self._plant, self._alert_plant)
 
     def _alert_plant(self, text: str) -> None:
         """The plant's news (any thread): said at once, not a failure of the reads."""

@@ -143,3 +143,29 @@ def open_tap(options: EngineOptions, target: Target, say: Callable[[str], None])
         target.host, target.port, profile.name if profile is not None else None
     )
     return PlantTap(name, options.credentials, options.metrics, say)
+
+
+def open_at_start(
+    options: EngineOptions,
+    target: Target,
+    tap: Callable[[], PlantTap],
+    say: Callable[[str], None],
+) -> None:
+    """Publish from the start (--mqtt, else a cell's publish, else the profile's) and
+    feed --metrics: said as it begins, or why it cannot. ``tap`` makes the engine's."""
+    address = options.publish
+    profile = target.profile
+    if address is None and profile is not None and profile.publish is not None:
+        from ..commands.plant import parse_mqtt_address
+
+        address = parse_mqtt_address(profile.publish)
+    if address is None and options.metrics is None:
+        return
+    made = tap()
+    if address is not None:
+        from ..protocol import InputError
+
+        try:
+            say(made.publish_to(address, ()))
+        except InputError as exc:
+            say(str(exc))

@@ -144,6 +144,7 @@ STATUS_FIGURES: tuple[HelpEntry, ...] = (
     ),
     HelpEntry(" CSV ", "a CSV log is being written (log FILE.csv; log stop ends it)"),
     HelpEntry(" CSV LOG STOPPED ", "the CSV log could not be written; exit status 4"),
+    HelpEntry(" MQTT ", "the watched values are published to a broker (publish; publish off)"),
     HelpEntry(
         " Esc cancels: LINE (N s) ",
         "a typed line has run for over half a second (a wait, a latency run, a slow "

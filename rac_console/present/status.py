@@ -204,6 +204,8 @@ def _fields(
             )
     if status.csv_log is not None:  # a new log runs: an earlier failure is for the exit
         fields.append(_badge("CSV", CSV_STYLE))
+    if status.publishing is not None:  # the watched values go to an MQTT broker
+        fields.append(_badge("MQTT", CSV_STYLE))
     if status.paused:
         fields.append(_figure(Text("POLLING PAUSED", style="bold yellow")))
     elif (
