@@ -81,7 +81,7 @@ class MqttFeed:
         self._early: dict[int, Any] = {}  # acknowledged before its id was noted
         self._denied: set[str] = set()  # topics the broker refused (said once each)
         self._connected = False
-        self._trouble: str | None = None  # what was said of the broker last
+        self._trouble: str | None = None  # the kind of trouble said last: away, refused
         self._stopping = False
         self.sent = 0  # messages acknowledged by the broker
         self._not_kept = mqtt.MQTT_ERR_QUEUE_SIZE  # the one refusal paho keeps nothing of
@@ -242,8 +242,9 @@ class MqttFeed:
     ) -> None:
         if reason.is_failure:
             self._trouble_once(
+                "refused",
                 f"the MQTT broker {self.address.host}:{self.address.port} refused {self.target}'s "
-                f"connection ({reason}); trying again every {RETRY_MOST} s at most"
+                f"connection ({reason}); trying again every {RETRY_MOST} s at most",
             )
             return
         with self._lock:
@@ -263,8 +264,9 @@ class MqttFeed:
 
     def _on_connect_fail(self, client: Any, userdata: Any) -> None:
         self._trouble_once(
+            "away",
             f"cannot reach the MQTT broker {self.address.host}:{self.address.port} for "
-            f"{self.target}; trying again every {RETRY_MOST} s at most, polling goes on"
+            f"{self.target}; trying again every {RETRY_MOST} s at most, polling goes on",
         )
 
     def _on_disconnect(
@@ -277,9 +279,10 @@ class MqttFeed:
             self._lock.notify_all()
         if was and not stopping:
             self._trouble_once(
-                f"lost the MQTT broker {self.address.host}:{self.address.port} ({reason}); "
-                f"retrying, polling goes on: the latest of each of {self.target}'s values "
-                "goes out when it is back"
+                "away",
+                f"lost the MQTT broker {self.address.host}:{self.address.port}; retrying, "
+                f"polling goes on: the latest of each of {self.target}'s values goes out "
+                "when it is back",
             )
 
     def _on_publish(
@@ -302,8 +305,9 @@ class MqttFeed:
             self._denied.add(topic)
             self._say(f"the MQTT broker did not take {terminal_safe(topic)}: {reason}")
 
-    def _trouble_once(self, text: str) -> None:
-        kind = text.split(" ", 3)[:3]
-        if self._trouble != " ".join(kind):
-            self._trouble = " ".join(kind)
+    def _trouble_once(self, kind: str, text: str) -> None:
+        """Say ``text`` unless this kind of trouble was said already: a broker away
+        (lost, then not reachable at each retry) is one line; a refusal after it, one more."""
+        if self._trouble != kind:
+            self._trouble = kind
             self._say(text)
