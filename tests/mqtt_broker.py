@@ -23,7 +23,7 @@ import subprocess
 import sys
 import threading
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -332,3 +332,38 @@ def listen(host: str, port: int, topic: str) -> None:
 
 if __name__ == "__main__":
     listen(sys.argv[1], int(sys.argv[2]), sys.argv[3])
+
+
+# ------------------------------------------------------------------ fixtures
+# Imported by the tests that use them (``from mqtt_broker import broker, ...``).
+
+
+@pytest.fixture
+def broker(tmp_path: Path) -> Iterator[Broker]:
+    """A mosquitto of the test's own, stopped with it."""
+    started = Broker(tmp_path).start()
+    try:
+        yield started
+    finally:
+        started.stop()
+
+
+@pytest.fixture
+def subscriber(broker: Broker) -> Iterator[Subscriber]:
+    """Subscribed to ``plant/#`` on the test's broker."""
+    watching = Subscriber(broker.port, "plant/#")
+    try:
+        yield watching
+    finally:
+        watching.close()
+
+
+@pytest.fixture
+def running() -> Iterator[list[Running]]:
+    """Commands a test leaves running: killed at its end if still there."""
+    started: list[Running] = []
+    yield started
+    for command in started:
+        if command.process.poll() is None:
+            command.process.kill()
+            command.process.wait(20)

@@ -5,12 +5,11 @@ from __future__ import annotations
 
 import asyncio
 import json
-from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
 from cell_helpers import make_cell_app
-from mqtt_broker import Broker, Subscriber, needs_mosquitto
+from mqtt_broker import Broker, Subscriber, broker, needs_mosquitto, subscriber
 from test_repl import Driver
 from tui_helpers import make_app, results_text, type_line, until
 
@@ -18,24 +17,7 @@ from rac_console.sim.cell import SimulatedCellThread
 
 pytestmark = [needs_mosquitto, pytest.mark.slow]
 QUICK = {"cycle": 0.8, "hold": 0.4, "reaction": 0.1}
-
-
-@pytest.fixture
-def broker(tmp_path: Path) -> Iterator[Broker]:
-    started = Broker(tmp_path).start()
-    try:
-        yield started
-    finally:
-        started.stop()
-
-
-@pytest.fixture
-def subscriber(broker: Broker) -> Iterator[Subscriber]:
-    watching = Subscriber(broker.port, "plant/#")
-    try:
-        yield watching
-    finally:
-        watching.close()
+broker, subscriber = broker, subscriber  # the fixtures
 
 
 # A subscriber's wait blocks: it runs on a thread, the console's loop goes on.
@@ -122,8 +104,6 @@ async def test_the_console_says_on_its_status_line_that_values_go_to_the_broker(
         assert "MQTT" not in app.status_bar.line.plain
         await type_line(pilot, f"publish {broker.url}/plant")
         await until(pilot, lambda: "MQTT" in app.status_bar.line.plain, "the MQTT badge")
-        await asyncio.to_thread(
-            subscriber.wait_for, "I1", subscriber.has_value("plant/sim/I1", 1)
-        )
+        await asyncio.to_thread(subscriber.wait_for, "I1", subscriber.has_value("plant/sim/I1", 1))
         await type_line(pilot, "publish off")
         await until(pilot, lambda: "MQTT" not in app.status_bar.line.plain, "the badge gone")

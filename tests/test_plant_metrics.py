@@ -6,11 +6,11 @@ from __future__ import annotations
 import re
 import time
 import urllib.request
-from collections.abc import Callable, Iterator
+from collections.abc import Callable
 from pathlib import Path
 
 import pytest
-from mqtt_broker import Running
+from mqtt_broker import Running, running
 from servers import CLOSE, RecordingServer
 from test_cli import cli, env, one_error_line, recording
 
@@ -27,6 +27,7 @@ from prometheus_client.parser import text_string_to_metric_families  # noqa: E40
 pytestmark = pytest.mark.slow
 env = env  # the fixtures: a private HOME for the CLI, servers that stop with the test
 recording = recording
+running = running
 SERVING = re.compile(r"serving the watched values at (http://127\.0\.0\.1:\d+/metrics)")
 
 Samples = dict[tuple[str, tuple[tuple[str, str], ...]], float]
@@ -51,16 +52,6 @@ def samples(text: str, parse: Callable[[str], object] = text_string_to_metric_fa
 
 def labels(**given: str) -> tuple[tuple[str, str], ...]:
     return tuple(sorted(given.items()))
-
-
-@pytest.fixture
-def running() -> Iterator[list[Running]]:
-    started: list[Running] = []
-    yield started
-    for command in started:
-        if command.process.poll() is None:
-            command.process.kill()
-            command.process.wait(20)
 
 
 def serving(watch: Running) -> str:

@@ -15,7 +15,16 @@ from pathlib import Path
 from typing import Any
 
 import pytest
-from mqtt_broker import Broker, Cable, Running, Subscriber, needs_mosquitto
+from mqtt_broker import (
+    Broker,
+    Cable,
+    Running,
+    Subscriber,
+    broker,
+    needs_mosquitto,
+    running,
+    subscriber,
+)
 from servers import RecordingServer
 from test_cli import cli, env, fixed_reply, one_error_line, recording
 
@@ -26,27 +35,10 @@ from rac_console.sim.thread import SimulatorThread
 pytestmark = [needs_mosquitto, pytest.mark.slow]
 env = env  # the fixtures: a private HOME for the CLI, servers that stop with the test
 recording = recording
+broker, subscriber, running = broker, subscriber, running
 
 #: ASCII, as RAC's wire is: JSON's quotes and braces, terminal escapes, MQTT's wildcards.
 HOSTILE = '"},"value":666,"x":"\x1b[2J\x1b]0;owned\x07{#}+/\\'
-
-
-@pytest.fixture
-def broker(tmp_path: Path) -> Iterator[Broker]:
-    started = Broker(tmp_path).start()
-    try:
-        yield started
-    finally:
-        started.stop()
-
-
-@pytest.fixture
-def subscriber(broker: Broker) -> Iterator[Subscriber]:
-    watching = Subscriber(broker.port, "plant/#")
-    try:
-        yield watching
-    finally:
-        watching.close()
 
 
 @pytest.fixture
@@ -62,16 +54,6 @@ def put(sim: SimulatorThread, kind: str, index: int, value: Variant) -> None:
         assert session.put(KINDS[kind], index, value).response.ok
     finally:
         session.close()
-
-
-@pytest.fixture
-def running() -> Iterator[list[Running]]:
-    started: list[Running] = []
-    yield started
-    for command in started:
-        if command.process.poll() is None:
-            command.process.kill()
-            command.process.wait(20)
 
 
 # ------------------------------------------------------------------ topics and payloads

@@ -28,9 +28,8 @@ from collections.abc import Callable, Iterator
 from pathlib import Path
 
 import pytest
-from mqtt_broker import RAC, Broker, Running, mosquitto_path, needs_mosquitto
+from mqtt_broker import RAC, Broker, Running, mosquitto_path, needs_mosquitto, running
 from test_cli import env
-from test_plant_mqtt import running
 
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT / "benchmarks"))  # the benchmark's namespaces and cable, reused
