@@ -5,11 +5,15 @@ from __future__ import annotations
 
 import asyncio
 import json
+import os
+import signal
+import sys
 from pathlib import Path
 
 import pytest
 from cell_helpers import make_cell_app
 from mqtt_broker import Broker, Subscriber, broker, needs_mosquitto, subscriber
+from test_ascii_screen import Terminal, terminal  # noqa: F401 (a fixture)
 from test_repl import Driver
 from tui_helpers import make_app, results_text, type_line, until
 
@@ -107,3 +111,21 @@ async def test_the_console_says_on_its_status_line_that_values_go_to_the_broker(
         await asyncio.to_thread(subscriber.wait_for, "I1", subscriber.has_value("plant/sim/I1", 1))
         await type_line(pilot, "publish off")
         await until(pilot, lambda: "MQTT" not in app.status_bar.line.plain, "the badge gone")
+
+
+def test_the_last_will_says_offline_when_the_console_is_killed(
+    terminal: Terminal,  # noqa: F811
+    broker: Broker,
+    subscriber: Subscriber,
+) -> None:
+    """The full-screen console in a real terminal, publishing, then killed outright."""
+    command = f"{sys.executable} -m rac_console --mqtt {broker.url}/plant"
+    terminal.tmux("new-session", "-d", "-s", "t", "-x", "120", "-y", "40", command)
+    terminal.until("type help")
+    terminal.tmux("send-keys", "-t", "t", "watch I 1", "Enter")
+    terminal.until(" MQTT ")  # the status line says where the values go
+    subscriber.wait_for("I1", subscriber.has_value("plant/sim/I1", 1))
+    subscriber.wait_for("online", status_is("plant/sim/status", b"online"))
+    console = int(terminal.tmux("list-panes", "-t", "t", "-F", "#{pane_pid}").split()[0])
+    os.kill(console, signal.SIGKILL)  # no clean end: only the broker can say it
+    subscriber.wait_for("the last will", status_is("plant/sim/status", b"offline"))

@@ -211,3 +211,15 @@ def test_a_target_is_named_by_its_profile_else_its_host() -> None:
     assert plant_name("10.0.0.3", 5006, None) == "10.0.0.3"
     assert plant_name("10.0.0.3", 5007, None) == "10.0.0.3:5007"
     assert plant_name(None, 40000, None) == "sim"
+
+
+def test_the_readmes_plant_config_parses_as_printed() -> None:
+    import tomllib
+    from pathlib import Path
+
+    readme = (Path(__file__).resolve().parent.parent / "README.md").read_text(encoding="utf-8")
+    example = "[mqtt]\n" + readme.split("```toml\n[mqtt]\n", 1)[1].split("```", 1)[0]
+    parsed = parse_config(tomllib.loads(example), "README")
+    assert parsed.mqtt.username == "rac-cell3" and parsed.mqtt.ca_file is not None
+    assert parsed.profiles["cell3"].publish == "mqtts://broker.plant:8883/line2"
+    assert parsed.cells["line2"].publish == "mqtt://broker.plant:1883/line2"
