@@ -8,10 +8,17 @@ Each screenshot is taken after typing real commands and letting polling run.
 from __future__ import annotations
 
 import asyncio
+import contextlib
+import shutil
+import socket
+import subprocess
 import sys
 import tempfile
+import time
+from collections.abc import Iterator
 from pathlib import Path
 
+from rac_console.commands.plant import parse_mqtt_address
 from rac_console.commands.policy import TargetProfile, WritePolicy, Writes, parse_allow
 from rac_console.commands.target import Target
 from rac_console.engine import Engine
@@ -116,6 +123,44 @@ CELL_SCENES = {
 }
 
 
+#: The console publishing to a mosquitto started here (Debian's package), the MQTT badge
+#: on its status line, and ``publish`` saying where the values go.
+PLANT_SCENES = {
+    "plant-120x40": (
+        (120, 40),
+        ["watch P 0 current pose", "watch IO 128-131", "watch I 0 cycle", "publish"],
+        "",
+    ),
+}
+
+
+@contextlib.contextmanager
+def mosquitto() -> Iterator[int | None]:
+    """A broker on 127.0.0.1 and a free port (None: mosquitto is not installed)."""
+    path = shutil.which("mosquitto") or shutil.which("mosquitto", path="/usr/sbin")
+    if path is None:
+        print("plant-120x40: needs mosquitto (apt install mosquitto)", file=sys.stderr)
+        yield None
+        return
+    with socket.socket() as probe:
+        probe.bind(("127.0.0.1", 0))
+        port = probe.getsockname()[1]
+    with tempfile.TemporaryDirectory() as folder:
+        config = Path(folder) / "mosquitto.conf"
+        config.write_text(f"listener {port} 127.0.0.1\nallow_anonymous true\n")
+        broker = subprocess.Popen([path, "-c", str(config)], stderr=subprocess.DEVNULL)
+        try:
+            for _ in range(100):
+                with contextlib.suppress(OSError):
+                    socket.create_connection(("127.0.0.1", port), timeout=0.5).close()
+                    break
+                time.sleep(0.05)
+            yield port
+        finally:
+            broker.terminate()
+            broker.wait(10)
+
+
 def cell_of(sims: SimulatedCellThread) -> Cell:
     """A cell on the simulators: a profile each (a colour, a label)."""
     targets = []
@@ -183,6 +228,14 @@ async def main(only: list[str]) -> None:
             continue
         with SimulatorThread() as sim:
             await take(name, size, lines, typed, engine=profile_engine(sim.port))
+    for name, (size, lines, typed) in PLANT_SCENES.items():
+        if not wanted(name):
+            continue
+        with mosquitto() as port:
+            if port is not None:
+                address = parse_mqtt_address(f"mqtt://127.0.0.1:{port}/line2")
+                engine = Engine(None, interval=0.2, cycles=True, publish=address)
+                await take(name, size, lines, typed, engine=engine)
     for name, (size, lines, keys) in CELL_SCENES.items():
         if wanted(name):
             with SimulatedCellThread(2) as sims:
