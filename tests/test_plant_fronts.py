@@ -44,6 +44,13 @@ async def test_publish_in_the_repl_starts_says_where_and_stops(
         await asyncio.to_thread(subscriber.wait_for, "I1", subscriber.has_value("plant/sim/I1", 1))
         d.type("\r")  # back to the prompt
         await d.until(lambda out: not d.repl.rows, "the watch to end")
+        # Unwatched: the retained topic says so, no value left to be read as live.
+        await asyncio.to_thread(
+            subscriber.wait_for,
+            "I1 unwatched",
+            lambda s: b'"UNWATCHED"' in s.last.get("plant/sim/I1", b""),
+        )
+        assert json.loads(subscriber.last["plant/sim/I1"])["value"] is None
         d.type("publish\r")
         await d.until(lambda out: "sim's watched values go to mqtt://" in out, "where")
         d.type("publish off\r")

@@ -5,8 +5,10 @@ test changes itself.
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
+import shutil
 import subprocess
 import threading
 import time
@@ -28,6 +30,7 @@ from mqtt_broker import (
 from servers import RecordingServer
 from test_cli import cli, env, fixed_reply, one_error_line, recording
 
+from rac_console.commands.plant import parse_mqtt_address
 from rac_console.protocol import KINDS, VT, Variant
 from rac_console.session import Session
 from rac_console.sim.thread import SimulatorThread
@@ -431,3 +434,148 @@ def test_a_profile_and_a_cell_publish_from_the_config_file(
         subscriber.wait_for(name, subscriber.has_value(f"line2/{name}/I2", 250))
     assert "line3/cell3/I2" not in subscriber.last
     subscriber.close()
+
+
+# ------------------------------------------------------------------ mqtts://
+
+
+def make_certificates(folder: Path) -> tuple[Path, Path, Path]:
+    """A CA of the test's own and a certificate it signed for 127.0.0.1 (openssl)."""
+    ca_key, ca, key, request, certificate = (
+        folder / name for name in ("ca.key", "ca.pem", "server.key", "server.csr", "server.pem")
+    )
+    extensions = folder / "san.cnf"
+    extensions.write_text("subjectAltName = IP:127.0.0.1\n")
+
+    def openssl(*args: str) -> None:
+        subprocess.run(["openssl", *args], check=True, capture_output=True, timeout=60)
+
+    openssl("req", "-x509", "-newkey", "rsa:2048", "-nodes", "-days", "2", "-subj",
+            "/CN=rac test CA", "-keyout", str(ca_key), "-out", str(ca))  # fmt: skip
+    openssl("req", "-newkey", "rsa:2048", "-nodes", "-subj", "/CN=127.0.0.1",
+            "-keyout", str(key), "-out", str(request))  # fmt: skip
+    openssl("x509", "-req", "-in", str(request), "-CA", str(ca), "-CAkey", str(ca_key),
+            "-CAcreateserial", "-days", "2", "-extfile", str(extensions),
+            "-out", str(certificate))  # fmt: skip
+    return ca, certificate, key
+
+
+@pytest.mark.skipif(shutil.which("openssl") is None, reason="needs openssl for the certificates")
+def test_mqtts_with_the_ca_file_given_and_refused_without_it(
+    env: dict[str, str], tmp_path: Path
+) -> None:
+    ca, certificate, key = make_certificates(tmp_path)
+    tls = ("allow_anonymous true", f"cafile {ca}", f"certfile {certificate}", f"keyfile {key}")
+    broker = Broker(tmp_path, tls).start()
+    url = f"mqtts://127.0.0.1:{broker.port}/plant"
+    try:
+        trusted = cli(
+            env | {"RAC_MQTT_CA_FILE": str(ca)}, "watch", "I", "1", "--count", "2", "--mqtt", url
+        )
+        import paho.mqtt.client as mqtt
+
+        got: list[bytes] = []
+        reader = mqtt.Client(callback_api_version=mqtt.CallbackAPIVersion.VERSION2)
+        reader.tls_set(ca_certs=str(ca))
+        reader.on_message = lambda c, u, m: got.append(m.payload)
+        reader.on_connect = lambda c, u, f, r, p: c.subscribe("plant/sim/I1", 1)
+        reader.connect("127.0.0.1", broker.port)
+        reader.loop_start()
+        try:
+            until("the value over TLS", lambda: bool(got))
+        finally:
+            reader.loop_stop()
+            reader.disconnect()
+        assert json.loads(got[-1])["value"] == 1
+        # Without the CA, the system's certificates do not know it: one line, polling on.
+        untrusted = cli(env, "watch", "I", "1", "--every", "0.2", "--count", "6", "--mqtt", url)
+    finally:
+        broker.stop()
+    assert trusted.returncode == 0, trusted.stderr
+    assert "cannot reach" not in trusted.stderr
+    assert untrusted.returncode == 0, untrusted.stderr
+    assert len(untrusted.stdout.splitlines()) == 6
+    assert len([e for e in untrusted.stderr.splitlines() if "MQTT broker" in e]) == 1
+    missing = cli(
+        env | {"RAC_MQTT_CA_FILE": str(tmp_path / "nowhere.pem")}, "watch", "I", "1",
+        "--count", "1", "--mqtt", url,
+    )  # fmt: skip
+    assert missing.returncode == 2 and missing.stdout == ""  # refused before polling
+    assert "nowhere.pem" in one_error_line(missing)
+    not_a_certificate = tmp_path / "notes.txt"
+    not_a_certificate.write_text("not a certificate\n")
+    garbage = cli(
+        env | {"RAC_MQTT_CA_FILE": str(not_a_certificate)}, "watch", "I", "1",
+        "--count", "1", "--mqtt", url,
+    )  # fmt: skip
+    assert garbage.returncode == 2 and "no certificate TLS can use" in one_error_line(garbage)
+
+
+def test_an_address_that_is_no_mqtt_broker_is_one_line_and_polling_goes_on(
+    env: dict[str, str],
+) -> None:
+    """A web server where the broker was meant: it answers the CONNECT with HTTP and
+    hangs up. Said once (it was silent before: only a refused TCP connection was said)."""
+    import socket
+    import threading
+
+    server = socket.create_server(("127.0.0.1", 0))
+    stop = threading.Event()
+
+    def answer() -> None:
+        server.settimeout(0.2)
+        while not stop.is_set():
+            try:
+                conn, _ = server.accept()
+            except TimeoutError:
+                continue
+            with conn:
+                conn.settimeout(5)
+                with contextlib.suppress(OSError):
+                    conn.recv(1024)
+                    conn.sendall(b"HTTP/1.1 400 Bad Request\r\nContent-Length: 0\r\n\r\n")
+
+    worker = threading.Thread(target=answer, daemon=True)
+    worker.start()
+    try:
+        port = server.getsockname()[1]
+        result = cli(
+            env, "watch", "I", "1", "--every", "0.2", "--count", "8",
+            "--mqtt", f"mqtt://127.0.0.1:{port}/plant",
+        )  # fmt: skip
+    finally:
+        stop.set()
+        worker.join(5)
+        server.close()
+    assert result.returncode == 0, result.stderr
+    assert len(result.stdout.splitlines()) == 8
+    said = [line for line in result.stderr.splitlines() if "no MQTT answer" in line]
+    assert len(said) == 1, result.stderr
+    assert "Traceback" not in result.stderr
+
+
+def test_after_connect_the_values_go_under_the_new_targets_name(
+    tmp_path: Path, broker: Broker, subscriber: Subscriber, sim: SimulatorThread
+) -> None:
+    """The built-in simulator first, then ``connect`` to another controller: its values
+    must not be published as the first one's."""
+    from rac_console.engine import Engine
+
+    put(sim, "I", 1, Variant(VT.I4, 4242))
+    address = parse_mqtt_address(f"{broker.url}/plant")
+    engine = Engine(None, interval=0.05, timeout=2.0, publish=address)
+    engine.start()
+    try:
+        engine.submit("watch I 1")
+        subscriber.wait_for("the simulator's I1", subscriber.has_value("plant/sim/I1", 1))
+        engine.submit(f"connect {sim.host}:{sim.port}")
+        other = f"plant/{sim.host}:{sim.port}/I1"
+        subscriber.wait_for("the other controller's I1", subscriber.has_value(other, 4242))
+    finally:
+        engine.stop()
+    assert all(
+        json.loads(payload).get("value") != 4242
+        for topic, payload, _ in subscriber.messages
+        if topic == "plant/sim/I1"
+    )
+    subscriber.wait_for("sim offline", lambda s: s.last.get("plant/sim/status") == b"offline")

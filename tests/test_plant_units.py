@@ -55,7 +55,11 @@ def test_a_broker_address_as_typed(text: str, host: str, port: int, prefix: str,
         ("mqtt://broker/a//b", "empty level"),
         ("mqtt://broker/a/#", "reserve"),
         ("mqtt://broker/a+b", "reserve"),
-        ("mqtt://broker/p?x=1", "no ? part"),
+        ("mqtt://broker/p?x=1", "no ? or # part"),
+        ("mqtt://broker#x/p", "no ? or # part"),
+        ("mqtt://a..b/p", "not a name or address"),
+        ("mqtt://broker/$SYS/x", "the broker's own"),
+        ("mqtt://broker//p", "empty level"),
     ],
 )
 def test_a_broker_address_that_cannot_be_used_says_how_to_write_it(text: str, says: str) -> None:

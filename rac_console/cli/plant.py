@@ -10,14 +10,12 @@ from __future__ import annotations
 import argparse
 import atexit
 import sys
+from pathlib import Path
 from typing import Any
 
 from ..commands.plant import MqttAddress, parse_metrics_address, parse_mqtt_address
 from ..protocol import InputError
 from ..protocol.text import terminal_safe
-
-#: The commands that poll, and so have values to feed.
-PLANT_COMMANDS = (None, "repl", "watch")
 
 
 def settle_plant(args: argparse.Namespace) -> bool:
@@ -47,15 +45,30 @@ def _plant_options(args: argparse.Namespace, notices: list[str]) -> dict[str, An
         address = parse_mqtt_address(given)
     elif cell_publish is not None:
         address = parse_mqtt_address(cell_publish)
-    targets = [target for _, target in getattr(args, "cell_targets", None) or []] or [args.target]
+    members = getattr(args, "cell_targets", None) or [("", args.target)]
     publishing = address is not None or any(
-        target.profile is not None and target.profile.publish is not None for target in targets
+        target.profile is not None and target.profile.publish is not None for _, target in members
     )
+    credentials = config.credentials()
     if publishing:
         from ..plant.extras import need
 
         need("paho.mqtt.client", "publishing to MQTT")
-    options: dict[str, Any] = {"publish": address, "credentials": config.credentials()}
+        _check_ca_file(credentials.ca_file)
+        from ..commands.plant import topic_level
+        from ..engine.options import EngineOptions
+        from ..engine.plant_tap import name_of
+
+        for name, target in members:
+            named = EngineOptions(plant_name=None if len(members) == 1 else name)
+            topic_level(name_of(named, target), "the target's name")
+        tls = address.tls if address is not None else False
+        if credentials.password and not tls:
+            notices.append(
+                "the MQTT password goes to the broker unencrypted (mqtt://): use mqtts:// "
+                "where the network is not the cell's own"
+            )
+    options: dict[str, Any] = {"publish": address, "credentials": credentials}
     if getattr(args, "metrics", None) is not None:
         from ..plant.metrics import MetricsBoard, MetricsServer
 
@@ -72,3 +85,26 @@ def _plant_options(args: argparse.Namespace, notices: list[str]) -> dict[str, An
                 "machine can read the watched values"
             )
     return options
+
+
+def _check_ca_file(ca_file: str | None) -> None:
+    """The CA file, if one is named, must be a certificate TLS can use: refused now,
+    not found out when the first connection fails."""
+    if ca_file is None:
+        return
+    import ssl
+
+    where = "RAC_MQTT_CA_FILE, or ca_file in the config's [mqtt]"
+    path = Path(ca_file).expanduser()
+    if not path.is_file():
+        raise InputError(
+            f"the MQTT CA file {ca_file} ({where}) is not a file: name the CA certificate "
+            "(PEM) that signs the broker's"
+        )
+    try:
+        ssl.create_default_context(cafile=str(path))
+    except (ssl.SSLError, OSError, ValueError) as exc:
+        why = getattr(exc, "reason", None) or getattr(exc, "strerror", None) or exc
+        raise InputError(
+            f"the MQTT CA file {ca_file} ({where}) holds no certificate TLS can use: {why}"
+        ) from None

@@ -70,6 +70,8 @@ def parse_mqtt_address(text: str) -> MqttAddress:
             f"process lists): put them in the config file's [mqtt] table or in "
             f"{USERNAME_ENV} and {PASSWORD_ENV}"
         )
+    if "?" in rest or "#" in authority:  # urlsplit would drop what follows, silently
+        raise InputError(f"the broker's address takes no ? or # part: {MQTT_USAGE}")
     from urllib.parse import urlsplit
 
     try:
@@ -80,13 +82,20 @@ def parse_mqtt_address(text: str) -> MqttAddress:
     host = parts.hostname or ""
     if not host or not host.isprintable() or any(c.isspace() for c in host):
         raise InputError(f"the broker's address names no host: {MQTT_USAGE}")
+    if not _host_name_ok(host):
+        raise InputError(
+            f"the broker's host {terminal_safe(host)!s} is not a name or address a resolver "
+            "takes (labels of 1 to 63 letters, digits and -, 253 characters in all)"
+        )
     path = rest[len(authority) :]  # as typed: urlsplit would take a # for a fragment
-    if "?" in path:
-        raise InputError(f"the broker's address takes no ? part: {MQTT_USAGE}")
     tls = scheme.lower() == "mqtts"
     if port == 0:
         raise InputError(f"the broker's port is a number from 1 to 65535: {MQTT_USAGE}")
-    prefix = path.strip("/")
+    prefix = path[1:].rstrip("/")
+    if len(prefix.encode("utf-8")) > MAX_PREFIX:
+        raise InputError(f"the topic prefix is longer than {MAX_PREFIX} bytes: {MQTT_USAGE}")
+    if prefix.startswith("$"):
+        raise InputError("a topic prefix starting with $ is the broker's own ($SYS): use line2")
     if not prefix:
         raise InputError(
             f"give a topic prefix after the broker, as in {'mqtts' if tls else 'mqtt'}://"
@@ -95,6 +104,27 @@ def parse_mqtt_address(text: str) -> MqttAddress:
     for level in prefix.split("/"):
         topic_level(level, "the topic prefix")
     return MqttAddress(host, port or (MQTTS_PORT if tls else MQTT_PORT), prefix, tls)
+
+
+#: Bytes of a topic prefix, at most: MQTT's topics hold 65,535, and the target and the
+#: variable follow it.
+MAX_PREFIX = 1000
+
+
+def _host_name_ok(host: str) -> bool:
+    """Whether the resolver takes ``host`` (an IP address, or a name IDNA encodes)."""
+    import ipaddress
+
+    try:
+        ipaddress.ip_address(host)
+        return True
+    except ValueError:
+        pass
+    try:
+        encoded = host.encode("idna")
+    except UnicodeError:
+        return False
+    return len(encoded) <= 253
 
 
 def topic_level(name: str, what: str) -> str:
@@ -106,7 +136,7 @@ def topic_level(name: str, what: str) -> str:
     if bad or not name.isprintable():
         shown = " ".join(repr(c) for c in bad) or "control characters"
         raise InputError(
-            f"{what} {terminal_safe(name)!r} holds {shown}, which MQTT topics reserve: "
+            f"{what} '{terminal_safe(name)}' holds {shown}, which MQTT topics reserve: "
             "use letters, digits, - _ . and :"
         )
     return name

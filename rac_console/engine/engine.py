@@ -300,12 +300,12 @@ class Engine:
         finally:
             self._started.set()
             self._link.close()
-            if self._publisher.tap is not None:
-                self._publisher.tap.close()
             self._files.close()
             self._csv.close()
-            self._publisher.flush()
+            self._publisher.flush()  # the last rows reach the plant's feed too
             self.publish_status(force=True)
+            if self._publisher.tap is not None:
+                self._publisher.tap.close()
 
     def _next(self, wait: float | None) -> Job | tuple[()] | None:
         """The next job; ``()`` when none came in time; None: stop."""
@@ -381,6 +381,12 @@ class Engine:
         if self._link.opened > 1:
             self._poller.new_target()
         self._poller.wake()
+        if self._publisher.tap is not None:  # its values go under its own name
+            from .plant_tap import name_of
+
+            said = self._publisher.tap.rename(name_of(self.options, target))
+            if said is not None:
+                self._alert_plant(said)
 
     def _plant(self) -> PlantTap:
         """This engine's feed to the plant, made on first use (``publish``)."""

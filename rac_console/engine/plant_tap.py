@@ -8,14 +8,19 @@ from the plant: no topic is subscribed to, so nothing received can reach a contr
 
 from __future__ import annotations
 
+import threading
 import time
 from collections.abc import Callable, Iterable
 from typing import TYPE_CHECKING
 
 from ..commands.language import VarRef
 from ..commands.plant import Credentials, MqttAddress, topic_level
+from ..protocol import InputError
 from .events import RowView
 from .status import WAITING, Status
+
+#: The status a retained topic is left with when its variable is unwatched.
+UNWATCHED = "UNWATCHED"
 
 if TYPE_CHECKING:
     from ..commands.target import Target
@@ -61,13 +66,35 @@ class PlantTap:
         shown = f"publishing {self.name}'s watched values to {feed} (retained, QoS 1)"
         return shown if before is None else f"{before}; {shown}"
 
-    def stop_publishing(self) -> str | None:
-        """Stop the MQTT feed (its status topic says ``offline``); what was stopped."""
+    def stop_publishing(self, wait: bool = False) -> str | None:
+        """Stop the MQTT feed (its status topic says ``offline``); what was stopped.
+
+        The feed hands over what is pending and says ``offline`` on a thread of its own,
+        so that polling never waits on the broker; ``wait`` (the engine's end) waits."""
         feed, self.mqtt = self.mqtt, None
         if feed is None:
             return None
-        feed.stop()
+        if wait:
+            feed.stop()
+        else:
+            threading.Thread(target=feed.stop, name="rac-mqtt-stop", daemon=True).start()
         return f"stopped publishing {self.name}'s values to {feed}"
+
+    def rename(self, name: str) -> str | None:
+        """Another target opened (``connect``): its values are published under its own
+        name, to the same broker; the old name's figures leave ``/metrics``. What was
+        said of it, if publishing."""
+        if self._board is not None:
+            self._board.forget(self.name)
+        old, self.name = self.name, name
+        feed = self.mqtt
+        if feed is None or name == old:
+            return None
+        stopped = self.stop_publishing()
+        try:
+            return f"{stopped}; {self.publish_to(feed.address, ())}"
+        except InputError as exc:
+            return f"{stopped}; {exc}"
 
     # ------------------------------------------------------------ the publisher's calls
 
@@ -92,11 +119,18 @@ class PlantTap:
                 board.set_value(self.name, str(view.var), view.label, fields)
 
     def removed(self, variables: Iterable[VarRef]) -> None:
-        """Rows unwatched: their numbers leave ``/metrics`` (their retained topics stay,
-        with the time of their last read)."""
+        """Rows unwatched: their numbers leave ``/metrics``, and their retained topics
+        say so (no value, status ``UNWATCHED``): a dashboard must not read the last value
+        as a live one."""
         if self._board is not None:
             for var in variables:
                 self._board.remove(self.name, str(var))
+        if self.mqtt is not None:
+            from ..plant.payload import payload
+
+            wall = time.time()
+            for var in variables:
+                self.mqtt.retire(str(var), payload(self.name, var, "", None, UNWATCHED, wall))
 
     def status(self, status: Status) -> None:
         if self._board is not None:
@@ -113,7 +147,7 @@ class PlantTap:
             )
 
     def close(self) -> None:
-        self.stop_publishing()
+        self.stop_publishing(wait=True)
 
     def _to_mqtt(self, feed: MqttFeed, views: Iterable[RowView], wall: float) -> None:
         from ..plant.payload import Reading
@@ -136,13 +170,18 @@ def plant_name(host: str | None, port: int, profile: str | None) -> str:
     return host if port == 5006 else f"{host}:{port}"
 
 
-def open_tap(options: EngineOptions, target: Target, say: Callable[[str], None]) -> PlantTap:
-    """An engine's tap, named as ``options`` say or after its target."""
+def name_of(options: EngineOptions, target: Target) -> str:
+    """A target's name in topics and labels: as ``options`` say (a cell's member), or
+    after the target."""
     profile = target.profile
-    name = options.plant_name or plant_name(
+    return options.plant_name or plant_name(
         target.host, target.port, profile.name if profile is not None else None
     )
-    return PlantTap(name, options.credentials, options.metrics, say)
+
+
+def open_tap(options: EngineOptions, target: Target, say: Callable[[str], None]) -> PlantTap:
+    """An engine's tap."""
+    return PlantTap(name_of(options, target), options.credentials, options.metrics, say)
 
 
 def open_at_start(
@@ -163,8 +202,6 @@ def open_at_start(
         return
     made = tap()
     if address is not None:
-        from ..protocol import InputError
-
         try:
             say(made.publish_to(address, ()))
         except InputError as exc:

@@ -58,6 +58,12 @@ class MetricsBoard:
         with self._lock:
             self._values.pop((target, variable), None)
 
+    def forget(self, target: str) -> None:
+        """A target no longer polled (another opened in its place): its series go."""
+        with self._lock:
+            self._values = {key: v for key, v in self._values.items() if key[0] != target}
+            self._figures.pop(target, None)
+
     def set_figures(self, target: str, figures: TargetFigures) -> None:
         with self._lock:
             self._figures[target] = figures

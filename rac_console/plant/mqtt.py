@@ -23,6 +23,7 @@ Each trouble is said once, and its end once.
 
 from __future__ import annotations
 
+import os
 import secrets
 import threading
 import time
@@ -95,7 +96,8 @@ class MqttFeed:
             client.username_pw_set(credentials.username, credentials.password)
         if address.tls:
             try:
-                client.tls_set(ca_certs=credentials.ca_file)
+                ca_file = credentials.ca_file
+                client.tls_set(ca_certs=os.path.expanduser(ca_file) if ca_file else None)
             except (OSError, ValueError) as exc:
                 where = credentials.ca_file or "the system's certificates"
                 raise InputError(f"mqtts: cannot use {terminal_safe(where)}: {exc}") from None
@@ -114,9 +116,26 @@ class MqttFeed:
 
     def start(self) -> None:
         """Connect in the background: nothing here waits on the network."""
-        self._client.connect_async(self.address.host, self.address.port, keepalive=KEEPALIVE)
-        self._client.loop_start()
+        client = self._client
+        client.connect_async(self.address.host, self.address.port, keepalive=KEEPALIVE)
+        # paho's network thread, guarded: what it does not catch itself ends publishing
+        # with one line, never a traceback on the user's terminal.
+        network = client._thread_main
+        client._thread_main = lambda: self._guarded(network)
+        client.loop_start()
         self._feeder.start()
+
+    def _guarded(self, network: Callable[[], None]) -> None:
+        try:
+            network()
+        except Exception as exc:  # a name the resolver refuses, a topic paho cannot pack
+            with self._lock:
+                self._connected, self._stopping = False, True
+                self._lock.notify_all()
+            self._say(
+                f"publishing {self.target}'s values to {self} stopped: "
+                f"{terminal_safe(str(exc)) or type(exc).__name__}"
+            )
 
     def update(self, variable: str, payload: Held) -> None:
         """The latest of ``PREFIX/<target>/<variable>`` (never blocks on the network)."""
@@ -133,11 +152,20 @@ class MqttFeed:
                 latest[topic] = pending[topic] = reading
             self._lock.notify()
 
+    def retire(self, variable: str, payload: bytes) -> None:
+        """A variable no longer watched: its topic gets ``payload`` (no value, and why)
+        once, and is not published again when the broker comes back."""
+        topic = f"{self.base}/{variable}"
+        with self._lock:
+            self._latest.pop(topic, None)
+            self._pending[topic] = payload
+            self._lock.notify()
+
     @property
     def connected(self) -> bool:
         return self._connected
 
-    def stop(self, timeout: float = 2.0) -> None:
+    def stop(self, timeout: float = 1.0) -> None:
         """Hand over what is pending (for up to ``timeout``), say ``offline`` on the
         status topic, and disconnect: a clean end sends no last will."""
         with self._lock:
@@ -248,6 +276,8 @@ class MqttFeed:
             )
             return
         with self._lock:
+            if self._stopping:  # offline is said, or about to be: never online after it
+                return
             self._connected = True
             self._in_flight += 1  # the status; paho sends again what it had in flight
             self._pending = dict(self._latest)  # the broker may have lost them all
@@ -277,12 +307,21 @@ class MqttFeed:
             self._connected = False
             stopping = self._stopping
             self._lock.notify_all()
-        if was and not stopping:
+        if stopping:
+            return
+        if was:
             self._trouble_once(
                 "away",
                 f"lost the MQTT broker {self.address.host}:{self.address.port}; retrying, "
                 f"polling goes on: the latest of each of {self.target}'s values goes out "
                 "when it is back",
+            )
+        elif self._trouble is None:  # the connection closed before the broker answered
+            self._trouble_once(
+                "silent",
+                f"no MQTT answer from {self.address.host}:{self.address.port} (is it an MQTT "
+                f"port? mqtts:// for TLS); trying again every {RETRY_MOST} s at most, polling "
+                "goes on",
             )
 
     def _on_publish(
