@@ -106,7 +106,7 @@ async def test_publish_on_a_cell_feeds_every_target_and_at_name_one(
         )
 
 
-async def test_the_console_says_on_its_status_line_that_values_go_to_the_broker(
+async def test_the_status_line_says_where_the_values_go_and_when_the_broker_is_lost(
     tmp_path: Path, broker: Broker, subscriber: Subscriber
 ) -> None:
     app = make_app(tmp_path)
@@ -116,6 +116,18 @@ async def test_the_console_says_on_its_status_line_that_values_go_to_the_broker(
         await type_line(pilot, f"publish {broker.url}/plant")
         await until(pilot, lambda: "MQTT" in app.status_bar.line.plain, "the MQTT badge")
         await asyncio.to_thread(subscriber.wait_for, "I1", subscriber.has_value("plant/sim/I1", 1))
+        assert " MQTT " in app.status_bar.line.plain  # connected
+        broker.stop()  # the badge must not go on looking healthy
+        await until(pilot, lambda: "MQTT LOST" in app.status_bar.line.plain, "MQTT LOST")
+        broker.start()
+        await until(
+            pilot,
+            lambda: (
+                "MQTT LOST" not in app.status_bar.line.plain
+                and " MQTT " in app.status_bar.line.plain
+            ),
+            "the broker back",
+        )
         await type_line(pilot, "publish off")
         await until(pilot, lambda: "MQTT" not in app.status_bar.line.plain, "the badge gone")
 

@@ -393,7 +393,9 @@ class Engine:
         from .plant_tap import open_tap
 
         if self._publisher.tap is None:
-            self._publisher.tap = open_tap(self.options, self._rules, self._alert_plant)
+            self._publisher.tap = open_tap(
+                self.options, self._rules, self._alert_plant, self._plant_changed
+            )
         return self._publisher.tap
 
     def _open_plant(self) -> None:
@@ -401,6 +403,11 @@ class Engine:
         from .plant_tap import open_at_start
 
         open_at_start(self.options, self._rules, self._plant, self._alert_plant)
+
+    def _plant_changed(self) -> None:
+        """The broker's state changed (paho's thread): the status line says so when the
+        engine's loop next turns."""
+        self._publisher.status_dirty = True
 
     def _alert_plant(self, text: str) -> None:
         """The plant's news (any thread): said at once, not a failure of the reads."""
@@ -503,4 +510,5 @@ class Engine:
             transcribing=files.path("transcript"),
             reads=(poller.reads[0], poller.reads[1], poller.reads[2]),
             publishing=self._publisher.tap.publishing if self._publisher.tap else None,
+            broker=self._publisher.tap.broker_state if self._publisher.tap else None,
         )

@@ -38,13 +38,21 @@ class PlantTap:
         credentials: Credentials,
         board: MetricsBoard | None,
         say: Callable[[str], None],
+        changed: Callable[[], None] = lambda: None,
     ) -> None:
-        """``name``: the target in topics and labels; ``say``: tell the user (any thread)."""
+        """``name``: the target in topics and labels; ``say``: tell the user, ``changed``:
+        the broker's state changed, for the status line (any thread)."""
+        self._changed = changed
         self.name = name
         self._credentials = credentials
         self._board = board
         self._say = say
         self.mqtt: MqttFeed | None = None
+
+    @property
+    def broker_state(self) -> str | None:
+        """The MQTT feed's :attr:`~..plant.mqtt.MqttFeed.state`; None: not publishing."""
+        return self.mqtt.state if self.mqtt is not None else None
 
     @property
     def publishing(self) -> str | None:
@@ -58,7 +66,7 @@ class PlantTap:
         from ..plant.mqtt import MqttFeed
 
         topic_level(self.name, "the target's name")
-        feed = MqttFeed(address, self._credentials, self.name, self._say)
+        feed = MqttFeed(address, self._credentials, self.name, self._say, self._changed)
         before = self.stop_publishing()
         self.mqtt = feed
         self._to_mqtt(feed, rows, time.time())
@@ -179,9 +187,14 @@ def name_of(options: EngineOptions, target: Target) -> str:
     )
 
 
-def open_tap(options: EngineOptions, target: Target, say: Callable[[str], None]) -> PlantTap:
+def open_tap(
+    options: EngineOptions,
+    target: Target,
+    say: Callable[[str], None],
+    changed: Callable[[], None],
+) -> PlantTap:
     """An engine's tap."""
-    return PlantTap(name_of(options, target), options.credentials, options.metrics, say)
+    return PlantTap(name_of(options, target), options.credentials, options.metrics, say, changed)
 
 
 def open_at_start(

@@ -65,9 +65,13 @@ class MqttFeed:
         credentials: Credentials,
         target: str,
         say: Callable[[str], None],
+        changed: Callable[[], None] = lambda: None,
     ) -> None:
-        """``say`` tells the user something (from paho's thread or the feed's)."""
+        """``say`` tells the user something, ``changed`` that :attr:`state` changed
+        (both from paho's thread or the feed's)."""
         mqtt = need("paho.mqtt.client", "publishing to MQTT")
+        self._changed = changed
+        self._dead = False
         self.address, self.target = address, target
         self.base = f"{address.prefix}/{target}"
         self.status_topic = f"{self.base}/status"
@@ -130,8 +134,9 @@ class MqttFeed:
             network()
         except Exception as exc:  # a name the resolver refuses, a topic paho cannot pack
             with self._lock:
-                self._connected, self._stopping = False, True
+                self._connected, self._stopping, self._dead = False, True, True
                 self._lock.notify_all()
+            self._changed()
             self._say(
                 f"publishing {self.target}'s values to {self} stopped: "
                 f"{terminal_safe(str(exc)) or type(exc).__name__}"
@@ -164,6 +169,16 @@ class MqttFeed:
     @property
     def connected(self) -> bool:
         return self._connected
+
+    @property
+    def state(self) -> str:
+        """``connected``; ``connecting`` (not yet, nothing wrong said); the trouble said
+        (``away``, ``refused``, ``silent``); or ``stopped`` (it cannot go on)."""
+        if self._dead:
+            return "stopped"
+        if self._connected:
+            return "connected"
+        return self._trouble or "connecting"
 
     def stop(self, timeout: float = 1.0) -> None:
         """Hand over what is pending (for up to ``timeout``), say ``offline`` on the
@@ -285,6 +300,7 @@ class MqttFeed:
             count = len(self._pending)
             self._lock.notify_all()
         self._publish(self.status_topic, ONLINE)
+        self._changed()
         if self._trouble is not None:  # the start was said by whoever started the feed
             self._trouble = None
             self._say(
@@ -349,4 +365,5 @@ class MqttFeed:
         (lost, then not reachable at each retry) is one line; a refusal after it, one more."""
         if self._trouble != kind:
             self._trouble = kind
+            self._changed()
             self._say(text)

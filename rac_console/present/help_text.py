@@ -146,6 +146,11 @@ STATUS_FIGURES: tuple[HelpEntry, ...] = (
     HelpEntry(" CSV LOG STOPPED ", "the CSV log could not be written; exit status 4"),
     HelpEntry(" MQTT ", "the watched values are published to a broker (publish; publish off)"),
     HelpEntry(
+        " MQTT LOST ",
+        "the broker went away (or NO BROKER: nothing answers MQTT there; REFUSED: it "
+        "refused us): polling goes on, the latest values go out when it is back",
+    ),
+    HelpEntry(
         " Esc cancels: LINE (N s) ",
         "a typed line has run for over half a second (a wait, a latency run, a slow "
         "reply): Esc on the command line cancels it; +N queued: lines typed behind it, "

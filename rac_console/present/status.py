@@ -205,7 +205,7 @@ def _fields(
     if status.csv_log is not None:  # a new log runs: an earlier failure is for the exit
         fields.append(_badge("CSV", CSV_STYLE))
     if status.publishing is not None:  # the watched values go to an MQTT broker
-        fields.append(_badge("MQTT", CSV_STYLE))
+        fields.append(_mqtt(status.broker))
     if status.paused:
         fields.append(_figure(Text("POLLING PAUSED", style="bold yellow")))
     elif (
@@ -224,6 +224,22 @@ def _fields(
     if frames_per_second:
         fields.append(_figure(Text(f"{frames_per_second:.0f} frames/s", style="dim")))
     return fields
+
+
+#: The MQTT badge by the broker's state: publishing must not look healthy when it is not.
+MQTT_BADGES = {
+    "connected": ("MQTT", CSV_STYLE),
+    "connecting": ("MQTT …", CONFIRM_STYLE),
+    "away": ("MQTT LOST", ALARM_STYLE),
+    "silent": ("MQTT NO BROKER", ALARM_STYLE),
+    "refused": ("MQTT REFUSED", ALARM_STYLE),
+    "stopped": ("MQTT STOPPED", ALARM_STYLE),
+}
+
+
+def _mqtt(state: str | None) -> _Field:
+    text, style = MQTT_BADGES.get(state or "connecting", MQTT_BADGES["connecting"])
+    return _badge(text, style, essential=style is ALARM_STYLE)
 
 
 #: How the status line names each reason a connection could not be opened.
