@@ -10,11 +10,8 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import shutil
-import socket
-import subprocess
 import sys
 import tempfile
-import time
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -136,29 +133,21 @@ PLANT_SCENES = {
 
 @contextlib.contextmanager
 def mosquitto() -> Iterator[int | None]:
-    """A broker on 127.0.0.1 and a free port (None: mosquitto is not installed)."""
-    path = shutil.which("mosquitto") or shutil.which("mosquitto", path="/usr/sbin")
-    if path is None:
+    """The benchmark's broker (benchmarks/plant_publish.py) on a free port; None when
+    mosquitto is not installed."""
+    if shutil.which("mosquitto") is None and shutil.which("mosquitto", path="/usr/sbin") is None:
         print("plant-120x40: needs mosquitto (apt install mosquitto)", file=sys.stderr)
         yield None
         return
-    with socket.socket() as probe:
-        probe.bind(("127.0.0.1", 0))
-        port = probe.getsockname()[1]
+    sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "benchmarks"))
+    from plant_publish import Mosquitto
+
     with tempfile.TemporaryDirectory() as folder:
-        config = Path(folder) / "mosquitto.conf"
-        config.write_text(f"listener {port} 127.0.0.1\nallow_anonymous true\n")
-        broker = subprocess.Popen([path, "-c", str(config)], stderr=subprocess.DEVNULL)
+        broker = Mosquitto(Path(folder), None)
         try:
-            for _ in range(100):
-                with contextlib.suppress(OSError):
-                    socket.create_connection(("127.0.0.1", port), timeout=0.5).close()
-                    break
-                time.sleep(0.05)
-            yield port
+            yield broker.port
         finally:
-            broker.terminate()
-            broker.wait(10)
+            broker.stop()
 
 
 def cell_of(sims: SimulatedCellThread) -> Cell:

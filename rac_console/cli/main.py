@@ -13,7 +13,7 @@ import sys
 from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
-from .parser import LOG_CSV_COMMANDS, ONE_SHOT, CliParser, build_cli, build_parser
+from .parser import ONE_SHOT, POLLING_COMMANDS, CliParser, build_cli, build_parser
 
 if TYPE_CHECKING:
     from ..engine.cell import Cell
@@ -44,7 +44,7 @@ def _dispatch(args: argparse.Namespace) -> int:
             file=sys.stderr,
         )
         return 2
-    if getattr(args, "log_csv", None) is not None and args.command not in LOG_CSV_COMMANDS:
+    if getattr(args, "log_csv", None) is not None and args.command not in POLLING_COMMANDS:
         print(
             "rac-console: --log-csv logs watched values: use it with the console, "
             "the REPL or rac-console watch",
@@ -69,7 +69,7 @@ def _dispatch(args: argparse.Namespace) -> int:
             return 2
         if in_cell is None and not settle_target(args):  # a broken config: one line, exit 2
             return 2
-        if args.command in ("watch", "repl", None):
+        if args.command in POLLING_COMMANDS:
             from .plant import settle_plant
 
             if not settle_plant(args):

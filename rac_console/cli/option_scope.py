@@ -8,6 +8,8 @@ from __future__ import annotations
 import argparse
 import sys
 
+from .parser import POLLING_COMMANDS
+
 #: Interval words: the top-level --interval, taken over by each command's own option.
 _INTERVAL_OF = {"get": "repeat_interval", "latency": "latency_interval", "watch": "every"}
 
@@ -33,7 +35,7 @@ def refusal(args: argparse.Namespace) -> str | None:
             f"{_name(command)} keeps no history"
         )
     for option in ("mqtt", "metrics"):
-        if getattr(args, option, None) is not None and command not in (None, "repl", "watch"):
+        if getattr(args, option, None) is not None and command not in POLLING_COMMANDS:
             return (
                 f"--{option} feeds the plant the watched values: the console, the REPL and "
                 f"watch take it, not {_name(command)}"

@@ -41,8 +41,9 @@ the check stops at the first that fails. Only GETs of I0 are sent.
 Exit status: 0 all ok, 1 the controller answered the GET with an error,
 3 a connection step failed."""
 
-LOG_CSV_COMMANDS = (None, "repl", "watch")
-"""Where ``--log-csv`` means something: the console, the REPL and ``watch``."""
+POLLING_COMMANDS = (None, "repl", "watch")
+"""The commands that poll watched values (the console, the REPL and ``watch``): where
+``--log-csv``, ``--mqtt`` and ``--metrics`` mean something."""
 
 
 def build_parser() -> argparse.ArgumentParser:

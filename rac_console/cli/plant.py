@@ -13,7 +13,12 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from ..commands.plant import MqttAddress, parse_metrics_address, parse_mqtt_address
+from ..commands.plant import (
+    MetricsAddress,
+    MqttAddress,
+    parse_metrics_address,
+    parse_mqtt_address,
+)
 from ..protocol import InputError
 from ..protocol.text import terminal_safe
 
@@ -77,8 +82,8 @@ def _plant_options(args: argparse.Namespace, notices: list[str]) -> dict[str, An
         server = MetricsServer(where, board)
         atexit.register(server.stop)
         options["metrics"] = board
-        host = f"[{where.host}]" if ":" in where.host else where.host
-        notices.append(f"serving the watched values at http://{host}:{server.port}/metrics")
+        served = MetricsAddress(where.host, server.port)  # port 0: the one it took
+        notices.append(f"serving the watched values at http://{served}/metrics")
         if not where.loopback:
             notices.append(
                 f"--metrics {where} is open to the network: anyone who reaches this "

@@ -12,6 +12,7 @@ import shlex
 from dataclasses import dataclass
 from typing import Any, Literal
 
+from ..protocol.text import endpoint
 from .outcome import ExitStatus
 
 DEFAULT_PORT = 5006
@@ -92,11 +93,6 @@ class CheckReport:
         if failed.problem in ANSWERED:
             return ExitStatus.CONTROLLER_ERROR
         return ExitStatus.TRANSPORT
-
-
-def endpoint(host: str, port: int) -> str:
-    """``10.0.0.5:5006``, ``[fe80::1]:5006``."""
-    return f"[{host}]:{port}" if ":" in host else f"{host}:{port}"
 
 
 def check_command(host: str | None, port: int | None = None) -> str:

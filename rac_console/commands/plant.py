@@ -11,7 +11,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 from ..protocol import InputError
-from ..protocol.text import terminal_safe
+from ..protocol.text import endpoint, terminal_safe
 
 MQTT_PORT = 1883
 MQTTS_PORT = 8883
@@ -35,8 +35,7 @@ class MqttAddress:
     tls: bool = False
 
     def __str__(self) -> str:
-        host = f"[{self.host}]" if ":" in self.host else self.host
-        return f"{'mqtts' if self.tls else 'mqtt'}://{host}:{self.port}/{self.prefix}"
+        return f"{'mqtts' if self.tls else 'mqtt'}://{endpoint(self.host, self.port)}/{self.prefix}"
 
 
 @dataclass(frozen=True)
@@ -159,8 +158,7 @@ class MetricsAddress:
             return self.host == "localhost"
 
     def __str__(self) -> str:
-        host = f"[{self.host}]" if ":" in self.host else self.host
-        return f"{host}:{self.port}"
+        return endpoint(self.host, self.port)
 
 
 METRICS_USAGE = (

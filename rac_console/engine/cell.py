@@ -22,7 +22,7 @@ from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING
 
 from ..protocol import InputError
-from ..protocol.text import terminal_safe
+from ..protocol.text import endpoint, terminal_safe
 from .engine import CellFiles, Engine
 from .feedback import Message
 from .options import EngineOptions
@@ -78,8 +78,7 @@ def member_name(target: Target) -> str:
         return target.profile.name
     if target.host is None:
         return f"sim:{target.port}"
-    host = f"[{target.host}]" if ":" in target.host else target.host
-    return f"{host}:{target.port}"
+    return endpoint(target.host, target.port)
 
 
 class Cell:

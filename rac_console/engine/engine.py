@@ -509,6 +509,5 @@ class Engine:
             recording=files.path("record"),
             transcribing=files.path("transcript"),
             reads=(poller.reads[0], poller.reads[1], poller.reads[2]),
-            publishing=self._publisher.tap.publishing if self._publisher.tap else None,
             broker=self._publisher.tap.broker_state if self._publisher.tap else None,
         )

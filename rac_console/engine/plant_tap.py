@@ -69,7 +69,7 @@ class PlantTap:
         feed = MqttFeed(address, self._credentials, self.name, self._say, self._changed)
         before = self.stop_publishing()
         self.mqtt = feed
-        self._to_mqtt(feed, rows, time.time())
+        self._to_mqtt(feed, read(rows), time.time())
         feed.start()
         shown = f"publishing {self.name}'s watched values to {feed} (retained, QoS 1)"
         return shown if before is None else f"{before}; {shown}"
@@ -110,7 +110,7 @@ class PlantTap:
         """Rows whose value or health changed since the last flush (a row not read yet
         has nothing to say)."""
         wall = time.time()
-        views = [view for view in changed if view.status != WAITING]
+        views = read(changed)
         if self.mqtt is not None:
             self._to_mqtt(self.mqtt, views, wall)
         board = self._board
@@ -164,8 +164,12 @@ class PlantTap:
         feed.update_many(
             (str(view.var), Reading(name, view.var, view.label, view.variant, view.status, wall))
             for view in views
-            if view.status != WAITING
         )
+
+
+def read(views: Iterable[RowView]) -> list[RowView]:
+    """The rows read at least once: a row not read yet has nothing to say to the plant."""
+    return [view for view in views if view.status != WAITING]
 
 
 def plant_name(host: str | None, port: int, profile: str | None) -> str:

@@ -77,8 +77,9 @@ class Status:
     recording: str | None = None  # where frames are recorded (--record, record FILE)
     transcribing: str | None = None  # where the transcript goes (--log, transcript FILE)
     reads: tuple[int, int, int] = (0, 0, 0)  # watched reads: ok, error, no reply
-    publishing: str | None = None  # the MQTT topics the watched values go to
-    broker: str | None = None  # the MQTT broker: connected, connecting, away, refused, …
+    #: The MQTT broker the watched values go to, by its state: connected, connecting,
+    #: away, silent, refused, stopped; None: not publishing.
+    broker: str | None = None
 
     def exit_status(self, status: int) -> int:
         """A front end's exit status: 4 (a local I/O error) when it would be 0 but the

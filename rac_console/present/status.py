@@ -204,7 +204,7 @@ def _fields(
             )
     if status.csv_log is not None:  # a new log runs: an earlier failure is for the exit
         fields.append(_badge("CSV", CSV_STYLE))
-    if status.publishing is not None:  # the watched values go to an MQTT broker
+    if status.broker is not None:  # the watched values go to an MQTT broker
         fields.append(_mqtt(status.broker))
     if status.paused:
         fields.append(_figure(Text("POLLING PAUSED", style="bold yellow")))
@@ -237,8 +237,8 @@ MQTT_BADGES = {
 }
 
 
-def _mqtt(state: str | None) -> _Field:
-    text, style = MQTT_BADGES.get(state or "connecting", MQTT_BADGES["connecting"])
+def _mqtt(state: str) -> _Field:
+    text, style = MQTT_BADGES.get(state, MQTT_BADGES["connecting"])
     return _badge(text, style, essential=style is ALARM_STYLE)
 
 

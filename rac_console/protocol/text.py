@@ -18,6 +18,11 @@ if TYPE_CHECKING:
 CR_MARK = "↵"
 
 
+def endpoint(host: str, port: int) -> str:
+    """``10.0.0.5:5006``, ``[fe80::1]:5006``."""
+    return f"[{host}]:{port}" if ":" in host else f"{host}:{port}"
+
+
 def counted(n: int, noun: str) -> str:
     """``1 row``, ``3 rows``: a count and its noun, for messages."""
     return f"{n} {noun}{'s' * (n != 1)}"

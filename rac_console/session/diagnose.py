@@ -19,10 +19,10 @@ import time
 from collections.abc import Callable, Sequence
 from concurrent.futures import Future
 
-from ..commands.check import CheckReport, Problem, StepName, StepResult, endpoint
+from ..commands.check import CheckReport, Problem, StepName, StepResult
 from ..protocol import describe_hresult, kind_of
 from ..protocol.request import get_for
-from ..protocol.text import escape_bytes
+from ..protocol.text import endpoint, escape_bytes
 from .blocking import Session, _reason
 from .endpoints import RESOLVE_SECONDS
 from .types import (
