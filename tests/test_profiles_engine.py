@@ -71,11 +71,12 @@ def test_connect_name_takes_the_profile_and_connect_sim_drops_it(cell: Simulator
         assert front.status.writes == "open"
         said = text(front, "connect cell3")
         assert "Cell 3 — welding" in said and f"{cell.host}:{cell.port}" in said
-        assert "writes confirm" in said
+        # cell4 (read-only) names the same controller: the strictest rules apply (issue 30)
+        assert "read-only" in said
         status = front.status
         assert status is not None and not status.is_simulator
         assert (status.profile, status.label, status.colour) == ("cell3", "Cell 3 — welding", "red")
-        assert (status.writes, status.connection) == ("confirm", "connected")
+        assert (status.writes, status.connection) == ("read-only", "connected")
         assert "777" in text(front, "get I 1")  # reads go to the profile's controller
         said = text(front, "connect sim")
         assert "built-in simulator" in said and "writes open" in said

@@ -10,11 +10,13 @@ from __future__ import annotations
 import argparse
 import atexit
 import sys
+from collections.abc import Callable
 from typing import TYPE_CHECKING
 
 from ..commands.cells import DEMO_CELL, not_open, split_hosts
+from ..commands.names import find_name
 from ..protocol import InputError
-from ..protocol.text import terminal_safe
+from ..protocol.text import endpoint, terminal_safe
 
 if TYPE_CHECKING:
     from ..commands.target import Target
@@ -58,13 +60,14 @@ def pick_member(args: argparse.Namespace) -> str | None:
             f"several targets are open ({', '.join(names)}): name the one to "
             f"{'write' if args.command == 'put' else 'ask'} first, e.g. {example}"
         )
-    found = dict(members).get(first[1:])
-    if found is None:
+    name = find_name(names, first[1:])
+    if name is None:
         raise not_open(first[1:], names)
+    found = dict(members)[name]
     args.words = args.words[1:]
     args.target, args.cell_targets = found, None
     args.host, args.port, args.read_only = found.host, found.port, found.read_only
-    return first[1:]
+    return name
 
 
 def _members(args: argparse.Namespace) -> Members | None:
@@ -99,10 +102,11 @@ def _members(args: argparse.Namespace) -> Members | None:
 
     args.cell_watch = ()
     if hosts is not None:
-        return [_named(name, resolved(name)) for name in hosts]
+        return one_controller_each([_named(name, resolved(name)) for name in hosts], addresses)
     assert cell is not None
-    spec = config.cells.get(cell)
-    if spec is None and cell == DEMO_CELL:
+    found = find_name(config.cells, cell)
+    spec = config.cells[found] if found is not None else None
+    if spec is None and cell.casefold() == DEMO_CELL:
         return _demo(args)
     if spec is None:
         known = ", ".join(sorted(config.cells)) or f"none in {where}"
@@ -112,7 +116,26 @@ def _members(args: argparse.Namespace) -> Members | None:
         )
     args.cell_watch = spec.watch
     args.cell_publish = spec.publish
-    return [_named(name, resolved(name)) for name in spec.targets]
+    return one_controller_each([_named(name, resolved(name)) for name in spec.targets], addresses)
+
+
+def one_controller_each(
+    members: Members, addresses: Callable[[str], frozenset[str] | None]
+) -> Members:
+    """The members, unless two of them reach one controller (one endpoint, however
+    written): InputError naming both, since one controller is one session."""
+    seen: list[tuple[str, int, frozenset[str]]] = []
+    for name, target in members:
+        host = target.host or "127.0.0.1"
+        reached = (addresses(host) or frozenset()) | {host.casefold()}
+        for other, port, theirs in seen:
+            if port == target.port and theirs & reached:
+                raise InputError(
+                    f"{terminal_safe(other)} and {terminal_safe(name)} are one controller "
+                    f"({endpoint(host, port)}): one session per controller; name it once"
+                )
+        seen.append((name, target.port, reached))
+    return members
 
 
 def _named(typed: str, target: Target) -> tuple[str, Target]:

@@ -30,14 +30,32 @@ def resolve_target(args: argparse.Namespace) -> Target:
     config file is broken: a broken file must not silently drop a profile's guard."""
     config = load_config()
     where = str(config.path) if config.found else f"{config.path} (no such file)"
+    host, port = host_and_port(args.host, args.port)
     return resolve_target_of(
-        args.host,
-        args.port,
+        host,
+        port,
         profiles=config.profiles,
         read_only_flag=bool(args.read_only),
         resolve=_addresses,
         config_where=where,
     )
+
+
+def host_and_port(host: str | None, port: int | None) -> tuple[str | None, int | None]:
+    """``-H HOST:PORT`` (or ``[v6]:PORT``) as ``connect`` reads it, ``-H NAME:PORT``
+    too; ``-p`` with a port in ``-H`` too is refused unless both say the same."""
+    if host is None or not (host.startswith("[") or host.count(":") == 1):
+        return host, port
+    from ..commands.language import parse_connect
+
+    address = parse_connect(host)
+    if not address.port_given:
+        return address.host, port
+    if port is not None and port != address.port:
+        raise InputError(
+            f"-H {terminal_safe(host)} and -p {port} name two ports: give the port once"
+        )
+    return address.host, address.port
 
 
 def _addresses(host: str) -> frozenset[str] | None:

@@ -20,9 +20,12 @@ from dataclasses import dataclass
 
 from ..protocol import InputError
 from ..protocol.text import terminal_safe
+from .names import case_collision, find_name
 
 #: A cell holds at most this many targets (a robot cell has two to six controllers).
 MOST_TARGETS = 8
+#: A cell's ``watch`` list holds at most this many lines: as many rows as a watch file.
+MOST_WATCHED = 4096
 #: ``--cell demo`` with no [cell.demo] in the config: simulators playing a handshake.
 DEMO_CELL = "demo"
 _NAME = re.compile(r"[A-Za-z0-9_][A-Za-z0-9_.:-]*", re.ASCII)
@@ -58,11 +61,11 @@ def split_hosts(text: str | None) -> list[str] | None:
 def _no_repeats(names: Sequence[str], where: str) -> None:
     seen: set[str] = set()
     for name in names:
-        if name in seen:
+        if name.casefold() in seen:
             raise InputError(
                 f"{where} names {terminal_safe(name)} twice: one session per controller"
             )
-        seen.add(name)
+        seen.add(name.casefold())
 
 
 def split_address(line: str) -> tuple[str | None, str]:
@@ -87,9 +90,10 @@ def route(line: str, names: Sequence[str], current: str) -> tuple[str, str]:
     name, rest = split_address(line)
     if name is None:
         return current, line
-    if name not in names:
+    found = find_name(names, name)
+    if found is None:
         raise not_open(name, names)
-    return name, rest
+    return found, rest
 
 
 def not_open(name: str, names: Sequence[str]) -> InputError:
@@ -97,6 +101,20 @@ def not_open(name: str, names: Sequence[str]) -> InputError:
     return InputError(
         f"no target named {terminal_safe(name)} is open here; open: {', '.join(names)}"
     )
+
+
+def _watch_line(
+    line: str, targets: Sequence[str], where: str, fail: Callable[[str], InputError]
+) -> str:
+    """A cell's watch line, led by its target's own name (``CELL3 IO 1`` is ``cell3 IO 1``)."""
+    first, _, rest = line.strip().partition(" ")
+    found = find_name(targets, first) if first else None
+    if found is None:
+        raise fail(
+            f"{where} watch {terminal_safe(line)!r}: start with one of its targets "
+            f'({", ".join(targets)}), e.g. "{targets[0]} IO 128 part placed"'
+        )
+    return f"{found} {rest.strip()}"
 
 
 def parse_cells(
@@ -108,6 +126,11 @@ def parse_cells(
     example = '[cell.line2] then targets = ["cell3", "cell4"] on the next line'
     if not isinstance(data, dict):
         raise fail(f"[cell] holds one table per cell: write {example}")
+    if (pair := case_collision(data)) is not None:
+        raise fail(
+            f"[cell.{pair[0]}] and [cell.{pair[1]}] differ only in case, and a name is "
+            "found in any case (--cell): rename one of them"
+        )
     cells: dict[str, CellSpec] = {}
     for name, table in data.items():
         where = f"[cell.{name}]" if _NAME.fullmatch(str(name)) else f"[cell.{name!r}]"
@@ -121,31 +144,33 @@ def parse_cells(
         targets = table.get("targets")
         if not isinstance(targets, list) or not all(isinstance(t, str) for t in targets):
             raise fail(f'{where} targets: write targets = ["cell3", "cell4"] (profile names)')
+        targets = list(targets)
         if not targets:
             raise fail(f'{where} targets is empty: name its profiles, targets = ["cell3", "cell4"]')
         if len(targets) > MOST_TARGETS:
             raise fail(f"{where} names {len(targets)} targets; a cell holds at most {MOST_TARGETS}")
-        for target in targets:
-            if target not in profiles:
+        try:
+            _no_repeats(targets, where)
+        except InputError as exc:
+            raise fail(str(exc)) from None
+        for n, target in enumerate(targets):
+            found = find_name(profiles, target)
+            if found is None:
                 known = ", ".join(sorted(profiles)) or "none yet"
                 raise fail(
                     f"{where} targets: no profile named {terminal_safe(target)} "
                     f"(a [target.NAME] table; profiles: {known})"
                 )
-        try:
-            _no_repeats(targets, where)
-        except InputError as exc:
-            raise fail(str(exc)) from None
+            targets[n] = found  # the profile's own name, whatever case it was typed in
         watch = table.get("watch", [])
         if not isinstance(watch, list) or not all(isinstance(w, str) for w in watch):
             raise fail(f'{where} watch: write watch = ["cell3 IO 128 part placed"]')
-        for line in watch:
-            first = line.split(maxsplit=1)[0] if line.strip() else ""
-            if first not in targets:
-                raise fail(
-                    f"{where} watch {terminal_safe(line)!r}: start with one of its targets "
-                    f'({", ".join(targets)}), e.g. "{targets[0]} IO 128 part placed"'
-                )
+        if len(watch) > MOST_WATCHED:
+            raise fail(
+                f"{where} watch holds {len(watch)} lines; a cell watches at most "
+                f"{MOST_WATCHED} (as a watch file): keep the ones worth a row"
+            )
+        watch = [_watch_line(line, targets, where, fail) for line in watch]
         from .plant import publish_setting
 
         publish = publish_setting(where, table.get("publish"), fail)

@@ -11,6 +11,7 @@ settling a target (the console, before its first paint) needs only the classes h
 from __future__ import annotations
 
 import re
+from collections.abc import Sequence
 from dataclasses import dataclass
 from enum import Enum
 from typing import TYPE_CHECKING
@@ -106,6 +107,37 @@ class WritePolicy:
         if any(rule.covers(var) for rule in self.allow):
             return None
         return f"PUT {var} refused: {where}allows writes only to {rules} (nothing was sent)"
+
+
+#: How strict a mode of writes is: of several profiles at one endpoint, the strictest.
+STRICTNESS = {Writes.OPEN: 0, Writes.CONFIRM: 1, Writes.READ_ONLY: 2}
+
+
+def strictest(policies: Sequence[WritePolicy]) -> WritePolicy:
+    """The rules of several profiles at one controller, together: the strictest mode of
+    writes, and only the variables every ``allow`` list lets be written. ``source``
+    names the profiles that made the rules (``profile ro``, ``profile a + b``)."""
+    if len(policies) == 1:
+        return policies[0]
+    writes = max((p.writes for p in policies), key=STRICTNESS.__getitem__, default=Writes.OPEN)
+    lists = [p.allow for p in policies if p.allow is not None]
+    allow: tuple[AllowRange, ...] | None = None
+    for ranges in lists:
+        allow = ranges if allow is None else _both(allow, ranges)
+    made = [p for p in policies if p.writes is writes or p.allow is not None]
+    names = [p.source.removeprefix("profile ") for p in made if p.source]
+    source = f"profile {' + '.join(dict.fromkeys(names))}" if names else ""
+    return WritePolicy(writes, allow, source)
+
+
+def _both(first: tuple[AllowRange, ...], second: tuple[AllowRange, ...]) -> tuple[AllowRange, ...]:
+    """The variables both lists of ranges cover."""
+    return tuple(
+        AllowRange(a.kind, max(a.low, b.low), min(a.high, b.high))
+        for a in first
+        for b in second
+        if a.kind is b.kind and max(a.low, b.low) <= min(a.high, b.high)
+    )
 
 
 @dataclass(frozen=True)

@@ -28,7 +28,16 @@ from ..protocol import InputError
 from ..protocol.text import terminal_safe
 from .cells import CellSpec, parse_cells
 from .plant import NO_CREDENTIALS, Credentials, publish_setting
-from .policy import AllowRange, TargetProfile, WritePolicy, Writes, parse_allow
+from .names import case_collision, find_name
+from .policy import (
+    STRICTNESS,
+    AllowRange,
+    TargetProfile,
+    WritePolicy,
+    Writes,
+    parse_allow,
+    strictest,
+)
 
 DEFAULT_PORT = 5006
 #: ``connect sim`` and the status line's name for the built-in simulator.
@@ -116,6 +125,11 @@ def parse_config(data: Mapping[str, object], source: str) -> ParsedConfig:
                 'line of its own, then host = "..." under it'
             )
         found[name] = _profile(name, table, fail)
+    if (pair := case_collision(found)) is not None:
+        raise fail(
+            f"{table_name(pair[0])} and {table_name(pair[1])} differ only in case, and a "
+            "name is found in any case (-H, connect, @NAME): rename one of them"
+        )
     cells = parse_cells(data.get("cell"), found, fail)
     return ParsedConfig(found, dict(settings), cells, _mqtt(data.get("mqtt", {}), fail))
 
@@ -213,10 +227,6 @@ def _allow(where: str, table: dict[str, object], fail: _Fail) -> tuple[AllowRang
     return tuple(ranges)
 
 
-#: How strict a profile's writes are: of two profiles at one address, the stricter rules.
-_STRICTNESS = {Writes.OPEN: 0, Writes.CONFIRM: 1, Writes.READ_ONLY: 2}
-
-
 #: The addresses a host name or address text stands for (an IPv4-mapped IPv6 address as
 #: its IPv4 form), or None when it cannot be resolved. Given by the caller: this module
 #: is pure, and resolving is a socket affair (see :mod:`rac_console.session.endpoints`).
@@ -225,11 +235,22 @@ Addresses = Callable[[str], "frozenset[str] | None"]
 
 @dataclass(frozen=True)
 class ProfileMatch:
-    """The profile whose rules a target gets, and the profiles of its port whose host
-    could not be resolved (matched by name and text only: said to the user once)."""
+    """Who a target is: the profile shown for it (its name, label and colour), the
+    profiles whose rules apply to it, and the profiles of its port whose host could not
+    be resolved (matched by name and text only: said to the user once)."""
 
     profile: TargetProfile | None
     unresolved: tuple[TargetProfile, ...] = ()
+    #: Every profile at the endpoint reached, and the one named if it is elsewhere: the
+    #: rules are the strictest of all of them (naming a profile never makes them laxer).
+    ruling: tuple[TargetProfile, ...] = ()
+
+    @property
+    def policy(self) -> WritePolicy | None:
+        """The rules that apply: the strictest of the ruling profiles'; None for none."""
+        if not self.ruling:
+            return None
+        return strictest([profile.policy for profile in self.ruling])
 
     def notices(self) -> list[str]:
         """One line per profile that could not be matched by its address."""
@@ -240,26 +261,52 @@ class ProfileMatch:
         ]
 
 
+def find_profile(profiles: Mapping[str, TargetProfile], name: str) -> TargetProfile | None:
+    """The profile named ``name`` in any case (names that differ only in case are
+    refused when the file is read), or None."""
+    found = find_name(profiles, name)
+    return profiles[found] if found is not None else None
+
+
 def match_profile(
     profiles: Mapping[str, TargetProfile],
     name_or_host: str,
     port: int | None = None,
     addresses: Addresses | None = None,
 ) -> ProfileMatch:
-    """The profile named ``name_or_host`` (in any case); else every profile at the same
-    endpoint (``port`` None: the default), the host compared as text and, with
-    ``addresses``, as the addresses both sides resolve to (``127.1``, ``localhost`` and
-    ``0x7f000001`` are all 127.0.0.1); of several, the strictest."""
-    key = name_or_host.casefold()
-    for name, profile in profiles.items():
-        if name.casefold() == key:
-            return ProfileMatch(profile)
-    wanted = DEFAULT_PORT if port is None else port
-    at_port = [p for p in profiles.values() if p.port == wanted]
+    """The profiles of the endpoint ``name_or_host`` reaches: a profile's name (in any
+    case) reaches its host at ``port`` (None: its own port), a host ``port`` (None: the
+    default). Hosts are compared as text and, with ``addresses``, as the addresses both
+    sides resolve to (``127.1``, ``localhost`` and ``0x7f000001`` are all 127.0.0.1).
+    The profile shown is the one named, unless another profile names that endpoint (the
+    strictest there is shown); the rules are those of every profile there and of the
+    one named."""
+    named = find_profile(profiles, name_or_host)
+    host = named.host if named is not None else name_or_host
+    wanted = (named.port if named is not None else DEFAULT_PORT) if port is None else port
+    same, unresolved = _at_endpoint(profiles, host, wanted, addresses)
+    if named is not None and named.port == wanted and named not in same:
+        same.insert(0, named)
+    ruling = [*same, *([named] if named is not None and named not in same else [])]
+    shown = (
+        named
+        if named is not None and (named in same or not same)
+        else max(same, key=lambda p: (STRICTNESS[p.policy.writes], p.policy.allow is not None),
+                 default=None)
+    )  # fmt: skip
+    return ProfileMatch(shown, tuple(unresolved), tuple(ruling))
+
+
+def _at_endpoint(
+    profiles: Mapping[str, TargetProfile], host: str, port: int, addresses: Addresses | None
+) -> tuple[list[TargetProfile], list[TargetProfile]]:
+    """The profiles at ``host:port``, and those of that port whose host cannot be resolved."""
+    key = host.casefold()
+    at_port = [p for p in profiles.values() if p.port == port]
     same = [p for p in at_port if p.host.casefold() == key]
     unresolved: list[TargetProfile] = []
     others = [p for p in at_port if p.host.casefold() != key]
-    typed = addresses(name_or_host) if addresses is not None and others else None
+    typed = addresses(host) if addresses is not None and others else None
     if addresses is not None and typed:  # a host that cannot be resolved reaches nothing
         for profile in others:
             theirs = addresses(profile.host)
@@ -267,12 +314,7 @@ def match_profile(
                 unresolved.append(profile)
             elif theirs & typed:
                 same.append(profile)
-    strictest = max(
-        same,
-        key=lambda p: (_STRICTNESS[p.policy.writes], p.policy.allow is not None),
-        default=None,
-    )
-    return ProfileMatch(strictest, tuple(unresolved))
+    return same, unresolved
 
 
 def could_be_profile_name(host: str) -> bool:

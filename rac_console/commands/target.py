@@ -73,15 +73,19 @@ def resolve_target(
             read_only_flag=read_only_flag,
             profiles=profiles,
         )
-    from .profiles import match_profile
+    from .profiles import find_profile, match_profile
 
     match = match_profile(profiles, host, port, resolve)
-    profile = match.profile
+    named = find_profile(profiles, host)
     notices = tuple(match.notices())
-    if profile is None:
+    policy = match.policy
+    if named is not None:  # the profile's host, at the port given or its own
+        host, port = named.host, named.port if port is None else port
+    port = DEFAULT_PORT if port is None else port
+    if policy is None:
         return Target(
             host,
-            DEFAULT_PORT if port is None else port,
+            port,
             policy=plain_policy,
             read_only=read_only_flag or plain_policy.writes is Writes.READ_ONLY,
             read_only_flag=read_only_flag,
@@ -89,16 +93,34 @@ def resolve_target(
             unreachable_hint=no_profile_hint(host, profiles, config_where),
             notices=notices,
         )
-    named = profile.name.casefold() == host.casefold()
+    if named is not None and port != named.port:
+        notices += (_elsewhere(named, host, port, match.profile),)
     return Target(
-        profile.host if named else host,  # at its address: the address typed
-        profile.port if port is None else port,  # a port given wins
-        profile,
-        profile.policy,
-        read_only=read_only_flag or profile.policy.writes is Writes.READ_ONLY,
+        host,
+        port,
+        match.profile,
+        policy,
+        read_only=read_only_flag or policy.writes is Writes.READ_ONLY,
         read_only_flag=read_only_flag,
         profiles=profiles,
         notices=notices,
+    )
+
+
+def _elsewhere(
+    named: TargetProfile, host: str, port: int, reached: TargetProfile | None
+) -> str:
+    """Said when a profile's name is given another port: which controller that is."""
+    from ..protocol.text import endpoint
+
+    if reached is None or reached is named:
+        return (
+            f"{named.name} is {endpoint(named.host, named.port)}; no profile names "
+            f"{endpoint(host, port)}: {named.name}'s rules apply there"
+        )
+    return (
+        f"{named.name} is {endpoint(named.host, named.port)}; {endpoint(host, port)} is "
+        f"profile {reached.name}'s controller: the stricter rules of both apply"
     )
 
 
