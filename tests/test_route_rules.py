@@ -71,9 +71,7 @@ def test_a_name_with_another_port_in_run_and_a_cell(
     run = cli(env, "-H", f"bench:{ro.port}", "run", "--keep-going", "-", stdin=script)
     assert run.returncode == 2, run.stderr
     assert run.stderr.count("read-only") == 2, run.stderr  # each line refused, said why
-    cell = cli(
-        env, "-H", f"bench:{ro.port},127.0.0.1:{other.port}", "put", "@ro", "I", "10", "5"
-    )
+    cell = cli(env, "-H", f"bench:{ro.port},127.0.0.1:{other.port}", "put", "@ro", "I", "10", "5")
     assert cell.returncode == 2 and "read-only" in cell.stderr, cell.stderr
     assert puts(ro) == [] and puts(bench) == []
 
@@ -105,7 +103,7 @@ def test_the_strictest_of_two_profiles_merges_their_allow_lists() -> None:
         return frozenset({"127.0.0.1"}) if host in ("localhost", "127.0.0.1") else None
 
     io = kind_of("IO")
-    config = parse_config(
+    parsed = parse_config(
         {
             "target": {
                 "a": {"host": "127.0.0.1", "port": 7000, "allow": ["I 100-199", "IO 64-71"]},
@@ -115,7 +113,7 @@ def test_the_strictest_of_two_profiles_merges_their_allow_lists() -> None:
         },
         "config.toml",
     )  # fmt: skip
-    target = resolve_target("a", None, profiles=config.profiles, resolve=addresses)
+    target = resolve_target("a", None, profiles=parsed.profiles, resolve=addresses)
     assert target.policy.writes is Writes.CONFIRM  # b's
     assert target.policy.allow == (AllowRange(kind_of("I"), 150, 199),)  # both allow only these
     assert not any(rule.kind is io for rule in target.policy.allow)
@@ -140,7 +138,7 @@ def test_profile_names_that_differ_only_in_case_are_refused_at_load(
 
 def test_cell_names_that_differ_only_in_case_are_refused() -> None:
     profiles = {"a": {"host": "h", "port": 1}, "b": {"host": "h", "port": 2}}
-    with pytest.raises(InputError, match="Line2.*line2|line2.*Line2"):
+    with pytest.raises(InputError, match=r"Line2.*line2|line2.*Line2"):
         parse_config(
             {
                 "target": profiles,

@@ -27,8 +27,8 @@ from dataclasses import dataclass, field
 from ..protocol import InputError
 from ..protocol.text import terminal_safe
 from .cells import CellSpec, parse_cells
-from .plant import NO_CREDENTIALS, Credentials, publish_setting
 from .names import case_collision, find_name
+from .plant import NO_CREDENTIALS, Credentials, publish_setting
 from .policy import (
     STRICTNESS,
     AllowRange,

@@ -107,9 +107,7 @@ def resolve_target(
     )
 
 
-def _elsewhere(
-    named: TargetProfile, host: str, port: int, reached: TargetProfile | None
-) -> str:
+def _elsewhere(named: TargetProfile, host: str, port: int, reached: TargetProfile | None) -> str:
     """Said when a profile's name is given another port: which controller that is."""
     from ..protocol.text import endpoint
 
