@@ -61,13 +61,8 @@ def _dispatch(args: argparse.Namespace) -> int:
 
         return paths()
     if args.command != "sim":
-        from .cell import settle_cell
-        from .target import settle_target
-
-        in_cell = settle_cell(args)  # -H a,b or --cell NAME: several targets
+        in_cell = settle_targets(args)
         if in_cell is False:
-            return 2
-        if in_cell is None and not settle_target(args):  # a broken config: one line, exit 2
             return 2
         if args.command in POLLING_COMMANDS:
             from .plant import settle_plant
@@ -119,21 +114,25 @@ def _dispatch(args: argparse.Namespace) -> int:
     return _interactive(args)
 
 
-def _after_first_paint() -> None:
-    """The console painted its first screen: the collector runs again, and skips what
-    the start made (it lives as long as the console)."""
-    gc.freeze()
-    gc.enable()
+def settle_targets(args: argparse.Namespace) -> bool | None:
+    """The targets the options name, resolved once for every mode (``args.target``, and
+    ``args.cell_targets`` for several): True for a cell, None for one target, False
+    after one line on stderr (a broken config, a name that is no target)."""
+    from .cell import settle_cell
+    from .target import settle_target
+
+    in_cell = settle_cell(args)  # -H a,b or --cell NAME: several targets
+    if in_cell is None and not settle_target(args):  # a broken config: one line, exit 2
+        return False
+    return in_cell
 
 
-def _interactive(args: argparse.Namespace) -> int:
-    """The full-screen console, or the REPL: one engine and history file for both."""
+def make_cell(args: argparse.Namespace) -> Cell:
+    """The console's or the REPL's cell of the settled targets (one target: a cell of
+    one); InputError when a file named cannot be opened."""
     from ..engine import DEFAULT_INTERVAL, EngineOptions
     from ..engine.cell import Cell, member_name
     from ..engine.where import Where
-    from ..present.history import History, default_history_path
-    from ..protocol.errors import InputError
-    from ..protocol.text import terminal_safe
 
     options = EngineOptions(
         timeout=args.timeout,
@@ -143,12 +142,28 @@ def _interactive(args: argparse.Namespace) -> int:
         record=args.record,
         transcript=args.transcript,
         log_csv=getattr(args, "log_csv", None),
-        **args.plant,
+        **getattr(args, "plant", {}),
     )
     where = Where.CONSOLE if args.command is None else Where.REPL
     members = getattr(args, "cell_targets", None) or [(member_name(args.target), args.target)]
+    return Cell(members, options=options, where=where)
+
+
+def _after_first_paint() -> None:
+    """The console painted its first screen: the collector runs again, and skips what
+    the start made (it lives as long as the console)."""
+    gc.freeze()
+    gc.enable()
+
+
+def _interactive(args: argparse.Namespace) -> int:
+    """The full-screen console, or the REPL: one engine and history file for both."""
+    from ..present.history import History, default_history_path
+    from ..protocol.errors import InputError
+    from ..protocol.text import terminal_safe
+
     try:
-        cell = Cell(members, options=options, where=where)
+        cell = make_cell(args)
     except InputError as exc:
         print(f"rac-console: {terminal_safe(str(exc))}", file=sys.stderr)
         return 2

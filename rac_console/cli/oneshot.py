@@ -12,10 +12,10 @@ from contextlib import ExitStack
 from dataclasses import replace
 
 from ..commands.argv import exchange_from_words, input_line
-from ..commands.cells import not_open, route
-from ..commands.language import Command, Latency, Use, Wait
+from ..commands.language import Command, Latency
 from ..commands.outcome import ExitStatus, Outcome, refused, worst
 from ..commands.policy import Writes
+from ..commands.routing import Chained
 from ..commands.target import Target
 from ..engine import Alert, Measured, Message
 from ..engine.chained_wait import chained_feedback, met
@@ -143,33 +143,25 @@ def _script_lines(source: str) -> Iterator[str]:
 
 
 def run_script(args: argparse.Namespace) -> ExitStatus:
-    """``run FILE|-``: every line over one session; the worst status is the exit status."""
+    """``run FILE|-``: every line routed by the planner (``@NAME`` and ``use`` in a
+    cell), each target over one session. It stops at the first line that fails, says
+    which, and exits with its status; ``--keep-going`` runs on and exits with the worst."""
     output = Output(args.json)
-    status = ExitStatus.OK  # the worst so far (a script may be endless: no list of them)
     try:
         lines = _script_lines(args.file)
         first = next(lines, None)  # opens the file: a missing one is said before connecting
     except OSError as exc:
         print_error(output.err, f"cannot read {args.file}: {exc.strerror}")
         return ExitStatus.REFUSED
-    members = getattr(args, "cell_targets", None)
+    from ..engine.cell import member_name
+
+    members = getattr(args, "cell_targets", None) or [(member_name(args.target), args.target)]
     numbered = enumerate(itertools.chain([first] if first else [], lines), 1)
     try:
-        if members:
-            return output.status(_run_on_cell(args, output, members, numbered))
-        with open_session(args, output.local_failure) as session:
-            for number, raw_line in numbered:
-                line = raw_line.rstrip("\r\n")
-                status = worst(
-                    [
-                        status,
-                        _show_line(output, _results(session, line, args, line, Where.RUN), number),
-                    ]
-                )
+        return output.status(_run_lines(args, output, members, numbered))
     except InputError as exc:
         print_error(output.err, str(exc))
         return ExitStatus.REFUSED
-    return output.status(status)
 
 
 def _show_line(output: Output, results: list[Outcome | Message], number: int) -> ExitStatus:
@@ -184,88 +176,96 @@ def _show_line(output: Output, results: list[Outcome | Message], number: int) ->
     return status
 
 
-def _run_on_cell(
+def _run_lines(
     args: argparse.Namespace,
     output: Output,
     members: list[tuple[str, Target]],
     numbered: Iterator[tuple[int, str]],
 ) -> ExitStatus:
-    """``run`` on a cell: each line on its ``@NAME`` or the current target (``use NAME``
-    changes it), each target's session opened when a line first needs it. ``--record``
-    and ``--log`` are one file each for the cell, every line naming its target."""
+    """The script's lines in order, each on the target the planner routes it to, each
+    target's session opened when a line first needs it. In a cell, ``--record`` and
+    ``--log`` are one file each, every line naming its target."""
+    from ..commands.routing import Chained, OnEveryTarget, OnTarget, Refused, SwitchCurrent
     from ..engine.frame_files import FrameFiles
 
+    single = len(members) == 1
     targets = dict(members)
     names = list(targets)
     current = names[0]
     status = ExitStatus.OK
-    files = FrameFiles(args.record, getattr(args, "transcript", None), output.local_failure)
-    plain = argparse.Namespace(**{**vars(args), "record": None, "transcript": None})
+    keep_going = bool(getattr(args, "keep_going", False))
+    plain = (
+        args if single else argparse.Namespace(**{**vars(args), "record": None, "transcript": None})
+    )
     with ExitStack() as stack:
-        stack.callback(files.close)
+        files = None
+        if not single:
+            files = FrameFiles(args.record, getattr(args, "transcript", None), output.local_failure)
+            stack.callback(files.close)
         sessions: dict[str, Session] = {}
+
+        def run_on(target: str, what: Command, line: str) -> list[Outcome | Message]:
+            if target not in sessions:
+                sessions[target] = stack.enter_context(
+                    open_session(plain, output.local_failure, targets[target])
+                )
+                if files is not None:
+                    sessions[target].add_frame_observer(files.view(target).frame)
+            on = argparse.Namespace(**{**vars(args), "target": targets[target]})
+            return _results(sessions[target], what, on, line, Where.RUN)
+
         for number, raw_line in numbered:
             line = raw_line.rstrip("\r\n")
-            try:
-                name, rest = route(line, names, current)
-                command = BUILTIN.parse(rest)
-            except InputError as exc:
-                output.target = None
-                output.show(refused(line, str(exc)), {"line": number}, prefix=f"line {number}: ")
-                status = worst([status, ExitStatus.REFUSED])
-                continue
-            output.target = name
-            if isinstance(command, Use):
-                if command.name not in targets:
-                    text = str(not_open(command.name, names))
-                    output.show(refused(line, text), {"line": number}, prefix=f"line {number}: ")
-                    status = worst([status, ExitStatus.REFUSED])
-                else:
-                    current = output.target = command.name
-                    output.say(f"current target: {current}", {"line": number})
-                continue
-
-            def run_on(
-                target: str, what: str | Command, line: str = line
-            ) -> list[Outcome | Message]:
-                if target not in sessions:
-                    sessions[target] = stack.enter_context(
-                        open_session(plain, output.local_failure, targets[target])
-                    )
-                    sessions[target].add_frame_observer(files.view(target).frame)
-                on = argparse.Namespace(**{**vars(args), "target": targets[target]})
-                return _results(sessions[target], what, on, line, Where.RUN)
-
-            if isinstance(command, Wait) and command.after is not None:
-                results = _chained(command, name, run_on, names)
-                output.target = None  # the results name their targets
-            else:
-                results = run_on(name, command or rest)
-            status = worst([status, _show_line(output, results, number)])
+            route = BUILTIN.plan(line, names, current)
+            output.target = None
+            results: list[Outcome | Message] = []
+            match route:
+                case Refused(text=text):
+                    results = [refused(line, text)]
+                case SwitchCurrent(name=name):
+                    current = output.target = name
+                    results = [Message(f"current target: {name}")]
+                case OnTarget(name=name, command=command):
+                    output.target = None if single else name
+                    results = run_on(name, command, line)
+                case Chained():
+                    results = _chained(route, run_on, line)
+                case OnEveryTarget(command=command):
+                    for name in names:
+                        output.target = name
+                        line_status = _show_line(output, run_on(name, command, line), number)
+                        status = worst([status, line_status])
+                    output.target = None
+            line_status = _show_line(output, results, number)
+            status = worst([status, line_status])
+            if status is not ExitStatus.OK and not keep_going:
+                print_error(
+                    output.err,
+                    f"run stopped at line {number}: the lines after it were not run "
+                    "(--keep-going runs every line)",
+                )
+                return status
     return status
 
 
 def _chained(
-    command: Wait,
-    name: str,
-    run_on: Callable[[str, str | Command], list[Outcome | Message]],
-    names: list[str],
+    route: Chained,
+    run_on: Callable[[str, Command, str], list[Outcome | Message]],
+    line: str,
 ) -> list[Outcome | Message]:
     """``wait ... after @FIRST ...`` in a script: FIRST's wait, then this target's."""
-    after = command.after
-    assert after is not None
-    if after.target not in names:
-        return [Message(str(not_open(after.target, names)), "error")]
-    first = next((r for r in run_on(after.target, after.wait) if isinstance(r, Outcome)), None)
+    first = next(
+        (r for r in run_on(route.first, route.first_wait, line) if isinstance(r, Outcome)), None
+    )
     if first is None:
-        return [Message(f"{after.target}: the wait did not run", "error")]
+        return [refused(line, f"{route.first}: the wait did not run")]
     second = None
     if met(first):
-        found = run_on(name, replace(command, after=None))
+        found = run_on(route.second, route.second_wait, line)
         second = next((r for r in found if isinstance(r, Outcome)), None)
     return [
         item
-        for item in chained_feedback(after.target, first, name, second)
+        for item in chained_feedback(route.first, first, route.second, second)
         if isinstance(item, Outcome | Message)
     ]
 

@@ -140,6 +140,12 @@ def build_cli(commands: bool = True) -> CliParser:
     send.add_argument("text", metavar="TEXT", nargs="?", help="e.g. 'GET:RC8:10:I:' (CR is added)")
     run, _ = command("run", "run console commands from FILE (or - for stdin) over one session")
     run.add_argument("file", metavar="FILE|-")
+    run.add_argument(
+        "--keep-going",
+        action="store_true",
+        help="run every line even after one failed (by default run stops at the first "
+        "line that fails: refused, an error, an unknown outcome, a wait not met)",
+    )
     latency, _ = command(
         "latency",
         "measure round trips of repeated GETs (like redis-cli --latency): "

@@ -17,10 +17,13 @@ options name no file; the cell opens them before any thread starts, says a failu
 from __future__ import annotations
 
 import itertools
+import threading
+from collections import deque
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING
 
+from ..commands.names import find_name
 from ..protocol import InputError
 from ..protocol.text import endpoint, terminal_safe
 from .engine import CellFiles, Engine
@@ -30,8 +33,9 @@ from .outbox import Batch, Outbox
 from .where import Where
 
 if TYPE_CHECKING:  # the console's first paint loads none of these
-    from ..commands.language import Command, Use, Wait
+    from ..commands.language import Command, Wait
     from ..commands.outcome import Outcome
+    from ..commands.routing import Chained, Route, SwitchCurrent
     from ..commands.target import Target
     from .cellcsv import CellCsv
     from .events import Event, Feedback, Result
@@ -61,6 +65,17 @@ class _Gather:
     line: str | None
     command: Command
     waiting: dict[str, tuple[Feedback, ...] | None]  # by target: its feedback, once in
+
+
+@dataclass(frozen=True)
+class _Line:
+    """A line submitted, waiting for its turn: typed (``command`` None), or a command a
+    front end made for the target ``name`` (None: the current one)."""
+
+    seq: int
+    line: str | None
+    command: Command | None = None
+    name: str | None = None
 
 
 @dataclass(frozen=True)
@@ -150,8 +165,14 @@ class Cell:
             )
             for name, target in targets
         )
-        self._by_name = {member.name: member for member in self.members}
         self.current = self.members[0].name
+        self._queue_parts()
+
+    def _queue_parts(self) -> None:
+        self._lock = threading.RLock()
+        self._lines: deque[_Line] = deque()  # submitted, waiting for their turn
+        self._running: int | None = None  # the number of the line running now
+        self._dropped: list[_Line] = []  # cancelled behind the line running: said after it
         self._chains: dict[int, _Chain] = {}  # by the number of the job awaited now
         self._gathers: dict[int, _Gather] = {}  # by the number of each member's job
 
@@ -165,10 +186,8 @@ class Cell:
         cell.files = cell.csv = None
         member = Member(name or member_name(engine.target), engine.target, engine)
         cell.members = (member,)
-        cell._by_name = {member.name: member}
         cell.current = member.name
-        cell._chains = {}
-        cell._gathers = {}
+        cell._queue_parts()
         return cell
 
     @property
@@ -196,12 +215,12 @@ class Cell:
     def member(self, name: str | None = None) -> Member:
         """The target named ``name`` (None: the current one); InputError naming the
         open targets when there is none by that name."""
-        found = self._by_name.get(self.current if name is None else name)
+        found = find_name(self.names, self.current if name is None else name)
         if found is None:
             from ..commands.cells import not_open
 
             raise not_open(str(name), self.names)
-        return found
+        return self.members[self.names.index(found)]
 
     def start(self, connect: bool = True) -> None:
         for member in self.members:
@@ -230,76 +249,95 @@ class Cell:
     # ------------------------------------------------------------------ jobs
 
     def submit(self, line: str) -> int:
-        """Queue a typed line on its target; its Result carries the number returned
-        (from the target's outbox, or the cell's for ``use`` and a problem with the
-        line's ``@NAME``)."""
-        from ..commands.cells import route
-        from ..commands.language import Connect, Use, Wait
-        from ..commands.plant import Publish
-
-        try:
-            name, rest = route(line, self.names, self.current)
-            member = self.member(name)
-        except InputError as exc:
-            return self._answer(line, Message(str(exc), "error"))
-        try:
-            command = self.registry.parse(rest)
-        except InputError:
-            # The target says why, in its turn: after the lines queued before this one.
-            return member.engine.submit(rest)
-        if isinstance(command, Use):
-            if self.where not in self.registry.spec_of(command).where:
-                return member.engine.submit_command(command, line)  # the engine says why
-            return self._use(command, line)
-        if isinstance(command, Connect) and len(self.members) > 1:
-            return self._answer(line, Message(self._fixed(), "error"))
-        if isinstance(command, Wait) and command.after is not None:
-            return self._chain(command, member.name, line)
-        if isinstance(command, Publish) and len(self.members) > 1 and rest == line:
-            return self._to_every_target(command, line)
-        if command is None:  # a blank line, a comment
-            return member.engine.submit(rest)
-        return member.engine.submit_command(command, line)
+        """Queue a typed line; it is routed (:mod:`rac_console.commands.routing`) when
+        every line before it has ended, so lines run one at a time, in the order typed,
+        whatever target each names. Its Result carries the number returned (from its
+        target's outbox, or the cell's for a line the cell answers itself)."""
+        return self._enqueue(_Line(next(self._numbers), line))
 
     def submit_command(
         self, command: Command, line: str | None = None, name: str | None = None
     ) -> int:
-        """Queue a command a front end made (Space on a row of ``name``'s table)."""
-        from ..commands.language import Connect, Use
+        """Queue a command a front end made (Space on a row of ``name``'s table), in
+        turn with the typed lines; run as it is, never parsed."""
+        return self._enqueue(_Line(next(self._numbers), line, command, name))
 
-        if isinstance(command, Use):
-            return self._use(command, line)
-        if isinstance(command, Connect) and len(self.members) > 1:
-            return self._answer(line, Message(self._fixed(), "error"))
-        return self.member(name).engine.submit_command(command, line)
+    def _enqueue(self, item: _Line) -> int:
+        with self._lock:
+            self._lines.append(item)
+        self._pump()
+        return item.seq
 
-    def _fixed(self) -> str:
-        return (
-            f"a cell's targets are fixed ({', '.join(self.names)}): use NAME picks one; "
-            "to open others, start rac-console with -H a,b or --cell NAME"
-        )
+    @property
+    def lines_waiting(self) -> int:
+        """The lines submitted and not ended yet (the one running included)."""
+        with self._lock:
+            return len(self._lines) + (self._running is not None)
 
-    def _use(self, command: Use, line: str | None) -> int:
-        try:
-            member = self.member(command.name)
-        except InputError as exc:
-            return self._answer(line, Message(str(exc), "error"))
+    def _pump(self) -> None:
+        """Start the next lines while none runs: those the cell answers itself at once,
+        then the first a target runs (the next waits for its Result)."""
+        with self._lock:
+            while self._running is None and self._lines:
+                self._start(self._lines.popleft())
+
+    def _route(self, item: _Line) -> Route:
+        from ..commands.routing import Refused, route_command
+
+        if item.command is None:
+            return self.registry.plan(item.line or "", self.names, self.current)
+        name = self.current if item.name is None else find_name(self.names, item.name)
+        if name is None:
+            from ..commands.cells import not_open
+
+            return Refused(str(not_open(str(item.name), self.names)))
+        text = item.line or ""
+        return route_command(item.command, text, self.names, name, self.registry.traits)
+
+    def _start(self, item: _Line) -> None:
+        """Route one line and start it (under the lock)."""
+        from ..commands.routing import Chained, OnEveryTarget, OnTarget, Refused, SwitchCurrent
+
+        route = self._route(item)
+        match route:
+            case OnTarget(name=name, command=command):
+                self.member(name).engine.submit_command(command, item.line, item.seq)
+                self._running = item.seq
+            case OnEveryTarget(command=command):
+                self._to_every_target(item, command)
+                self._running = item.seq
+            case Chained():
+                self._chain(item, route)
+                self._running = item.seq
+            case SwitchCurrent():
+                self._use(item, route)
+            case Refused(text=text):
+                self._answer(item, (Message(text, "error"),))
+            case _:  # a blank line, a comment
+                self._answer(item, ())
+
+    def _use(self, item: _Line, route: SwitchCurrent) -> None:
+        if self.where not in self.registry.spec_of(route.command).where:
+            from .jobs import not_here
+
+            text = not_here(self.registry, "use", self.where)
+            self._answer(item, (Message(text, "error"),), route.command)
+            return
+        member = self.member(route.name)
         self.current = member.name
         label = member.target.label
         shown = f"{member.name} ({terminal_safe(label)})" if label else member.name
-        return self._answer(line, Message(f"current target: {shown}; @NAME runs a line elsewhere"))
+        said = Message(f"current target: {shown}; @NAME runs a line elsewhere")
+        self._answer(item, (said,), route.command)
 
-    def _chain(self, command: Wait, name: str, line: str | None) -> int:
+    def _chain(self, item: _Line, route: Chained) -> None:
         """``wait ... after @FIRST ...``: FIRST's wait now, this target's once it held."""
-        after = command.after
-        assert after is not None
-        try:
-            first = self.member(after.target)
-        except InputError as exc:
-            return self._answer(line, Message(str(exc), "error"))
-        chain = _Chain(next(self._numbers), line, command, first.name, name)
-        self._chains[first.engine.submit_command(after.wait)] = chain
-        return chain.seq
+        from ..commands.language import After
+
+        command = replace(route.second_wait, after=After(route.first, route.first_wait))
+        chain = _Chain(item.seq, item.line, command, route.first, route.second)
+        first = self.member(route.first).engine
+        self._chains[first.submit_command(route.first_wait)] = chain
 
     def _advance(self, chain: _Chain, result: Result) -> list[Result]:
         """A chained wait's job ended: the second wait starts, or the whole answer."""
@@ -327,13 +365,12 @@ class Cell:
         )
         return [Result(chain.seq, feedback, chain.line, chain.command)]
 
-    def _to_every_target(self, command: Command, line: str | None) -> int:
+    def _to_every_target(self, item: _Line, command: Command) -> None:
         """A line for the whole cell (``publish``): run by every target, answered once."""
-        gather = _Gather(next(self._numbers), line, command, {})
+        gather = _Gather(item.seq, item.line, command, {})
         for member in self.members:
             self._gathers[member.engine.submit_command(command)] = gather
             gather.waiting[member.name] = None
-        return gather.seq
 
     def _gathered(self, name: str, gather: _Gather, result: Result) -> list[Result]:
         from .events import Result
@@ -344,18 +381,33 @@ class Cell:
         feedback = tuple(f for each in gather.waiting.values() for f in each or ())
         return [Result(gather.seq, feedback, gather.line, gather.command)]
 
-    def _answer(self, line: str | None, message: Message) -> int:
+    def _answer(
+        self, item: _Line, feedback: tuple[Feedback, ...], command: Command | None = None
+    ) -> None:
         from .events import Result
 
-        seq = next(self._numbers)
-        self.outbox.put(Result(seq, (message,), line))
-        return seq
+        self.outbox.put(Result(item.seq, feedback, item.line, command or item.command))
 
     def cancel(self, queued: bool = False) -> None:
-        """Esc, Ctrl-C: every target's running job (and with ``queued`` those behind
-        it) stops; next to moving machinery, stop means everywhere."""
+        """Esc, Ctrl-C: the running line stops on every target, and the lines queued
+        behind it are not run (each answered so); next to moving machinery, stop means
+        everywhere. (``queued`` is kept for the callers: the cell's queue always goes.)"""
+        with self._lock:
+            self._dropped.extend(self._lines)
+            self._lines.clear()
+            if self._running is None:
+                self._say_dropped()
         for member in self.members:
             member.engine.cancel(queued)
+
+    def _say_dropped(self) -> None:
+        """The lines a cancel dropped, answered once the line running has ended (so
+        their answers come after its, in the order typed)."""
+        from .engine import NOT_RUN
+
+        dropped, self._dropped = self._dropped, []
+        for item in dropped:
+            self._answer(item, (Message(NOT_RUN, "error"),))
 
     def answer_confirm(self, seq: int, yes: bool) -> None:
         """The answer to a ConfirmWrite: its number names one job in the cell."""
@@ -368,24 +420,36 @@ class Cell:
 
     def drain(self) -> list[tuple[str | None, Batch]]:
         """Everything published since the last drain: the cell's own results (None),
-        then each target's batch, by name."""
+        then each target's batch, by name. The line running ends when its Result is
+        here, and the next starts: so each drain holds the lines in the order typed."""
         drained: list[tuple[str | None, Batch]] = [(None, self.outbox.drain())]
         drained.extend((member.name, member.engine.outbox.drain()) for member in self.members)
-        if self._chains or self._gathers:  # steps of the cell's own, answered as one
-            from .events import Result
+        if not any(batch.events for _, batch in drained[1:]):
+            return drained  # the first paint loads no event class
+        from .events import Result
 
-            answers: list[Result] = []
-            for name, batch in drained[1:]:
-                kept: list[Event] = []
-                for event in batch.events:
-                    if not isinstance(event, Result):
-                        kept.append(event)
-                    elif (chain := self._chains.pop(event.seq, None)) is not None:
-                        answers.extend(self._advance(chain, event))
-                    elif (gather := self._gathers.pop(event.seq, None)) is not None:
-                        answers.extend(self._gathered(str(name), gather, event))
-                    else:
-                        kept.append(event)
-                batch.events[:] = kept
-            drained[0][1].events.extend(answers)
+        ended = False
+        answers: list[Result] = []
+        for name, batch in drained[1:]:
+            if not batch.events:
+                continue
+            kept: list[Event] = []
+            for event in batch.events:
+                if not isinstance(event, Result):
+                    kept.append(event)
+                elif (chain := self._chains.pop(event.seq, None)) is not None:
+                    answers.extend(self._advance(chain, event))
+                elif (gather := self._gathers.pop(event.seq, None)) is not None:
+                    answers.extend(self._gathered(str(name), gather, event))
+                else:
+                    kept.append(event)
+                    ended = ended or event.seq == self._running
+            batch.events[:] = kept
+        drained[0][1].events.extend(answers)
+        ended = ended or any(answer.seq == self._running for answer in answers)
+        if ended:
+            with self._lock:
+                self._running = None
+                self._say_dropped()
+            self._pump()
         return drained

@@ -197,17 +197,20 @@ class Engine:
         """Queue a typed line; its :class:`Result` comes out with the number returned."""
         return self._queue(line)
 
-    def submit_command(self, command: Command, line: str | None = None) -> int:
+    def submit_command(
+        self, command: Command, line: str | None = None, seq: int | None = None
+    ) -> int:
         """Queue a command a front end made itself (F2's pause, Space on an IO row):
         run like a typed line, never parsed; ``line`` is how it is shown (the echo,
-        the result), or None for nothing to echo."""
-        return self._queue(command, line)
+        the result), or None for nothing to echo. ``seq``: the number its cell gave
+        the line (else the next of :attr:`numbers`)."""
+        return self._queue(command, line, seq)
 
-    def _queue(self, what: str | Command, line: str | None = None) -> int:
+    def _queue(self, what: str | Command, line: str | None = None, seq: int | None = None) -> int:
         from .job import Job
 
         with self._jobs_lock:
-            job = Job(next(self.numbers), what, line)
+            job = Job(next(self.numbers) if seq is None else seq, what, line)
             self._queued[job.seq] = job
         self._inbox.put(job)
         return job.seq

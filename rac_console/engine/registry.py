@@ -24,6 +24,7 @@ from ..commands.language import (
     parse_exchange,
     split_word,
 )
+from ..commands.routing import Route, Traits, plan
 from ..protocol import KINDS, InputError
 from ..protocol.text import close_match
 from .events import Feedback
@@ -122,6 +123,9 @@ class CommandSpec:
     complete: Completer = no_completion
     hint: Hinter | None = None  # None: the usage's words (:func:`words_of`)
     types: tuple[type, ...] = field(default=())  # the command objects its parser makes
+    #: What the planner and the guards know of it: whether it writes, where it runs in
+    #: a cell (:mod:`rac_console.commands.routing`).
+    traits: Traits = field(default_factory=Traits)
 
     @property
     def usage(self) -> str:
@@ -218,6 +222,17 @@ class Registry:
         specs = list(self._specs.values())
         width = max(len(s.usage) for s in specs)
         return [f"{s.usage:<{width}}  {s.summary}" for s in specs] + [RAW_HELP]
+
+    def traits(self, command: Command) -> Traits:
+        """What ``command``'s entry declares of it (a command no entry runs: a target's)."""
+        try:
+            return self.spec_of(command).traits
+        except LookupError:
+            return Traits()
+
+    def plan(self, line: str, names: Sequence[str], current: str) -> Route:
+        """The route of a typed line in a cell of ``names`` (see :func:`..routing.plan`)."""
+        return plan(line, names, current, self.parse, self.traits)
 
     def runs_in(self, where: Where) -> list[str]:
         return [spec.name for spec in self._specs.values() if where in spec.where]

@@ -630,18 +630,13 @@ class RacConsoleApp(CellMembers, PaletteActions, TableActions, LogActions, App[i
         """Whether this line, run now, may stop to ask before it writes: a write on a
         ``confirm`` target with nothing running before it (a write queued behind a
         long wait must not hold the keys typed meanwhile)."""
-        from ..commands.cells import split_address
-        from ..present.type_ahead import may_ask
+        from ..present.type_ahead import written_target
 
-        name, _ = split_address(line) if line.lstrip().startswith("@") else (None, line)
-        status = self.state_of(name).status
-        return (
-            status is not None
-            and status.writes == "confirm"
-            and not writes_refused(status)
-            and not self.lines_pending
-            and may_ask(line)
-        )
+        if self.lines_pending:
+            return False
+        name = written_target(line, self.cell.names, self.cell.current)
+        status = self.state_of(name).status if name is not None else None
+        return status is not None and status.writes == "confirm" and not writes_refused(status)
 
     def hold_keys(self, seq: int, queued: bool) -> None:
         """The keys typed after line ``seq`` are held until it asked or ended; a line that

@@ -6,6 +6,7 @@ from collections.abc import Sequence
 
 from ...commands.check import check_pointer
 from ...commands.language import Connect, Simple, Step, Use, parse_connect, parse_use
+from ...commands.routing import Scope, Traits
 from ...commands.target import Target, resolve_target
 from ...session import ConnectFailed, Disconnected
 from ...session.endpoints import addresses
@@ -115,6 +116,7 @@ SPECS = (
         ),
         complete=_targets,
         types=(Connect,),
+        traits=Traits(scope=Scope.ONE_TARGET),
     ),
     CommandSpec(
         "use",
@@ -130,6 +132,7 @@ SPECS = (
         where=frozenset({Where.CONSOLE, Where.REPL, Where.RUN}),
         complete=_cell_targets,
         types=(Use,),
+        traits=Traits(scope=Scope.CELL),
     ),
     CommandSpec(
         "disconnect",

@@ -19,6 +19,7 @@ from ...commands.language import (
     parse_send,
 )
 from ...commands.outcome import Outcome
+from ...commands.routing import Traits, WriteTrait
 from ...protocol import KINDS
 from ...session import ConnectFailed, Disconnected, TransportError
 from ..conditions import wait_for
@@ -195,6 +196,7 @@ SPECS = (
         complete=variable_completion(_put_next),
         hint=_put_hint,
         types=(Put,),
+        traits=Traits(WriteTrait.ALWAYS),
     ),
     CommandSpec(
         "send",
@@ -205,6 +207,7 @@ SPECS = (
         "send GET:RC8:10:I:",
         where=EVERYWHERE,
         types=(Raw,),
+        traits=Traits(WriteTrait.UNLESS_GET),
     ),
     CommandSpec(
         "latency",

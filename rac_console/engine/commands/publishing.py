@@ -10,6 +10,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 from ...commands.plant import PUBLISH_USAGE, Publish, parse_publish
+from ...commands.routing import Scope, Traits
 from ...protocol.errors import InputError
 from ..context import CommandContext
 from ..events import Feedback, Message
@@ -66,4 +67,5 @@ PUBLISH_SPEC = CommandSpec(
     ),
     complete=_complete,
     types=(Publish,),
+    traits=Traits(scope=Scope.EVERY_TARGET),
 )
