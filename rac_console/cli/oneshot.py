@@ -210,7 +210,8 @@ def _run_lines(
                     open_session(plain, output.local_failure, targets[target])
                 )
                 if files is not None:
-                    sessions[target].add_frame_observer(files.view(target).frame)
+                    place = names.index(target) + 1
+                    sessions[target].add_frame_observer(files.view(target, place).frame)
             on = argparse.Namespace(**{**vars(args), "target": targets[target]})
             return _results(sessions[target], what, on, line, Where.RUN)
 
@@ -241,8 +242,8 @@ def _run_lines(
             if status is not ExitStatus.OK and not keep_going:
                 print_error(
                     output.err,
-                    f"run stopped at line {number}: the lines after it were not run "
-                    "(--keep-going runs every line)",
+                    f"run stopped at line {number}, which failed: nothing after it was run "
+                    "(--keep-going runs on)",
                 )
                 return status
     return status

@@ -33,19 +33,34 @@ _OPERATOR_RE = re.compile(r"(==|=|!=|<=|>=|<|>)\s*(.*)", re.DOTALL)
 _WITHIN_RE = re.compile(r"(.*?)\s*\bwithin\s+(\S+?)s?", re.ASCII | re.DOTALL | re.IGNORECASE)
 
 
-_AFTER_RE = re.compile(r"(.*)\s+after\s+@(\S+)\s+(.+)", re.ASCII | re.DOTALL | re.IGNORECASE)
+_AFTER_RE = re.compile(r"\s+after\s+@(\S+)\s+(.+)", re.ASCII | re.DOTALL | re.IGNORECASE)
+
+
+def _after_at(text: str) -> re.Match[str] | None:
+    """The last `` after @NAME ...`` outside quotes: a string value in quotes may hold
+    those words (``wait S 1 == "x after @B I 11 == 78"``)."""
+    found, quote = None, ""
+    for at, char in enumerate(text):
+        if quote:
+            quote = "" if char == quote else quote
+        elif char in "\"'":
+            quote = char
+        elif char.isspace() and (match := _AFTER_RE.match(text, at)) is not None:
+            found = match
+    return found
 
 
 def parse_wait(rest: str) -> Wait:
     """``wait VAR CONDITION [within S]``, and in a cell ``... after @NAME VAR CONDITION``:
     each condition waits up to S seconds, the second from when the first held."""
-    chained = _AFTER_RE.fullmatch(rest.strip())
+    text = rest.strip()
+    chained = _after_at(text)
     if chained is not None:
-        first = _parse_one(chained.group(3))
-        second = _parse_one(chained.group(1))
-        if _WITHIN_RE.fullmatch(chained.group(3).strip()) is None:
+        first = _parse_one(chained.group(2))
+        second = _parse_one(text[: chained.start()])
+        if _WITHIN_RE.fullmatch(chained.group(2).strip()) is None:
             first = replace(first, within=second.within)
-        return replace(second, after=After(chained.group(2), first))
+        return replace(second, after=After(chained.group(1), first))
     return _parse_one(rest)
 
 

@@ -159,11 +159,11 @@ class Cell:
                     cell_files=(
                         None
                         if files is None or csv is None
-                        else CellFiles(name, files.view(name), csv)
+                        else CellFiles(name, files.view(name, place), csv)
                     ),
                 ),
             )
-            for name, target in targets
+            for place, (name, target) in enumerate(targets, 1)
         )
         self.current = self.members[0].name
         self._queue_parts()

@@ -53,12 +53,16 @@ class FrameFiles:
                 self._open.recorder.close()
             raise
         self.name: str | None = None
+        self.place: int | None = None
         self._owner = True
 
-    def view(self, name: str) -> FrameFiles:
-        """A member's view: the same files, each line naming ``name``; closed by us."""
+    def view(self, name: str, place: int | None = None) -> FrameFiles:
+        """A member's view: the same files, each line naming ``name`` (and recording
+        its ``place`` in the cell, 1 the first: a replay serves the targets in that
+        order); closed by us."""
         view = FrameFiles.__new__(FrameFiles)
         view._open, view.name, view._owner = self._open, name, False
+        view.place = place
         return view
 
     @property
@@ -77,7 +81,7 @@ class FrameFiles:
     def frame(self, frame: Frame) -> None:
         recorder, transcript = self._open.recorder, self._open.transcript
         if recorder is not None:
-            recorder(frame, self.name)
+            recorder(frame, self.name, self.place)
         if transcript is not None:
             transcript(frame, self.name)
 

@@ -100,7 +100,8 @@ class LineFile:
 class FrameRecorder(LineFile):
     """A frame observer appending JSON lines: ``t``, ``dir``, ``text``, ``rtt_ms``
     (``partial``, ``unsolicited``, and ``refused`` with why for a reply not taken);
-    in a cell also ``target``, the name of the target it crossed to or from (a single
+    in a cell also ``target``, the name of the target it crossed to or from, and
+    ``member``, its place in the cell (1: the first; a replay serves them in that order; a single
     target's lines have none, as they always had). A failing disk stops it, said once
     (see :class:`LineFile`)."""
 
@@ -112,13 +113,15 @@ class FrameRecorder(LineFile):
     def frames(self) -> int:
         return self.written
 
-    def __call__(self, frame: Frame, target: str | None = None) -> None:
+    def __call__(self, frame: Frame, target: str | None = None, place: int | None = None) -> None:
         if self._fd is None:
             return
         data = frame.data[:-1] if frame.data.endswith(b"\r") else frame.data
         record: dict[str, object] = {"t": round(frame.time, 6)}
         if target is not None:
             record["target"] = target
+        if place is not None:
+            record["member"] = place
         record["dir"] = frame.direction
         record["text"] = escape_bytes(data)
         if frame.rtt is not None:

@@ -82,6 +82,7 @@ class Recording:
     path: str
     answers: dict[Key, list[bytes]] = field(default_factory=dict)  # reply frames, CR ended
     target: str | None = None  # the cell's target it was recorded from (None: no cell)
+    member: int | None = None  # its place in that cell (1: the first), when recorded
     unanswered: int = 0  # requests with no reply, or whose reply was refused or cut off
     unused_replies: int = 0  # unsolicited lines, and replies that answered no request
     not_gets: int = 0  # answered requests that were not GETs (PUTs, raw lines, SIM:)
@@ -243,7 +244,7 @@ def read_targets(lines: Iterable[bytes], path: str) -> list[Recording]:
     for number, raw in enumerate(lines, 1):
         if not raw.strip():
             continue
-        target, direction, data, unusable = _record(raw, number, path)
+        target, direction, data, unusable, member = _record(raw, number, path)
         pairing = pairings.get(target)
         if pairing is None:
             if pairings and (target is None or None in pairings):
@@ -258,13 +259,24 @@ def read_targets(lines: Iterable[bytes], path: str) -> list[Recording]:
                     "targets, more than a cell holds"
                 )
             pairing = pairings[target] = _Pairing(Recording(path, target=target), seen)
+        if pairing.recording.member is None:
+            pairing.recording.member = member
         pairing.add(direction, data, unusable)
-    return [pairing.finish() for pairing in pairings.values()]
+    return in_cell_order([pairing.finish() for pairing in pairings.values()])
 
 
-def _record(raw: bytes, number: int, path: str) -> tuple[str | None, str, bytes, str]:
-    """One line's target, direction, its bytes and why a reply cannot be used ("" when
-    it can)."""
+def in_cell_order(recordings: list[Recording]) -> list[Recording]:
+    """A cell's targets in the cell's order (each line records its place in the cell),
+    else by name: never by which target happened to write first, so each target gets
+    the same port every run."""
+    if all(r.member is not None for r in recordings):
+        return sorted(recordings, key=lambda r: (r.member or 0, (r.target or "").casefold()))
+    return sorted(recordings, key=lambda r: (r.target or "").casefold())
+
+
+def _record(raw: bytes, number: int, path: str) -> tuple[str | None, str, bytes, str, int | None]:
+    """One line's target, direction, its bytes, why a reply cannot be used ("" when
+    it can), and its target's place in the cell (None: not recorded)."""
     where = f"{terminal_safe(path)} line {number}"
     try:
         record = json.loads(raw)
@@ -286,7 +298,9 @@ def _record(raw: bytes, number: int, path: str) -> tuple[str | None, str, bytes,
         raise ReplayError(
             f"{where}: 'text' is not as --record writes it: {_quoted(text)}"
         ) from None
-    return target, direction, data, _unusable(record, data)
+    member = record.get("member")
+    place = member if isinstance(member, int) and not isinstance(member, bool) else None
+    return target, direction, data, _unusable(record, data), place
 
 
 def _unusable(record: dict[str, object], data: bytes) -> str:
