@@ -12,7 +12,7 @@ import pytest
 from cell_helpers import CellFront
 from test_repl import Driver
 
-from rac_console.commands.cells import parse_cells, route, split_address, split_hosts
+from rac_console.commands.cells import parse_cells, split_address, split_hosts
 from rac_console.commands.policy import WritePolicy, Writes
 from rac_console.commands.target import Target
 from rac_console.engine import Result
@@ -133,9 +133,13 @@ def test_the_pure_parts() -> None:
     assert split_address("get I 10") == (None, "get I 10")
     with pytest.raises(InputError, match="needs a command"):
         split_address("@cell4")
-    assert route("get I 1", ["a", "b"], "b") == ("b", "get I 1")
-    with pytest.raises(InputError, match="open: a, b"):
-        route("@c get I 1", ["a", "b"], "a")
+    from rac_console.commands.routing import OnTarget, Refused
+    from rac_console.engine.commands import BUILTIN
+
+    routed = BUILTIN.plan("get I 1", ["a", "b"], "b")
+    assert isinstance(routed, OnTarget) and (routed.name, routed.text) == ("b", "get I 1")
+    refused = BUILTIN.plan("@c get I 1", ["a", "b"], "a")
+    assert isinstance(refused, Refused) and "open: a, b" in refused.text
 
     def fail(text: str) -> InputError:
         return InputError(text)

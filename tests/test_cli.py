@@ -531,7 +531,9 @@ def test_run_exit_status_is_the_worst(
 ) -> None:
     server = recording(_script_reply)
     script = "\n".join(lines) + "\n"
-    result = cli(env, *server.args, "--timeout", "0.3", "--json", "run", "-", stdin=script)
+    result = cli(
+        env, *server.args, "--timeout", "0.3", "--json", "run", "--keep-going", "-", stdin=script
+    )
     assert result.returncode == status, result.stderr
     assert "Traceback" not in result.stderr
     objects = json_lines(result.stdout)

@@ -78,7 +78,7 @@ def test_a_read_only_profile_refuses_writes_before_the_wire(
         result = cli(env, "-H", "cell3", *words)
         assert result.returncode == 2, result.stderr
         assert "read-only" in one_error_line(result)
-    script = cli(env, "-H", "cell3", "run", "-", stdin="put I 1 5\nget I 10\n")
+    script = cli(env, "-H", "cell3", "run", "--keep-going", "-", stdin="put I 1 5\nget I 10\n")
     assert script.returncode == 2
     assert bytes(server.received) == b"GET:RC8:10:I:\r"
 

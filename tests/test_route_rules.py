@@ -197,3 +197,33 @@ def test_a_profile_with_another_port_is_shown_by_the_profile_it_reaches() -> Non
     elsewhere = resolve_target("bench", 7003, profiles={"bench": locked, "ro": ro})
     assert elsewhere.read_only  # naming a profile never makes its rules laxer
     assert any("bench is 127.0.0.1:7001" in notice for notice in elsewhere.notices)
+
+
+# ----------------------------------------------------- connect in the console and REPL
+
+
+def test_connect_a_name_with_another_port_takes_the_rules_of_that_port(
+    recording: Servers,  # noqa: F811
+) -> None:
+    from test_engine import Front
+
+    from rac_console.engine import Engine
+
+    bench, ro = recording(), recording()
+    profiles = {
+        "bench": TargetProfile("bench", "127.0.0.1", bench.port),
+        "ro": TargetProfile(
+            "ro", "127.0.0.1", ro.port, policy=WritePolicy(Writes.READ_ONLY, None, "profile ro")
+        ),
+    }
+    engine = Engine(None, interval=0.05, timeout=1.0, profiles=profiles)
+    engine.start()
+    try:
+        front = Front(engine)
+        said = "\n".join(front.run(f"connect BENCH:{ro.port}"))
+        assert "read-only" in said and "profile ro" in said, said
+        refused = "\n".join(front.run("put I 10 5") + front.run("send PUT:RC8:10:I:3,5"))
+        assert refused.count("read-only") == 2, refused
+    finally:
+        engine.stop()
+    assert puts(ro) == [] and puts(bench) == []

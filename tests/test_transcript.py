@@ -142,7 +142,7 @@ def test_cli_run_appends_a_line_per_frame(env: dict[str, str], tmp_path: Path) -
     path = tmp_path / "wire.log"
     path.write_text("[2020-01-01 00:00:00.000] -- kept\n")
     script = "get I 1\nput I 2 7\nsend FOO\nget I 2\n"
-    result = cli(env, "--log", str(path), "--no-verify", "run", "-", stdin=script)
+    result = cli(env, "--log", str(path), "--no-verify", "run", "--keep-going", "-", stdin=script)
     assert result.returncode == 1, result.stderr  # FOO: E_INVALIDCOMMAND
     lines = lines_of(path)
     assert lines[0][2] == "kept"

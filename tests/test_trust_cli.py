@@ -73,7 +73,7 @@ def test_read_only_lets_well_formed_gets_through(
 ) -> None:
     server = recording()
     script = "get I 1\nGET:RC8:2:P:\nsend GET:RC8:3:IO:\nput I 1 5\nsend SIM:GET:\n"
-    result = cli(env, *server.args, "--read-only", "run", "-", stdin=script)
+    result = cli(env, *server.args, "--read-only", "run", "--keep-going", "-", stdin=script)
     assert result.returncode == 2
     assert server.wait_received(3 * 12) == b"GET:RC8:1:I:\rGET:RC8:2:P:\rGET:RC8:3:IO:\r"
     assert result.stderr.count("read-only") == 2

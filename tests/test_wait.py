@@ -159,9 +159,12 @@ def test_cancel_ends_a_long_wait(front: Front) -> None:
 # ------------------------------------------------------------------ run
 
 
-def run_script(script: str, *options: str) -> subprocess.CompletedProcess[str]:
+def run_script(
+    script: str, *options: str, keep_going: bool = False
+) -> subprocess.CompletedProcess[str]:
+    going = ["--keep-going"] if keep_going else []
     return subprocess.run(
-        [sys.executable, "-m", "rac_console", *options, "run", "-"],
+        [sys.executable, "-m", "rac_console", *options, "run", *going, "-"],
         input=script,
         capture_output=True,
         text=True,
@@ -180,11 +183,13 @@ def test_a_cell_check_script_passes() -> None:
 
 @pytest.mark.slow
 def test_a_wait_that_times_out_fails_the_script_with_exit_1() -> None:
-    result = run_script("wait I 1 >= 100 within 0.2\nget I 1\n")
+    result = run_script("wait I 1 >= 100 within 0.2\nget I 1\n", keep_going=True)
     assert result.returncode == 1
     assert "line 1: I1 >= 100: not met within 0.2 s" in result.stderr
     assert "Traceback" not in result.stderr
-    assert "I1 = 1" in result.stdout  # the script went on
+    assert "I1 = 1" in result.stdout  # the script went on (--keep-going)
+    stopped = run_script("wait I 1 >= 100 within 0.2\nget I 1\n")
+    assert stopped.returncode == 1 and "I1 = 1" not in stopped.stdout  # it stops there
 
 
 # ------------------------------------------------------------------ REPL

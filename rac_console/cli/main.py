@@ -103,6 +103,7 @@ def _dispatch(args: argparse.Namespace) -> int:
         from .oneshot import run_script
 
         args.file = "-"  # no terminal: the REPL reads a script, like run -
+        args.keep_going = True  # but as the REPL: a failed line stops nothing
         return run_script(args)
     if args.command == "sim":
         import asyncio

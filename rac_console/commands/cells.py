@@ -84,18 +84,6 @@ def split_address(line: str) -> tuple[str | None, str]:
     return name, rest.strip()
 
 
-def route(line: str, names: Sequence[str], current: str) -> tuple[str, str]:
-    """The target a line runs on and the line without its ``@NAME``: the named one, or
-    ``current``. InputError naming the open targets for a name that is not one."""
-    name, rest = split_address(line)
-    if name is None:
-        return current, line
-    found = find_name(names, name)
-    if found is None:
-        raise not_open(name, names)
-    return found, rest
-
-
 def not_open(name: str, names: Sequence[str]) -> InputError:
     """What is said of a name that is none of the open targets ``names``: which are."""
     return InputError(
