@@ -414,15 +414,17 @@ def test_a_change_sent_into_a_pulled_cable_does_not_end_up_over_the_latest(
 
 
 def test_a_profile_and_a_cell_publish_from_the_config_file(
-    env: dict[str, str], broker: Broker, sim: SimulatorThread
+    env: dict[str, str], broker: Broker, sim: SimulatorThread, request: pytest.FixtureRequest
 ) -> None:
     subscriber = Subscriber(broker.port, "#")
     config = Path(env["XDG_CONFIG_HOME"]) / "rac-console" / "config.toml"
     config.parent.mkdir(parents=True)
+    other = SimulatorThread().__enter__()  # a cell's targets are two controllers
+    request.addfinalizer(lambda: other.__exit__(None, None, None))
     config.write_text(
         f'[target.cell3]\nhost = "{sim.host}"\nport = {sim.port}\n'
         f'publish = "{broker.url}/line3"\n'
-        f'[target.cell4]\nhost = "{sim.host}"\nport = {sim.port}\n'
+        f'[target.cell4]\nhost = "{other.host}"\nport = {other.port}\n'
         f'[cell.line2]\ntargets = ["cell3", "cell4"]\npublish = "{broker.url}/line2"\n'
     )
     one = cli(env, "-H", "cell3", "watch", "I", "1", "--count", "2")
