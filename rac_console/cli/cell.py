@@ -10,13 +10,12 @@ from __future__ import annotations
 import argparse
 import atexit
 import sys
-from collections.abc import Callable
 from typing import TYPE_CHECKING
 
 from ..commands.cells import DEMO_CELL, not_open, split_hosts
 from ..commands.names import find_name
 from ..protocol import InputError
-from ..protocol.text import endpoint, terminal_safe
+from ..protocol.text import terminal_safe
 
 if TYPE_CHECKING:
     from ..commands.target import Target
@@ -79,21 +78,22 @@ def _members(args: argparse.Namespace) -> Members | None:
         raise InputError(f"--cell {cell} and -H {args.host}: give one (a cell names its targets)")
     if args.port is not None:
         raise InputError("-p applies to one target; in a cell each profile has its port")
-    from ..commands.language import parse_connect
+    from ..commands.target import one_controller_each
     from ..commands.target import resolve_target as resolve_target_of
     from ..engine.config import load_config
     from ..session.endpoints import addresses
+    from .target import host_and_port
 
     config = load_config()
     where = str(config.path) if config.found else f"{config.path} (no such file)"
 
     def resolved(name: str) -> Target:
-        address = parse_connect(name)  # a profile, HOST, HOST:PORT or [v6]:PORT
-        if address.host is None:
+        host, port = host_and_port(name, None)  # a profile, HOST, HOST:PORT or [v6]:PORT
+        if host is None or host == "sim":
             raise InputError("-H names controllers; sim is not one (try --cell demo)")
         return resolve_target_of(
-            address.host,
-            address.port if address.port_given else None,
+            host,
+            port,
             profiles=config.profiles,
             read_only_flag=bool(args.read_only),
             resolve=addresses,
@@ -117,25 +117,6 @@ def _members(args: argparse.Namespace) -> Members | None:
     args.cell_watch = spec.watch
     args.cell_publish = spec.publish
     return one_controller_each([_named(name, resolved(name)) for name in spec.targets], addresses)
-
-
-def one_controller_each(
-    members: Members, addresses: Callable[[str], frozenset[str] | None]
-) -> Members:
-    """The members, unless two of them reach one controller (one endpoint, however
-    written): InputError naming both, since one controller is one session."""
-    seen: list[tuple[str, int, frozenset[str]]] = []
-    for name, target in members:
-        host = target.host or "127.0.0.1"
-        reached = (addresses(host) or frozenset()) | {host.casefold()}
-        for other, port, theirs in seen:
-            if port == target.port and theirs & reached:
-                raise InputError(
-                    f"{terminal_safe(other)} and {terminal_safe(name)} are one controller "
-                    f"({endpoint(host, port)}): one session per controller; name it once"
-                )
-        seen.append((name, target.port, reached))
-    return members
 
 
 def _named(typed: str, target: Target) -> tuple[str, Target]:

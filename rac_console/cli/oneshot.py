@@ -15,7 +15,7 @@ from ..commands.argv import exchange_from_words, input_line
 from ..commands.language import Command, Latency
 from ..commands.outcome import ExitStatus, Outcome, refused, worst
 from ..commands.policy import Writes
-from ..commands.routing import Chained
+from ..commands.routing import Chained, OnEveryTarget, OnTarget, Refused, SwitchCurrent
 from ..commands.target import Target
 from ..engine import Alert, Measured, Message
 from ..engine.chained_wait import chained_feedback, met
@@ -185,7 +185,6 @@ def _run_lines(
     """The script's lines in order, each on the target the planner routes it to, each
     target's session opened when a line first needs it. In a cell, ``--record`` and
     ``--log`` are one file each, every line naming its target."""
-    from ..commands.routing import Chained, OnEveryTarget, OnTarget, Refused, SwitchCurrent
     from ..engine.frame_files import FrameFiles
 
     single = len(members) == 1

@@ -85,6 +85,7 @@ class Chained:
     first_wait: Wait
     second: str
     second_wait: Wait
+    command: Wait  # the wait as typed, both conditions
 
 
 @dataclass(frozen=True)
@@ -156,5 +157,5 @@ def route_command(
         first = find_name(names, command.after.target)
         if first is None:
             return Refused(str(not_open(command.after.target, names)))
-        return Chained(first, command.after.wait, name, replace(command, after=None))
+        return Chained(first, command.after.wait, name, replace(command, after=None), command)
     return OnTarget(name, command, text, trait.writes_with(command))

@@ -7,10 +7,12 @@ to resolve a host (``resolve``), so it does no I/O of its own.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Literal
 
+from ..protocol.errors import InputError
+from ..protocol.text import endpoint, terminal_safe
 from .policy import TargetProfile, WritePolicy, Writes
 
 if TYPE_CHECKING:  # matching a name to a profile loads with the first host named
@@ -109,8 +111,6 @@ def resolve_target(
 
 def _elsewhere(named: TargetProfile, host: str, port: int, reached: TargetProfile | None) -> str:
     """Said when a profile's name is given another port: which controller that is."""
-    from ..protocol.text import endpoint
-
     if reached is None or reached is named:
         return (
             f"{named.name} is {endpoint(named.host, named.port)}; no profile names "
@@ -120,6 +120,26 @@ def _elsewhere(named: TargetProfile, host: str, port: int, reached: TargetProfil
         f"{named.name} is {endpoint(named.host, named.port)}; {endpoint(host, port)} is "
         f"profile {reached.name}'s controller: the stricter rules of both apply"
     )
+
+
+def one_controller_each(
+    members: Sequence[tuple[str, Target]], addresses: Addresses
+) -> list[tuple[str, Target]]:
+    """A cell's members, unless two of them reach one controller (one endpoint, however
+    written: their hosts as typed and as resolved): InputError naming both, since one
+    controller is one session."""
+    seen: list[tuple[str, int, frozenset[str]]] = []
+    for name, target in members:
+        host = target.host or "127.0.0.1"
+        reached = (addresses(host) or frozenset()) | {host.casefold()}
+        for other, port, theirs in seen:
+            if port == target.port and theirs & reached:
+                raise InputError(
+                    f"{terminal_safe(other)} and {terminal_safe(name)} are one controller "
+                    f"({endpoint(host, port)}): one session per controller; name it once"
+                )
+        seen.append((name, target.port, reached))
+    return list(members)
 
 
 def no_profile_hint(

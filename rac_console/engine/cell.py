@@ -268,12 +268,6 @@ class Cell:
         self._pump()
         return item.seq
 
-    @property
-    def lines_waiting(self) -> int:
-        """The lines submitted and not ended yet (the one running included)."""
-        with self._lock:
-            return len(self._lines) + (self._running is not None)
-
     def _pump(self) -> None:
         """Start the next lines while none runs: those the cell answers itself at once,
         then the first a target runs (the next waits for its Result)."""
@@ -332,10 +326,7 @@ class Cell:
 
     def _chain(self, item: _Line, route: Chained) -> None:
         """``wait ... after @FIRST ...``: FIRST's wait now, this target's once it held."""
-        from ..commands.language import After
-
-        command = replace(route.second_wait, after=After(route.first, route.first_wait))
-        chain = _Chain(item.seq, item.line, command, route.first, route.second)
+        chain = _Chain(item.seq, item.line, route.command, route.first, route.second)
         first = self.member(route.first).engine
         self._chains[first.submit_command(route.first_wait)] = chain
 
