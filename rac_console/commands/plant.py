@@ -38,13 +38,21 @@ class MqttAddress:
         return f"{'mqtts' if self.tls else 'mqtt'}://{endpoint(self.host, self.port)}/{self.prefix}"
 
 
+#: Seconds between pings to a quiet broker (``keepalive`` in ``[mqtt]``): a broker that
+#: does not answer one within as long again is dropped and tried again.
+KEEPALIVE = 15
+KEEPALIVE_RANGE = (2, 3600)
+
+
 @dataclass(frozen=True)
 class Credentials:
-    """What the broker is told who we are, and whom to trust: never printed."""
+    """What the broker is told who we are, whom to trust and how often to ping: the
+    config's ``[mqtt]`` table. Never printed."""
 
     username: str | None = None
     password: str | None = None
     ca_file: str | None = None
+    keepalive: int = KEEPALIVE
 
     def __repr__(self) -> str:  # a traceback or a debug print shows no password
         password = "<set>" if self.password else "<none>"

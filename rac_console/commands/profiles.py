@@ -13,7 +13,7 @@ The file (read by :mod:`rac_console.engine.config`) names targets::
 
 and may hold a ``[settings]`` table, kept as it is for the settings that persist, and an
 ``[mqtt]`` table: the broker's ``username``, ``password`` and ``ca_file``, which are never
-typed on a command line.
+typed on a command line, and ``keepalive`` (seconds between pings to a quiet broker).
 Nothing is guessed: every problem is an InputError of one line naming the file, the
 profile and the key, and saying how to write it.
 """
@@ -28,7 +28,7 @@ from ..protocol import InputError
 from ..protocol.text import terminal_safe
 from .cells import CellSpec, parse_cells
 from .names import case_collision, find_name
-from .plant import NO_CREDENTIALS, Credentials, publish_setting
+from .plant import KEEPALIVE, KEEPALIVE_RANGE, NO_CREDENTIALS, Credentials, publish_setting
 from .policy import (
     STRICTNESS,
     AllowRange,
@@ -46,7 +46,7 @@ SIMULATOR_NAME = "sim"
 _PROFILE_KEYS = ("host", "port", "label", "colour", "color", "writes", "allow", "publish")
 _KEYS_TEXT = "host, port, label, colour (or color), writes, allow, publish"
 _TOP_KEYS = ("target", "settings", "cell", "mqtt")
-_MQTT_KEYS = ("username", "password", "ca_file")
+_MQTT_KEYS = ("username", "password", "ca_file", "keepalive")
 _NAME = re.compile(r"[A-Za-z0-9_][A-Za-z0-9_-]*", re.ASCII)
 _BARE_KEY = re.compile(r"[A-Za-z0-9_-]+", re.ASCII)
 _COLOUR_NAME = re.compile(r"[A-Za-z][A-Za-z0-9_]*", re.ASCII)
@@ -135,15 +135,29 @@ def parse_config(data: Mapping[str, object], source: str) -> ParsedConfig:
 
 
 def _mqtt(table: object, fail: _Fail) -> Credentials:
-    """``[mqtt]``: who the console is to the broker, and the CA that signs it."""
+    """``[mqtt]``: who the console is to the broker, the CA that signs it, and how often
+    it pings a quiet broker."""
     if not isinstance(table, dict):
         raise fail('[mqtt] is a table: write [mqtt] on a line of its own, then username = "..."')
     for key, value in table.items():
         if key not in _MQTT_KEYS:
-            raise fail(f"[mqtt] unknown key {_shown(key)}: use username, password and ca_file")
-        if not isinstance(value, str):  # the value is not shown: it may be the password
+            raise fail(
+                f"[mqtt] unknown key {_shown(key)}: use username, password, ca_file and keepalive"
+            )
+        if key == "keepalive":
+            low, high = KEEPALIVE_RANGE
+            if isinstance(value, bool) or not isinstance(value, int) or not low <= value <= high:
+                raise fail(
+                    f"[mqtt] keepalive: write keepalive = {KEEPALIVE} (seconds, {low} to {high})"
+                )
+        elif not isinstance(value, str):  # the value is not shown: it may be the password
             raise fail(f'[mqtt] {key}: write {key} = "..." (text in quotes)')
-    return Credentials(table.get("username"), table.get("password"), table.get("ca_file"))
+    return Credentials(
+        table.get("username"),
+        table.get("password"),
+        table.get("ca_file"),
+        table.get("keepalive", KEEPALIVE),
+    )
 
 
 def _profile(name: str, table: dict[str, object], fail: _Fail) -> TargetProfile:

@@ -57,6 +57,7 @@ class Config:
             env.get(USERNAME_ENV) or self.mqtt.username,
             env.get(PASSWORD_ENV) or self.mqtt.password,
             env.get(CA_FILE_ENV) or self.mqtt.ca_file,
+            self.mqtt.keepalive,
         )
 
 

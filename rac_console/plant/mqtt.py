@@ -18,13 +18,21 @@ again (a broker that restarted without persistence has lost its retained message
 paho also sends again what it had sent unacknowledged (a cable pulled: gone into the
 void), in no set order with those: an older value the broker takes after the latest of
 its topic is followed by the latest again, so that the latest is what stays retained.
-Each trouble is said once, and its end once.
+Each trouble is said once, and its end once: the broker is back when it has taken a
+message, not merely answered the CONNECT.
+
+Whatever a broker sends, memory and time stay bounded: every byte read goes through
+:class:`~.mqtt_guard.InboundGuard` (no packet over 64 KiB, nothing a publishing client
+never asks for, no acknowledgement of nothing), a broker that breaks the protocol is
+dropped with one line, and the next attempt waits longer each time until a connection
+has proved good (:mod:`.paho_hooks`).
 """
 
 from __future__ import annotations
 
 import os
 import secrets
+import ssl
 import threading
 import time
 from collections.abc import Callable, Iterable
@@ -32,15 +40,18 @@ from typing import Any, Protocol
 
 from ..commands.plant import Credentials, MqttAddress
 from ..protocol import InputError
-from ..protocol.text import terminal_safe
+from ..protocol.text import endpoint, terminal_safe
 from .extras import need
+from .mqtt_guard import MOST_PACKET, InboundGuard
+from .paho_hooks import Backoff, guarded_client
 
 #: Messages handed to paho and not yet acknowledged, at most (the rest wait, coalesced).
 IN_FLIGHT = 200
 QOS = 1
 #: Seconds between tries while the broker is away: from the first to the last, doubling.
 RETRY_FIRST, RETRY_MOST = 1, 30
-KEEPALIVE = 15
+#: Seconds a TCP connection and a TLS handshake may take.
+CONNECT_TIMEOUT = 5.0
 ONLINE, OFFLINE = b"online", b"offline"
 #: Seconds between two messages of one topic, at least (the latest reading goes).
 EVERY = 0.1
@@ -74,6 +85,7 @@ class MqttFeed:
         self._dead = False
         self.address, self.target = address, target
         self.base = f"{address.prefix}/{target}"
+        self._where = endpoint(address.host, address.port)
         self.status_topic = f"{self.base}/status"
         self._say = say
         self._lock = threading.Condition()
@@ -86,15 +98,20 @@ class MqttFeed:
         self._early: dict[int, Any] = {}  # acknowledged before its id was noted
         self._denied: set[str] = set()  # topics the broker refused (said once each)
         self._connected = False
-        self._trouble: str | None = None  # the kind of trouble said last: away, refused
+        self._proved = False  # this connection's broker has taken a message
+        self._republished = 0  # values published again at the last connection
+        self._trouble: str | None = None  # the kind of trouble said last: away, refused…
         self._stopping = False
         self.sent = 0  # messages acknowledged by the broker
+        self._handed_total = 0  # messages handed to paho, ever: each is acknowledged once
         self._not_kept = mqtt.MQTT_ERR_QUEUE_SIZE  # the one refusal paho keeps nothing of
-        client = mqtt.Client(
-            callback_api_version=mqtt.CallbackAPIVersion.VERSION2,
-            client_id=f"rac-console-{secrets.token_hex(6)}",
-            protocol=mqtt.MQTTv5,
+        self._keepalive = credentials.keepalive
+        self._guard = InboundGuard(lambda: self._handed_total, self._keepalive)
+        self._backoff = Backoff(RETRY_FIRST, RETRY_MOST)
+        client = guarded_client(
+            mqtt, f"rac-console-{secrets.token_hex(6)}", self._guard, self._backoff, self._crashed
         )
+        client.connect_timeout = CONNECT_TIMEOUT
         client.will_set(self.status_topic, OFFLINE, qos=QOS, retain=True)
         if credentials.username is not None:
             client.username_pw_set(credentials.username, credentials.password)
@@ -105,7 +122,6 @@ class MqttFeed:
             except (OSError, ValueError) as exc:
                 where = credentials.ca_file or "the system's certificates"
                 raise InputError(f"mqtts: cannot use {terminal_safe(where)}: {exc}") from None
-        client.reconnect_delay_set(RETRY_FIRST, RETRY_MOST)
         client.on_connect = self._on_connect
         client.on_connect_fail = self._on_connect_fail
         client.on_disconnect = self._on_disconnect
@@ -120,27 +136,29 @@ class MqttFeed:
 
     def start(self) -> None:
         """Connect in the background: nothing here waits on the network."""
+        from paho.mqtt.packettypes import PacketTypes
+        from paho.mqtt.properties import Properties
+
+        announced = Properties(PacketTypes.CONNECT)  # type: ignore[no-untyped-call]
+        announced.MaximumPacketSize = MOST_PACKET  # what the guard enforces
         client = self._client
-        client.connect_async(self.address.host, self.address.port, keepalive=KEEPALIVE)
-        # paho's network thread, guarded: what it does not catch itself ends publishing
-        # with one line, never a traceback on the user's terminal.
-        network = client._thread_main
-        client._thread_main = lambda: self._guarded(network)
+        client.connect_async(
+            self.address.host, self.address.port, self._keepalive, properties=announced
+        )
         client.loop_start()
         self._feeder.start()
 
-    def _guarded(self, network: Callable[[], None]) -> None:
-        try:
-            network()
-        except Exception as exc:  # a name the resolver refuses, a topic paho cannot pack
-            with self._lock:
-                self._connected, self._stopping, self._dead = False, True, True
-                self._lock.notify_all()
-            self._changed()
-            self._say(
-                f"publishing {self.target}'s values to {self} stopped: "
-                f"{terminal_safe(str(exc)) or type(exc).__name__}"
-            )
+    def _crashed(self, exc: Exception) -> None:
+        """paho's network thread ended on what it does not catch itself: publishing
+        stops with one line, never a traceback on the user's terminal."""
+        with self._lock:
+            self._connected, self._stopping, self._dead = False, True, True
+            self._lock.notify_all()
+        self._changed()
+        self._say(
+            f"publishing {self.target}'s values to {self} stopped: "
+            f"{terminal_safe(str(exc)) or type(exc).__name__}"
+        )
 
     def update(self, variable: str, payload: Held) -> None:
         """The latest of ``PREFIX/<target>/<variable>`` (never blocks on the network)."""
@@ -195,6 +213,7 @@ class MqttFeed:
             self._publish(self.status_topic, OFFLINE)
             with self._lock:
                 self._lock.wait_for(lambda: not self._in_flight, timeout)
+        self._backoff.stop()
         self._client.disconnect()
         self._client.loop_stop()
         if self._feeder.is_alive():
@@ -250,6 +269,8 @@ class MqttFeed:
         """Hand one message to paho (counted in flight by the caller). Without a
         connection now paho keeps it and sends it on the next: it stays in flight."""
         data = reading if isinstance(reading, bytes) else reading.encode()
+        with self._lock:  # counted before it can be acknowledged (see InboundGuard)
+            self._handed_total += 1
         info = self._client.publish(topic, data, qos=QOS, retain=True)
         with self._lock:
             if info.rc == self._not_kept:  # refused: it goes with the next change or connection
@@ -286,34 +307,66 @@ class MqttFeed:
         if reason.is_failure:
             self._trouble_once(
                 "refused",
-                f"the MQTT broker {self.address.host}:{self.address.port} refused {self.target}'s "
-                f"connection ({reason}); trying again every {RETRY_MOST} s at most",
+                f"the MQTT broker {self._where} refused {self.target}'s connection "
+                f"({reason}); trying again every {RETRY_MOST} s at most",
             )
             return
         with self._lock:
             if self._stopping:  # offline is said, or about to be: never online after it
                 return
-            self._connected = True
+            self._connected, self._proved = True, False
             self._in_flight += 1  # the status; paho sends again what it had in flight
             self._pending = dict(self._latest)  # the broker may have lost them all
             self._sent_at.clear()
-            count = len(self._pending)
+            self._republished = len(self._pending)
             self._lock.notify_all()
         self._publish(self.status_topic, ONLINE)
         self._changed()
+
+    def _proves_good(self) -> None:
+        """The broker took a message on this connection: it is back (said when its
+        absence was), and the next loss starts again from the shortest wait."""
+        self._proved = True
+        self._backoff.good()
         if self._trouble is not None:  # the start was said by whoever started the feed
             self._trouble = None
+            count = self._republished
+            self._changed()
             self._say(
                 f"the MQTT broker is back: {self.target}'s {count} value"
                 f"{'s' * (count != 1)} published again"
             )
 
     def _on_connect_fail(self, client: Any, userdata: Any) -> None:
-        self._trouble_once(
-            "away",
-            f"cannot reach the MQTT broker {self.address.host}:{self.address.port} for "
-            f"{self.target}; trying again every {RETRY_MOST} s at most, polling goes on",
-        )
+        failure: OSError | None = client.rac_failure
+        again = f"trying again every {RETRY_MOST} s at most, polling goes on"
+        if isinstance(failure, ssl.SSLCertVerificationError):
+            self._trouble_once(
+                "tls",
+                f"the MQTT broker {self._where}'s certificate does not verify "
+                f"({terminal_safe(failure.verify_message or str(failure))}): give the CA that "
+                f"signed it as ca_file in the config's [mqtt] table or in RAC_MQTT_CA_FILE; "
+                f"{again}",
+            )
+        elif client.rac_at_tls:
+            why = terminal_safe(getattr(failure, "reason", None) or str(failure))
+            self._trouble_once(
+                "tls",
+                f"no TLS handshake with the MQTT broker {self._where} ({why}): is it an "
+                f"mqtts port? (mqtt:// for plain MQTT); {again}",
+            )
+        elif isinstance(failure, TimeoutError):
+            self._trouble_once(
+                "away",
+                f"no answer from the MQTT broker {self._where} within {CONNECT_TIMEOUT:g} s "
+                f"(a wrong address, or a firewall dropping the packets?); {again}",
+            )
+        else:
+            why = "" if failure is None else f" ({terminal_safe(_reason(failure))})"
+            self._trouble_once(
+                "away",
+                f"cannot reach the MQTT broker {self._where} for {self.target}{why}; {again}",
+            )
 
     def _on_disconnect(
         self, client: Any, userdata: Any, flags: Any, reason: Any, properties: Any
@@ -325,19 +378,32 @@ class MqttFeed:
             self._lock.notify_all()
         if stopping:
             return
-        if was:
+        broke, again = self._guard.broke, f"trying again every {RETRY_MOST} s at most"
+        if broke is not None and not broke.first:
+            self._trouble_once(
+                "broken",
+                f"the MQTT broker {self._where} broke the protocol ({broke.why}): dropped it; "
+                f"{again} (sooner at first), polling goes on",
+            )
+        elif was and reason == _KEEPALIVE_TIMEOUT:
             self._trouble_once(
                 "away",
-                f"lost the MQTT broker {self.address.host}:{self.address.port}; retrying, "
-                f"polling goes on: the latest of each of {self.target}'s values goes out "
-                "when it is back",
+                f"the MQTT broker {self._where} stopped answering (no reply to a ping in "
+                f"{self._keepalive:g} s); retrying, polling goes on: the latest of each of "
+                f"{self.target}'s values goes out when it is back",
             )
-        elif self._trouble is None:  # the connection closed before the broker answered
+        elif was:
+            self._trouble_once(
+                "away",
+                f"lost the MQTT broker {self._where}; retrying, polling goes on: the latest "
+                f"of each of {self.target}'s values goes out when it is back",
+            )
+        elif broke is not None or self._trouble is None:  # closed before a CONNACK
+            what = f"{broke.why}: " if broke is not None else ""
             self._trouble_once(
                 "silent",
-                f"no MQTT answer from {self.address.host}:{self.address.port} (is it an MQTT "
-                f"port? mqtts:// for TLS); trying again every {RETRY_MOST} s at most, polling "
-                "goes on",
+                f"no MQTT answer from {self._where} ({what}is it an MQTT port? mqtts:// for "
+                f"TLS); {again}, polling goes on",
             )
 
     def _on_publish(
@@ -352,6 +418,8 @@ class MqttFeed:
             else:
                 self._catch_up(*sent)
             self._lock.notify_all()
+        if not self._proved:
+            self._proves_good()
         if sent is not None:
             self._acknowledged(sent[0], reason)
 
@@ -367,3 +435,16 @@ class MqttFeed:
             self._trouble = kind
             self._changed()
             self._say(text)
+
+
+#: paho's reason when no answer came to a ping (MQTT 5's "Keep alive timeout").
+_KEEPALIVE_TIMEOUT = 0x8D
+
+
+def _reason(failure: OSError) -> str:
+    """``Connection refused``, ``host not found``: the OS's words for a failed connect."""
+    import socket
+
+    if isinstance(failure, socket.gaierror):
+        return "host not found"
+    return failure.strerror or str(failure) or type(failure).__name__

@@ -1,0 +1,301 @@
+"""A broker that lies: what it sends cannot take the watch's memory or its polling.
+
+The brokers here are written in the test (127.0.0.1, port 0): each reads the CONNECT,
+then does one hostile thing until the client hangs up: a CONNACK announcing 256 MB
+followed by an endless stream, a CONNACK followed by junk, a CONNACK followed by
+silence, a CONNACK followed by a storm of acknowledgements. The watch is the real CLI;
+its peak memory is the kernel's (``VmHWM``), what it did is judged at the broker (which
+connections came, when, and whether the client hung up), and polling is judged by the
+lines the watch printed after the broker began.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import inspect
+import json
+import socket
+import threading
+import time
+from collections.abc import Callable, Iterator
+from pathlib import Path
+
+import pytest
+from mqtt_broker import Running, running
+from test_cli import env
+
+from rac_console.plant.mqtt_guard import (
+    MOST_PACKET,
+    BrokerMisbehaved,
+    InboundGuard,
+)
+
+env, running = env, running  # the fixtures: a private HOME, commands stopped at the end
+
+CONNACK = bytes((0x20, 3, 0, 0, 0))  # MQTT 5: no session, success, no properties
+#: 256 MB announced: the most a 4-byte remaining length can say.
+HUGE_CONNACK = bytes((0x20, 0xFF, 0xFF, 0xFF, 0x7F))
+#: The watch's peak resident memory, at most (it is about 40 MB at rest).
+MOST_RSS_MB = 150
+
+
+# ------------------------------------------------------------------ the guard alone
+
+
+def guard(sent: int = 0, clock: Callable[[], float] = lambda: 0.0) -> InboundGuard:
+    return InboundGuard(lambda: sent, keepalive=15, clock=clock)
+
+
+def test_an_honest_brokers_answers_pass_byte_by_byte_and_whole() -> None:
+    stream = CONNACK + bytes((0x40, 2, 0, 1)) + bytes((0x40, 3, 0, 2, 0)) + bytes((0xD0, 0))
+    one = guard(sent=2)
+    for byte in stream:
+        one.take(bytes((byte,)))
+    guard(sent=2).take(stream)
+    assert one.broke is None
+
+
+def test_a_packet_longer_than_announced_is_refused_at_its_length() -> None:
+    one = guard()
+    with pytest.raises(BrokerMisbehaved, match="268,435,455 bytes"):
+        one.take(HUGE_CONNACK)
+    assert one.broke is not None and not one.broke.first
+    at_most = guard()
+    at_most.take(bytes((0x20, 0x80, 0x80, 0x04)))  # 65,536: the most, taken
+    with pytest.raises(BrokerMisbehaved, match="65,537 bytes"):
+        guard().take(bytes((0x20, 0x81, 0x80, 0x04)))
+    assert MOST_PACKET == 65_536
+
+
+@pytest.mark.parametrize(
+    ("stream", "says", "first"),
+    [
+        (b"HTTP/1.1 400 Bad Request\r\n", "first answer is not an MQTT CONNACK", True),
+        (CONNACK + bytes((0x30, 2, 0, 0)), "a PUBLISH", False),
+        (CONNACK + CONNACK, "a second CONNACK", False),
+        (CONNACK + bytes((0x42, 2, 0, 1)), "a PUBACK", False),  # flags must be 0
+        (CONNACK + bytes((0x40, 0xFF, 0xFF, 0xFF, 0xFF)), "more than 4 bytes", False),
+        (CONNACK + bytes((0x40, 2, 0, 1)) * 4, "acknowledged 4 messages, 3 were sent", False),
+    ],
+)
+def test_what_no_broker_sends_a_publisher_is_refused(stream: bytes, says: str, first: bool) -> None:
+    one = guard(sent=3)
+    with pytest.raises(BrokerMisbehaved, match=says) as raised:
+        one.take(stream)
+    assert raised.value.first is first
+
+
+def test_pings_are_answered_no_more_often_than_they_are_sent() -> None:
+    now = [0.0]
+    one = guard(clock=lambda: now[0])
+    one.take(CONNACK + bytes((0xD0, 0)) * 2)
+    with pytest.raises(BrokerMisbehaved, match="pings"):
+        one.take(bytes((0xD0, 0)))
+    later = guard(clock=lambda: now[0])
+    later.take(CONNACK)
+    now[0] = 75.0  # five keepalives: up to twelve answers
+    later.take(bytes((0xD0, 0)) * 12)
+
+
+def test_the_private_parts_of_paho_the_hooks_override_are_still_there() -> None:
+    """paho has no public hook for these: when an upgrade moves one, this fails (and
+    pyproject's pin says which versions were checked)."""
+    import paho.mqtt.client as mqtt
+
+    from rac_console.plant.paho_hooks import PRIVATE
+
+    client = mqtt.Client(callback_api_version=mqtt.CallbackAPIVersion.VERSION2)
+    for name in PRIVATE:
+        assert hasattr(client, name), name
+    assert list(inspect.signature(client._sock_recv).parameters) == ["bufsize"]
+    assert list(inspect.signature(client._ssl_wrap_socket).parameters) == ["tcp_sock"]
+    assert hasattr(mqtt._ConnectionState, "MQTT_CS_DISCONNECTING")
+    reads = inspect.getsource(mqtt.Client._packet_read)
+    assert "self._sock_recv(" in reads and ".recv(" not in reads.replace("_sock_recv(", "")
+
+
+# ------------------------------------------------------------------ hostile brokers
+
+
+class HostileBroker:
+    """Accepts MQTT connections on 127.0.0.1; each gets ``act(conn)`` after its CONNECT.
+    Keeps when each connection came and whether the client hung up on it."""
+
+    def __init__(self, name: str, act: Callable[[socket.socket], None]) -> None:
+        self.name, self._act = name, act
+        self._server = socket.create_server(("127.0.0.1", 0))
+        self.port: int = self._server.getsockname()[1]
+        self.connections: list[float] = []  # monotonic times
+        self.hung_up = 0  # connections the client closed while the broker still sent
+        self._lock = threading.Lock()
+        self._stop = threading.Event()
+        self._threads = [threading.Thread(target=self._accept, daemon=True)]
+        self._threads[0].start()
+
+    def _accept(self) -> None:
+        self._server.settimeout(0.2)
+        while not self._stop.is_set():
+            try:
+                conn, _ = self._server.accept()
+            except TimeoutError:
+                continue
+            except OSError:
+                return
+            with self._lock:
+                self.connections.append(time.monotonic())
+            worker = threading.Thread(target=self._serve, args=(conn,), daemon=True)
+            self._threads.append(worker)
+            worker.start()
+
+    def _serve(self, conn: socket.socket) -> None:
+        with conn:
+            conn.settimeout(10)
+            try:
+                read_packet(conn)  # the CONNECT
+                self._act(conn)
+            except (ConnectionError, BrokenPipeError):
+                with self._lock:
+                    self.hung_up += 1
+            except OSError:
+                pass
+
+    @property
+    def stopping(self) -> bool:
+        return self._stop.is_set()
+
+    def count(self) -> tuple[int, int]:
+        with self._lock:
+            return len(self.connections), self.hung_up
+
+    def close(self) -> None:
+        self._stop.set()
+        self._server.close()
+        for thread in self._threads:
+            thread.join(5)
+
+
+def read_packet(conn: socket.socket) -> bytes:
+    header = conn.recv(1)
+    if not header:
+        raise ConnectionError("closed")
+    length, shift = 0, 0
+    while True:
+        byte = conn.recv(1)
+        if not byte:
+            raise ConnectionError("closed")
+        length += (byte[0] & 0x7F) << shift
+        shift += 7
+        if not byte[0] & 0x80:
+            break
+    body = b""
+    while len(body) < length:
+        chunk = conn.recv(length - len(body))
+        if not chunk:
+            raise ConnectionError("closed")
+        body += chunk
+    return header + body
+
+
+def streaming(
+    first: bytes, then: Callable[[int], bytes]
+) -> Callable[[HostileBroker], Callable[[socket.socket], None]]:
+    """A broker that sends ``first`` and then ``then(n)`` for n = 0, 1, … until the client
+    hangs up (a ConnectionError: counted) or the test ends."""
+
+    def make(broker: HostileBroker) -> Callable[[socket.socket], None]:
+        def act(conn: socket.socket) -> None:
+            conn.sendall(first)
+            n = 0
+            while not broker.stopping:
+                conn.sendall(then(n))
+                n += 1
+
+        return act
+
+    return make
+
+
+def silent(broker: HostileBroker) -> Callable[[socket.socket], None]:
+    """CONNACK, then nothing: what the client sends is read and never answered."""
+
+    def act(conn: socket.socket) -> None:
+        conn.sendall(CONNACK)
+        conn.settimeout(0.2)
+        while not broker.stopping:
+            with contextlib.suppress(TimeoutError):
+                if not conn.recv(65536):
+                    raise ConnectionError("the client hung up")
+
+    return act
+
+
+JUNK = bytes(range(256)) * 256  # 64 KiB, every byte value
+STORM = bytes((0x40, 2, 0x12, 0x34)) * 16_384  # 16,384 PUBACKs of a message never sent
+
+#: What the watch says of each, in its one line.
+SAYS = {
+    "a 256 MB CONNACK": "broke the protocol (it announced a CONNACK of 268,435,455 bytes",
+    "a CONNACK, then junk": "broke the protocol (it sent ",
+    "a CONNACK, then a PUBACK storm": "broke the protocol (it acknowledged ",
+    "a CONNACK, then silence": "stopped answering (no reply to a ping in 2 s)",
+}
+HOSTILE = {
+    "a 256 MB CONNACK": streaming(HUGE_CONNACK, lambda n: bytes(65_536)),
+    "a CONNACK, then junk": streaming(CONNACK, lambda n: JUNK[n % 256 :] + JUNK[: n % 256]),
+    "a CONNACK, then a PUBACK storm": streaming(CONNACK, lambda n: STORM),
+    "a CONNACK, then silence": silent,
+}
+
+
+@pytest.fixture
+def hostile(request: pytest.FixtureRequest) -> Iterator[HostileBroker]:
+    holder: list[Callable[[socket.socket], None]] = []
+    broker = HostileBroker(request.param, lambda conn: holder[0](conn))
+    holder.append(HOSTILE[request.param](broker))
+    try:
+        yield broker
+    finally:
+        broker.close()
+
+
+def peak_rss_mb(pid: int) -> float:
+    for line in Path(f"/proc/{pid}/status").read_text().splitlines():
+        if line.startswith("VmHWM:"):
+            return int(line.split()[1]) / 1024
+    raise AssertionError("no VmHWM")
+
+
+def mqtt_lines(watch: Running) -> list[str]:
+    return [line for line in watch.err if "MQTT" in line]
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(not Path("/proc/self/status").exists(), reason="reads the peak RSS in /proc")
+@pytest.mark.parametrize("hostile", list(HOSTILE), indirect=True)
+def test_a_hostile_broker_is_dropped_in_one_line_and_cannot_take_memory_or_polling(
+    hostile: HostileBroker, env: dict[str, str], running: list[Running], tmp_path: Path
+) -> None:
+    config = tmp_path / "rac.toml"
+    config.write_text("[mqtt]\nkeepalive = 2\n")  # the silent broker is found out in 4 s
+    watch = Running(
+        env | {"RAC_CONSOLE_CONFIG": str(config)},
+        "--json", "watch", "I", "1", "--every", "0.05",
+        "--mqtt", f"mqtt://127.0.0.1:{hostile.port}/plant",
+    )  # fmt: skip
+    running.append(watch)
+    # Dropped, and tried again after a wait (1 s), and again after a longer one (2 s).
+    watch.wait_for("three connections", lambda: hostile.count()[0] >= 3, deadline=60)
+    lines_then = len(watch.out)
+    watch.wait_for("polling after them", lambda: len(watch.out) >= lines_then + 20, deadline=60)
+    peak = peak_rss_mb(watch.process.pid)
+    times = hostile.connections[:3]
+    assert watch.stop() == 0
+    assert peak < MOST_RSS_MB, f"peak RSS {peak:.0f} MB"
+    assert times[2] - times[1] >= 1.9, "the second wait is no longer than the first"
+    assert hostile.count()[1] >= 2, "the client did not hang up on the hostile broker"
+    said = mqtt_lines(watch)
+    assert len(said) == 1, watch.err
+    assert SAYS[hostile.name] in said[0]
+    assert "Traceback" not in "\n".join(watch.err)
+    values = [json.loads(line)["values"]["I1"] for line in watch.out if line.startswith("{")]
+    assert len(values) >= 20
