@@ -148,3 +148,24 @@ def test_the_last_will_says_offline_when_the_console_is_killed(
     console = int(terminal.tmux("list-panes", "-t", "t", "-F", "#{pane_pid}").split()[0])
     os.kill(console, signal.SIGKILL)  # no clean end: only the broker can say it
     subscriber.wait_for("the last will", status_is("plant/sim/status", b"offline"))
+
+
+async def test_a_password_typed_in_a_publish_line_is_refused_and_kept_nowhere(
+    tmp_path: Path,
+) -> None:
+    """A base64 password holds /: the address is refused without being repeated, the
+    line is not kept in the history, and nothing is published anywhere."""
+    driver = Driver(tmp_path)
+    typed = "publish mqtt://rac:4711/s3cret@127.0.0.1:1883/line2"
+
+    async def steps(d: Driver) -> None:
+        d.type(f"{typed}\r")
+        await d.until(lambda out: "no user or password" in out, "the refusal")
+        d.type("get I 1\r")  # a line after it, kept: the history is written by now
+        await d.until(lambda out: "I1 = " in out, "the next line")
+
+    out = await driver.run(steps)
+    assert "s3cret" not in out and "4711" not in out
+    assert "publishing" not in out
+    history = (tmp_path / "history").read_text(encoding="utf-8")
+    assert "get I 1" in history and "s3cret" not in history

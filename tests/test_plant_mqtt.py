@@ -314,6 +314,7 @@ def test_a_broker_that_is_not_there_is_one_line_and_polling_goes_on(
     ("url", "says"),
     [
         ("mqtt://rac:hunter2@127.0.0.1/plant", "no user or password"),
+        ("mqtt://rac:4711/hunter2@127.0.0.1:1883/line2", "no user or password"),
         ("mqtt://127.0.0.1", "give a topic prefix"),
         ("mqtt://127.0.0.1/plant/+", "reserve"),
         ("http://127.0.0.1/plant", "mqtt:// or mqtts://"),
@@ -326,7 +327,7 @@ def test_an_address_that_cannot_be_used_is_refused_before_polling(
     result = cli(env, "watch", "I", "1", "--count", "1", "--mqtt", url)
     assert result.returncode == 2
     line = one_error_line(result)
-    assert says in line and "hunter2" not in line
+    assert says in line and "hunter2" not in line and "4711" not in line
     assert result.stdout == ""
 
 

@@ -48,6 +48,11 @@ def test_a_broker_address_as_typed(text: str, host: str, port: int, prefix: str,
         ("tcp://broker/line2", "starts with mqtt:// or mqtts://"),
         ("mqtt://user:pa55word@broker/line2", "no user or password"),
         ("mqtt://user@broker/line2", "no user or password"),
+        # A base64 password holds / (and ? or #): what precedes the @ is no host.
+        ("mqtt://rac:4711/s3cret@127.0.0.1:1883/line2", "no user or password"),
+        ("mqtt://rac:47?11@broker/line2", "no user or password"),
+        ("mqtt://rac:47#11@broker/line2", "no user or password"),
+        ("mqtts://rac:s3/cr/et@broker:8883/line2", "no user or password"),
         ("mqtt://broker", "give a topic prefix"),
         ("mqtt://broker:70000/p", "port"),
         ("mqtt://broker:0/p", "port"),
@@ -66,7 +71,8 @@ def test_a_broker_address_that_cannot_be_used_says_how_to_write_it(text: str, sa
     with pytest.raises(InputError) as refused:
         parse_mqtt_address(text)
     assert says in str(refused.value)
-    assert "pa55word" not in str(refused.value)
+    for secret in ("pa55word", "s3cret", "4711", "47", "cr/et"):
+        assert secret not in str(refused.value)
 
 
 def test_a_topic_level_keeps_out_wildcards_separators_and_control_characters() -> None:

@@ -70,13 +70,13 @@ def parse_mqtt_address(text: str) -> MqttAddress:
         raise InputError(f"give the broker as {MQTT_USAGE}")
     if scheme.lower() not in ("mqtt", "mqtts"):
         raise InputError(f"the broker's address starts with mqtt:// or mqtts://: {MQTT_USAGE}")
-    authority = rest.split("/", 1)[0]
-    if "@" in authority:  # the password is not repeated, not even escaped
+    if "@" in rest:  # anywhere: a password may hold / ? # (base64 holds /); not repeated
         raise InputError(
             "no user or password in the broker's address (it would show in history and "
-            f"process lists): put them in the config file's [mqtt] table or in "
-            f"{USERNAME_ENV} and {PASSWORD_ENV}"
+            f"process lists), and no @ in a topic prefix: put them in the config file's "
+            f"[mqtt] table or in {USERNAME_ENV} and {PASSWORD_ENV}"
         )
+    authority = rest.split("/", 1)[0]
     if "?" in rest or "#" in authority:  # urlsplit would drop what follows, silently
         raise InputError(f"the broker's address takes no ? or # part: {MQTT_USAGE}")
     from urllib.parse import urlsplit
