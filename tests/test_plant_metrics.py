@@ -16,7 +16,8 @@ from test_cli import cli, env, one_error_line, recording
 
 from rac_console.commands.plant import parse_metrics_address
 from rac_console.engine import Engine
-from rac_console.plant.metrics import MetricsBoard, MetricsServer
+from rac_console.plant.metrics import MetricsBoard
+from rac_console.plant.metrics_server import MetricsServer
 
 prometheus = pytest.importorskip("prometheus_client")
 from prometheus_client.openmetrics.parser import (  # noqa: E402
@@ -85,11 +86,11 @@ def test_the_watched_numbers_are_scraped_with_their_fields_and_counters(
     assert ("rac_rtt_seconds", labels(target="sim")) in got
     ok = got["rac_reads_total", labels(target="sim", result="ok")]
     assert ok >= 3 and got["rac_reads_total", labels(target="sim", result="no_reply")] == 0
-    # The counter counts on: a later scrape, after more cycles, has more.
-    seen = len(watch.out)
-    watch.wait_for("more cycles", lambda: len(watch.out) >= seen + 3)
-    later = samples(scrape(url)[0])
-    assert later["rac_reads_total", labels(target="sim", result="ok")] > ok
+    # The counter counts on: a later page (made at most once a second) has more.
+    deadline = time.monotonic() + 20
+    while samples(scrape(url)[0])["rac_reads_total", labels(target="sim", result="ok")] <= ok:
+        assert time.monotonic() < deadline, "the counter never counted on"
+        time.sleep(0.2)  # between scrapes, until the deadline
 
     text, kind = scrape(url, openmetrics=True)
     assert kind.startswith("application/openmetrics-text")
@@ -149,6 +150,116 @@ def test_a_label_with_quotes_and_braces_is_escaped_by_the_exposition() -> None:
         server.stop()
 
 
+def test_control_characters_in_a_label_are_escaped_not_sent() -> None:
+    """prometheus-client escapes quotes, backslashes and newlines; ESC, BEL and C1 would
+    reach the terminal of whoever curls the page."""
+    board = MetricsBoard()
+    server = MetricsServer(parse_metrics_address("127.0.0.1:0"), board)
+    hostile = "\x1b]0;owned\x07\x1b[2J\u009b31m\u202e"
+    try:
+        board.set_value("sim", "I1", hostile, [("", 1.0)])
+        text, _ = scrape(f"http://127.0.0.1:{server.port}/metrics")
+    finally:
+        server.stop()
+    assert not [c for c in text if (ord(c) < 0x20 and c != "\n") or 0x7F <= ord(c) < 0xA0]
+    assert "\u202e" not in text
+    got = samples(text)
+    label = dict(next(key for key in got if key[0] == "rac_value")[1])["label"]
+    assert label == "\\x1b]0;owned\\x07\\x1b[2J\\x9b31m\\u202e"
+
+
+def raw_request(port: int, request: bytes) -> bytes:
+    """What the server answers ``request`` with, until it closes."""
+    import socket
+
+    with socket.create_connection(("127.0.0.1", port), timeout=20) as sock:
+        sock.sendall(request)
+        answer = b""
+        while chunk := sock.recv(65536):
+            answer += chunk
+    return answer
+
+
+@pytest.mark.parametrize(
+    ("request_bytes", "status"),
+    [
+        (b"GET /metrics HTTP/1.1\r\nHost: x\r\n\r\n", b"200"),
+        (b"HEAD /metrics HTTP/1.1\r\n\r\n", b"200"),
+        (b"POST /metrics HTTP/1.1\r\nContent-Length: 0\r\n\r\n", b"405"),
+        (b"GET /static/ HTTP/1.1\r\n\r\n", b"404"),
+        (b"GET /metrics HTTP/1.1\r\nX: " + b"a" * 10_000 + b"\r\n\r\n", b"431"),
+        (b"\x16\x03\x01 hello TLS\r\n\r\n", b"400"),
+        (b"GET /metrics HTTP/1.1\r\n", b""),  # a head never finished: closed, unanswered
+    ],
+    ids=["get", "head", "post", "elsewhere", "a long head", "not http", "unfinished"],
+)
+def test_the_metrics_server_answers_only_what_it_serves(
+    request_bytes: bytes, status: bytes
+) -> None:
+    server = MetricsServer(parse_metrics_address("127.0.0.1:0"), MetricsBoard())
+    try:
+        answer = raw_request(server.port, request_bytes)
+    finally:
+        server.stop()
+    assert answer.split(b" ", 2)[1:2] == ([status] if status else [])
+    if request_bytes.startswith(b"HEAD"):
+        assert answer.endswith(b"\r\n\r\n")  # the head only
+
+
+def proc_status(pid: int, field: str) -> int:
+    for line in Path(f"/proc/{pid}/status").read_text().splitlines():
+        if line.startswith(f"{field}:"):
+            return int(line.split()[1])
+    raise AssertionError(f"no {field}")
+
+
+@pytest.mark.skipif(not Path("/proc/self/status").exists(), reason="reads /proc")
+def test_a_thousand_idle_connections_take_no_thread_and_polling_goes_on(
+    env: dict[str, str], running: list[Running]
+) -> None:
+    import resource
+    import socket
+
+    soft, hard = resource.getrlimit(resource.RLIMIT_NOFILE)
+    if hard != resource.RLIM_INFINITY and hard < 1200:
+        pytest.skip(f"the test needs 1,200 descriptors, this machine allows {hard}")
+    resource.setrlimit(resource.RLIMIT_NOFILE, (max(soft, 1200), hard))
+    watch = Running(env, "--json", "watch", "I", "1", "--every", "0.05", "--metrics", "0")
+    running.append(watch)
+    url = serving(watch)
+    port = int(url.rsplit(":", 1)[1].split("/")[0])
+    watch.wait_for("polling", lambda: len(watch.out) >= 3)
+    pid = watch.process.pid
+    threads_before = proc_status(pid, "Threads")
+    idle: list[socket.socket] = []
+    try:
+        for _ in range(1000):
+            sock = socket.socket()
+            sock.setblocking(False)
+            sock.connect_ex(("127.0.0.1", port))  # in progress: the kernel queues it
+            idle.append(sock)
+        seen = len(watch.out)
+        watch.wait_for("polling on", lambda: len(watch.out) >= seen + 40, deadline=60)
+        threads = proc_status(pid, "Threads")
+        peak_mb = proc_status(pid, "VmHWM") / 1024
+    finally:
+        for sock in idle:
+            sock.close()
+        resource.setrlimit(resource.RLIMIT_NOFILE, (soft, hard))
+    assert threads <= threads_before, f"{threads_before} threads, then {threads}"
+    assert peak_mb < 150, f"peak RSS {peak_mb:.0f} MB"
+    # Gone, they leave the server as it was: a scrape is answered.
+    deadline = time.monotonic() + 30
+    while True:
+        try:
+            assert "rac_value" in scrape(url)[0]
+            break
+        except OSError:
+            assert time.monotonic() < deadline, "no scrape answered after the idle ones left"
+            time.sleep(0.2)  # between tries, until the deadline
+    assert watch.stop() == 0
+
+
 # ------------------------------------------------------------------ refused before anything
 
 
@@ -171,6 +282,8 @@ def test_a_port_in_use_is_one_line_before_polling(env: dict[str, str], tmp_path:
         (("watch", "I", "1", "--metrics", "nine"), "--metrics takes [HOST:]PORT"),
         (("get", "I", "1", "--metrics", "9108"), "get has no option '--metrics'"),
         (("--metrics", "9108", "put", "I", "1", "2"), "not put"),
+        # The command's own words are refused before anything is said to be served.
+        (("--metrics", "0", "watch", "ZZ", "1"), "unknown variable type"),
     ],
 )
 def test_metrics_where_it_means_nothing_is_refused(

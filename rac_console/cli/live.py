@@ -313,6 +313,9 @@ def watch(args: argparse.Namespace) -> ExitStatus:
     except InputError as exc:
         print_error(output.err, str(exc))
         return ExitStatus.REFUSED
+    from .plant import say_plant_notices
+
+    say_plant_notices(args)
     # Each variable's failure (by target), said on stderr once.
     reported: dict[tuple[str | None, VarRef], str] = {}
 

@@ -101,7 +101,9 @@ def _dispatch(args: argparse.Namespace) -> int:
         return run_script(args)
     if args.command == "repl" and not sys.stdin.isatty():
         from .oneshot import run_script
+        from .plant import say_plant_notices
 
+        say_plant_notices(args)
         args.file = "-"  # no terminal: the REPL reads a script, like run -
         args.keep_going = True  # but as the REPL: a failed line stops nothing
         return run_script(args)
@@ -193,7 +195,9 @@ def _interactive(args: argparse.Namespace) -> int:
     if args.command == "repl":
         from ..commands.language import WatchFile
         from ..repl.repl import run_repl
+        from .plant import say_plant_notices
 
+        say_plant_notices(args)
         if args.watch:  # run first, its result printed as the REPL starts
             cell.submit_command(WatchFile("load", args.watch))
         watch_cell(cell, getattr(args, "cell_watch", ()))

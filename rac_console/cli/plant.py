@@ -32,11 +32,16 @@ def settle_plant(args: argparse.Namespace) -> bool:
     except InputError as exc:
         print(f"rac-console: {terminal_safe(str(exc))}", file=sys.stderr)
         return False
-    args.plant_notices = notices  # the console shows them in its results pane
-    if args.command is not None:
-        for notice in notices:
-            print(f"rac-console: {notice}", file=sys.stderr)
+    args.plant_notices = notices  # said by say_plant_notices once the command is checked
     return True
+
+
+def say_plant_notices(args: argparse.Namespace) -> None:
+    """The plant's notices (``serving … /metrics``) on stderr: said by the REPL and
+    ``watch`` once their own arguments have been accepted, never before a refusal (the
+    console shows them in its results pane)."""
+    for notice in getattr(args, "plant_notices", ()):
+        print(f"rac-console: {notice}", file=sys.stderr)
 
 
 def _plant_options(args: argparse.Namespace, notices: list[str]) -> dict[str, Any]:
@@ -75,7 +80,8 @@ def _plant_options(args: argparse.Namespace, notices: list[str]) -> dict[str, An
             )
     options: dict[str, Any] = {"publish": address, "credentials": credentials}
     if getattr(args, "metrics", None) is not None:
-        from ..plant.metrics import MetricsBoard, MetricsServer
+        from ..plant.metrics import MetricsBoard
+        from ..plant.metrics_server import MetricsServer
 
         where = parse_metrics_address(args.metrics)
         board = MetricsBoard()

@@ -13,6 +13,11 @@ serves the text format, or OpenMetrics when the scraper asks for it.
 
 A value whose last read failed has no ``rac_value``: a stale number is not passed on as
 the present one (``rac_read_ok`` says it failed).
+
+Every label value is made terminal-safe here (ESC, BEL, C1 and format characters as
+``\x1b``…): prometheus-client escapes only quotes, backslashes and newlines, and a page
+read with ``curl`` in a terminal must not be obeyed by it. :mod:`.metrics_server` serves
+the page.
 """
 
 from __future__ import annotations
@@ -22,9 +27,7 @@ from collections.abc import Iterator
 from dataclasses import dataclass
 from typing import Any
 
-from ..commands.plant import MetricsAddress
-from ..protocol import InputError
-from .extras import need
+from ..protocol.text import terminal_safe
 
 READ_RESULTS = ("ok", "error", "no_reply")
 
@@ -86,9 +89,10 @@ class MetricsBoard:
             labels=("target", "variable"),
         )
         for (target, variable), (label, fields) in sorted(values.items()):
+            target, variable, label = _safe(target), _safe(variable), _safe(label)
             read_ok.add_metric((target, variable), 0.0 if fields is None else 1.0)
             for field, number in fields or ():
-                value.add_metric((target, variable, field, label), number)
+                value.add_metric((target, variable, _safe(field), label), number)
         reads = CounterMetricFamily(
             "rac_reads", "Reads of watched variables, by result", labels=("target", "result")
         )
@@ -99,7 +103,8 @@ class MetricsBoard:
         connected = GaugeMetricFamily(
             "rac_connected", "1 while the session to the controller is up", labels=("target",)
         )
-        for target, figure in sorted(figures.items()):
+        for name, figure in sorted(figures.items()):
+            target = _safe(name)
             for result, count in zip(READ_RESULTS, figure.reads, strict=True):
                 reads.add_metric((target, result), count)
             if figure.cycle_seconds is not None:
@@ -110,24 +115,6 @@ class MetricsBoard:
         yield from (value, read_ok, reads, cycle, rtt, connected)
 
 
-class MetricsServer:
-    """Serves a board's ``/metrics`` on a thread of its own until :meth:`stop`."""
-
-    def __init__(self, address: MetricsAddress, board: MetricsBoard) -> None:
-        """InputError when the extra is missing or the address cannot be served."""
-        client = need("prometheus_client", "--metrics")
-        registry = client.CollectorRegistry(auto_describe=False)
-        registry.register(board)
-        try:
-            self._server, self._thread = client.start_http_server(
-                address.port, address.host, registry
-            )
-        except OSError as exc:
-            why = exc.strerror or str(exc)
-            raise InputError(f"--metrics cannot serve {address}: {why}") from None
-        self.address = address
-        self.port = self._server.server_port
-
-    def stop(self) -> None:
-        self._server.shutdown()
-        self._server.server_close()
+def _safe(text: str) -> str:
+    """A label value no terminal acts on (see the module)."""
+    return terminal_safe(text)
