@@ -221,6 +221,9 @@ def test_a_target_is_named_by_its_profile_else_its_host() -> None:
     assert plant_name("10.0.0.3", 5006, None) == "10.0.0.3"
     assert plant_name("10.0.0.3", 5007, None) == "10.0.0.3:5007"
     assert plant_name(None, 40000, None) == "sim"
+    # An IPv6 member is named [::1]:17002 in the cell: its topic level and label too.
+    assert plant_name("::1", 17002, None) == "[::1]:17002"
+    assert plant_name("::1", 5006, None) == "::1"
 
 
 def test_the_readmes_plant_config_parses_as_printed() -> None:

@@ -16,6 +16,7 @@ from typing import TYPE_CHECKING
 from ..commands.language import VarRef
 from ..commands.plant import Credentials, MqttAddress, topic_level
 from ..protocol import InputError
+from ..protocol.text import endpoint
 from .events import RowView
 from .status import WAITING, Status
 
@@ -179,7 +180,7 @@ def plant_name(host: str | None, port: int, profile: str | None) -> str:
         return profile
     if host is None:
         return "sim"
-    return host if port == 5006 else f"{host}:{port}"
+    return host if port == 5006 else endpoint(host, port)
 
 
 def name_of(options: EngineOptions, target: Target) -> str:
