@@ -498,7 +498,9 @@ def test_mqtts_with_the_ca_file_given_and_refused_without_it(
     assert "cannot reach" not in trusted.stderr
     assert untrusted.returncode == 0, untrusted.stderr
     assert len(untrusted.stdout.splitlines()) == 6
-    assert len([e for e in untrusted.stderr.splitlines() if "MQTT broker" in e]) == 1
+    said = [e for e in untrusted.stderr.splitlines() if "MQTT broker" in e]
+    assert len(said) == 1
+    assert "certificate does not verify" in said[0] and "RAC_MQTT_CA_FILE" in said[0]
     missing = cli(
         env | {"RAC_MQTT_CA_FILE": str(tmp_path / "nowhere.pem")}, "watch", "I", "1",
         "--count", "1", "--mqtt", url,
@@ -512,6 +514,20 @@ def test_mqtts_with_the_ca_file_given_and_refused_without_it(
         "--count", "1", "--mqtt", url,
     )  # fmt: skip
     assert garbage.returncode == 2 and "no certificate TLS can use" in one_error_line(garbage)
+
+
+def test_mqtts_to_a_plain_mqtt_port_is_said_to_be_no_tls(
+    env: dict[str, str], broker: Broker
+) -> None:
+    result = cli(
+        env, "watch", "I", "1", "--every", "0.2", "--count", "6",
+        "--mqtt", f"mqtts://127.0.0.1:{broker.port}/plant",
+    )  # fmt: skip
+    assert result.returncode == 0, result.stderr
+    assert len(result.stdout.splitlines()) == 6
+    said = [line for line in result.stderr.splitlines() if "MQTT" in line]
+    assert len(said) == 1, result.stderr
+    assert "no TLS handshake with the MQTT broker" in said[0] and "mqtts port?" in said[0]
 
 
 def test_an_address_that_is_no_mqtt_broker_is_one_line_and_polling_goes_on(

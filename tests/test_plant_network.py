@@ -232,3 +232,24 @@ def test_a_pulled_cable_sends_the_last_will_and_the_feed_comes_back_with_the_cab
             except subprocess.TimeoutExpired:
                 process.kill()
                 process.wait(20)
+
+
+def test_a_black_holed_broker_address_is_said_to_give_no_answer(
+    env: dict[str, str], net: Net, running: list[Running]
+) -> None:
+    """Nothing comes back from the broker's address (its packets dropped): not "is it
+    an MQTT port?", which is for a port that answers in something else."""
+    net.pull()
+    watch = Running(
+        env, "--json", "watch", "I", "1", "--every", "0.1",
+        "--mqtt", f"mqtt://{BROKER_HOST}:1883/plant", wrap=net.in_b(),
+    )  # fmt: skip
+    running.append(watch)
+    watch.wait_for("the silence said", lambda: said(watch, "MQTT") >= 1, SLOW)
+    lines = len(watch.out)
+    watch.wait_for("polling on", lambda: len(watch.out) >= lines + 20, QUICK)
+    assert watch.stop() == 0, watch.err
+    mqtt = [line for line in watch.err if "MQTT" in line]
+    assert len(mqtt) == 1, watch.err
+    assert f"no answer from the MQTT broker {BROKER_HOST}:1883 within 5 s" in mqtt[0]
+    assert "is it an MQTT port" not in mqtt[0]
