@@ -1,8 +1,8 @@
 """A broker that lies: what it sends cannot take the watch's memory or its polling.
 
-The brokers here are written in the test (127.0.0.1, port 0): each reads the CONNECT,
-then does one hostile thing until the client hangs up: a CONNACK announcing 256 MB
-followed by an endless stream, a CONNACK followed by junk, a CONNACK followed by
+The brokers are the tests' own (``hostile_broker.py``, 127.0.0.1, port 0): each reads
+the CONNECT, then does one hostile thing until the client hangs up: a CONNACK announcing
+256 MB followed by an endless stream, a CONNACK followed by junk, a CONNACK followed by
 silence, a CONNACK followed by a storm of acknowledgements. The watch is the real CLI;
 its peak memory is the kernel's (``VmHWM``), what it did is judged at the broker (which
 connections came, when, and whether the client hung up), and polling is judged by the
@@ -11,16 +11,13 @@ lines the watch printed after the broker began.
 
 from __future__ import annotations
 
-import contextlib
 import inspect
 import json
-import socket
-import threading
-import time
 from collections.abc import Callable, Iterator
 from pathlib import Path
 
 import pytest
+from hostile_broker import CONNACK, HOSTILE, HUGE_CONNACK, HostileBroker, hostile_broker
 from mqtt_broker import Running, running
 from test_cli import env
 
@@ -32,9 +29,13 @@ from rac_console.plant.mqtt_guard import (
 
 env, running = env, running  # the fixtures: a private HOME, commands stopped at the end
 
-CONNACK = bytes((0x20, 3, 0, 0, 0))  # MQTT 5: no session, success, no properties
-#: 256 MB announced: the most a 4-byte remaining length can say.
-HUGE_CONNACK = bytes((0x20, 0xFF, 0xFF, 0xFF, 0x7F))
+#: What the watch says of each, in its one line.
+SAYS = {
+    "a 256 MB CONNACK": "broke the protocol (it announced a CONNACK of 268,435,455 bytes",
+    "a CONNACK, then junk": "broke the protocol (it sent ",
+    "a CONNACK, then a PUBACK storm": "broke the protocol (it acknowledged ",
+    "a CONNACK, then silence": "stopped answering (no reply to a ping in 2 s)",
+}
 #: The watch's peak resident memory, at most (it is about 40 MB at rest).
 MOST_RSS_MB = 150
 
@@ -117,141 +118,9 @@ def test_the_private_parts_of_paho_the_hooks_override_are_still_there() -> None:
 # ------------------------------------------------------------------ hostile brokers
 
 
-class HostileBroker:
-    """Accepts MQTT connections on 127.0.0.1; each gets ``act(conn)`` after its CONNECT.
-    Keeps when each connection came and whether the client hung up on it."""
-
-    def __init__(self, name: str, act: Callable[[socket.socket], None]) -> None:
-        self.name, self._act = name, act
-        self._server = socket.create_server(("127.0.0.1", 0))
-        self.port: int = self._server.getsockname()[1]
-        self.connections: list[float] = []  # monotonic times
-        self.hung_up = 0  # connections the client closed while the broker still sent
-        self._lock = threading.Lock()
-        self._stop = threading.Event()
-        self._threads = [threading.Thread(target=self._accept, daemon=True)]
-        self._threads[0].start()
-
-    def _accept(self) -> None:
-        self._server.settimeout(0.2)
-        while not self._stop.is_set():
-            try:
-                conn, _ = self._server.accept()
-            except TimeoutError:
-                continue
-            except OSError:
-                return
-            with self._lock:
-                self.connections.append(time.monotonic())
-            worker = threading.Thread(target=self._serve, args=(conn,), daemon=True)
-            self._threads.append(worker)
-            worker.start()
-
-    def _serve(self, conn: socket.socket) -> None:
-        with conn:
-            conn.settimeout(10)
-            try:
-                read_packet(conn)  # the CONNECT
-                self._act(conn)
-            except (ConnectionError, BrokenPipeError):
-                with self._lock:
-                    self.hung_up += 1
-            except OSError:
-                pass
-
-    @property
-    def stopping(self) -> bool:
-        return self._stop.is_set()
-
-    def count(self) -> tuple[int, int]:
-        with self._lock:
-            return len(self.connections), self.hung_up
-
-    def close(self) -> None:
-        self._stop.set()
-        self._server.close()
-        for thread in self._threads:
-            thread.join(5)
-
-
-def read_packet(conn: socket.socket) -> bytes:
-    header = conn.recv(1)
-    if not header:
-        raise ConnectionError("closed")
-    length, shift = 0, 0
-    while True:
-        byte = conn.recv(1)
-        if not byte:
-            raise ConnectionError("closed")
-        length += (byte[0] & 0x7F) << shift
-        shift += 7
-        if not byte[0] & 0x80:
-            break
-    body = b""
-    while len(body) < length:
-        chunk = conn.recv(length - len(body))
-        if not chunk:
-            raise ConnectionError("closed")
-        body += chunk
-    return header + body
-
-
-def streaming(
-    first: bytes, then: Callable[[int], bytes]
-) -> Callable[[HostileBroker], Callable[[socket.socket], None]]:
-    """A broker that sends ``first`` and then ``then(n)`` for n = 0, 1, … until the client
-    hangs up (a ConnectionError: counted) or the test ends."""
-
-    def make(broker: HostileBroker) -> Callable[[socket.socket], None]:
-        def act(conn: socket.socket) -> None:
-            conn.sendall(first)
-            n = 0
-            while not broker.stopping:
-                conn.sendall(then(n))
-                n += 1
-
-        return act
-
-    return make
-
-
-def silent(broker: HostileBroker) -> Callable[[socket.socket], None]:
-    """CONNACK, then nothing: what the client sends is read and never answered."""
-
-    def act(conn: socket.socket) -> None:
-        conn.sendall(CONNACK)
-        conn.settimeout(0.2)
-        while not broker.stopping:
-            with contextlib.suppress(TimeoutError):
-                if not conn.recv(65536):
-                    raise ConnectionError("the client hung up")
-
-    return act
-
-
-JUNK = bytes(range(256)) * 256  # 64 KiB, every byte value
-STORM = bytes((0x40, 2, 0x12, 0x34)) * 16_384  # 16,384 PUBACKs of a message never sent
-
-#: What the watch says of each, in its one line.
-SAYS = {
-    "a 256 MB CONNACK": "broke the protocol (it announced a CONNACK of 268,435,455 bytes",
-    "a CONNACK, then junk": "broke the protocol (it sent ",
-    "a CONNACK, then a PUBACK storm": "broke the protocol (it acknowledged ",
-    "a CONNACK, then silence": "stopped answering (no reply to a ping in 2 s)",
-}
-HOSTILE = {
-    "a 256 MB CONNACK": streaming(HUGE_CONNACK, lambda n: bytes(65_536)),
-    "a CONNACK, then junk": streaming(CONNACK, lambda n: JUNK[n % 256 :] + JUNK[: n % 256]),
-    "a CONNACK, then a PUBACK storm": streaming(CONNACK, lambda n: STORM),
-    "a CONNACK, then silence": silent,
-}
-
-
 @pytest.fixture
 def hostile(request: pytest.FixtureRequest) -> Iterator[HostileBroker]:
-    holder: list[Callable[[socket.socket], None]] = []
-    broker = HostileBroker(request.param, lambda conn: holder[0](conn))
-    holder.append(HOSTILE[request.param](broker))
+    broker = hostile_broker(request.param)
     try:
         yield broker
     finally:

@@ -43,7 +43,7 @@ running = running
 BROKER_HOST = SIM_HOST  # A's address on the veth
 LISTENER = (sys.executable, str(Path(__file__).resolve().parent / "mqtt_broker.py"))
 STATUS, I1 = "plant/sim/status", "plant/sim/I1"
-LOST, BACK = "lost the MQTT broker", "the MQTT broker is back"
+LOST, BACK = "stopped answering (no reply to a ping in 15 s)", "the MQTT broker is back"
 SIMULATOR = re.compile(r"built-in RC8 simulator.*\(at 127\.0\.0\.1:(\d+)\)")
 #: Seconds for anything that takes no network timeout (a start, lines of a 0.1 s watch).
 QUICK = 60.0
