@@ -84,6 +84,7 @@ def test_the_watched_numbers_are_scraped_with_their_fields_and_counters(
     assert got["rac_connected", labels(target="sim")] == 1.0
     assert ("rac_poll_cycle_seconds", labels(target="sim")) in got
     assert ("rac_rtt_seconds", labels(target="sim")) in got
+    assert got["rac_poll_interval_seconds", labels(target="sim")] == 0.1
     ok = got["rac_reads_total", labels(target="sim", result="ok")]
     assert ok >= 3 and got["rac_reads_total", labels(target="sim", result="no_reply")] == 0
     # The counter counts on: a later page (made at most once a second) has more.

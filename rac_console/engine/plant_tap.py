@@ -152,6 +152,7 @@ class PlantTap:
                     status.rtt,
                     status.cycle_seconds,
                     status.reads,
+                    status.interval,
                 ),
             )
 

@@ -8,6 +8,7 @@ serves the text format, or OpenMetrics when the scraper asks for it.
     rac_read_ok{target, variable}                1 when the variable's last read succeeded
     rac_reads_total{target, result}              reads: ok, error (the controller said no), no_reply
     rac_poll_cycle_seconds{target}               the last poll cycle's length
+    rac_poll_interval_seconds{target}            the interval asked for (0: flat out)
     rac_rtt_seconds{target}                      the last round trip
     rac_connected{target}                        1 while the session is up
 
@@ -40,6 +41,7 @@ class TargetFigures:
     rtt: float | None
     cycle_seconds: float | None
     reads: tuple[int, int, int]  # ok, error, no_reply
+    interval: float | None = None  # the poll interval asked for
 
 
 class MetricsBoard:
@@ -99,6 +101,11 @@ class MetricsBoard:
         cycle = GaugeMetricFamily(
             "rac_poll_cycle_seconds", "The last poll cycle's length", labels=("target",)
         )
+        interval = GaugeMetricFamily(
+            "rac_poll_interval_seconds",
+            "The poll interval asked for (0: as fast as the controller answers)",
+            labels=("target",),
+        )
         rtt = GaugeMetricFamily("rac_rtt_seconds", "The last round trip", labels=("target",))
         connected = GaugeMetricFamily(
             "rac_connected", "1 while the session to the controller is up", labels=("target",)
@@ -109,10 +116,12 @@ class MetricsBoard:
                 reads.add_metric((target, result), count)
             if figure.cycle_seconds is not None:
                 cycle.add_metric((target,), figure.cycle_seconds)
+            if figure.interval is not None:
+                interval.add_metric((target,), figure.interval)
             if figure.rtt is not None:
                 rtt.add_metric((target,), figure.rtt)
             connected.add_metric((target,), 1.0 if figure.connected else 0.0)
-        yield from (value, read_ok, reads, cycle, rtt, connected)
+        yield from (value, read_ok, reads, cycle, interval, rtt, connected)
 
 
 def _safe(text: str) -> str:
