@@ -169,3 +169,30 @@ async def test_a_password_typed_in_a_publish_line_is_refused_and_kept_nowhere(
     assert "publishing" not in out
     history = (tmp_path / "history").read_text(encoding="utf-8")
     assert "get I 1" in history and "s3cret" not in history
+
+
+def test_every_state_of_the_feed_has_a_badge_and_trouble_looks_like_trouble() -> None:
+    from rac_console.plant.mqtt import STATES, TROUBLE
+    from rac_console.present.status import ALARM_STYLE, MQTT_BADGES
+
+    assert set(MQTT_BADGES) == set(STATES)
+    for state in TROUBLE:
+        assert MQTT_BADGES[state][1] is ALARM_STYLE, state
+
+
+async def test_a_broker_that_breaks_the_protocol_turns_the_badge_red(tmp_path: Path) -> None:
+    from hostile_broker import hostile_broker
+
+    hostile = hostile_broker("a 256 MB CONNACK")
+    app = make_app(tmp_path)
+    try:
+        async with app.run_test(size=(120, 40)) as pilot:
+            await type_line(pilot, "watch I 1")
+            await type_line(pilot, f"publish mqtt://127.0.0.1:{hostile.port}/plant")
+            await until(
+                pilot, lambda: "MQTT BROKEN" in app.status_bar.line.plain, "the MQTT BROKEN badge"
+            )
+            await until(pilot, lambda: "broke the protocol" in results_text(app), "the one line")
+            await type_line(pilot, "publish off")
+    finally:
+        hostile.close()

@@ -55,6 +55,9 @@ CONNECT_TIMEOUT = 5.0
 ONLINE, OFFLINE = b"online", b"offline"
 #: Seconds between two messages of one topic, at least (the latest reading goes).
 EVERY = 0.1
+#: What :attr:`MqttFeed.state` can be; the trouble among them, said in one line each.
+TROUBLE = ("away", "silent", "refused", "broken", "tls", "stopped")
+STATES = ("connected", "connecting", *TROUBLE)
 
 
 class Reading(Protocol):
@@ -190,8 +193,10 @@ class MqttFeed:
 
     @property
     def state(self) -> str:
-        """``connected``; ``connecting`` (not yet, nothing wrong said); the trouble said
-        (``away``, ``refused``, ``silent``); or ``stopped`` (it cannot go on)."""
+        """One of :data:`STATES`: ``connected``; ``connecting`` (not yet, nothing wrong
+        said); the trouble said (``away``, ``silent``: no MQTT there, ``refused``,
+        ``broken``: it broke the protocol, ``tls``: no handshake or a certificate that does
+        not verify); or ``stopped`` (it cannot go on)."""
         if self._dead:
             return "stopped"
         if self._connected:

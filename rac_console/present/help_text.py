@@ -148,7 +148,9 @@ STATUS_FIGURES: tuple[HelpEntry, ...] = (
     HelpEntry(
         " MQTT LOST ",
         "the broker went away (or NO BROKER: nothing answers MQTT there; REFUSED: it "
-        "refused us): polling goes on, the latest values go out when it is back",
+        "refused us; BROKEN: it broke the protocol and was dropped; TLS: no TLS handshake "
+        "or a certificate that does not verify): polling goes on, the latest values go "
+        "out when it is back",
     ),
     HelpEntry(
         " Esc cancels: LINE (N s) ",

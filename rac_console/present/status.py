@@ -233,6 +233,8 @@ MQTT_BADGES = {
     "away": ("MQTT LOST", ALARM_STYLE),
     "silent": ("MQTT NO BROKER", ALARM_STYLE),
     "refused": ("MQTT REFUSED", ALARM_STYLE),
+    "broken": ("MQTT BROKEN", ALARM_STYLE),
+    "tls": ("MQTT TLS", ALARM_STYLE),
     "stopped": ("MQTT STOPPED", ALARM_STYLE),
 }
 
