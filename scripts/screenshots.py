@@ -131,6 +131,17 @@ PLANT_SCENES = {
 }
 
 
+#: The console publishing to a broker that announces a 256 MB CONNACK (the tests' own,
+#: tests/hostile_broker.py): dropped in one line, the badge red, polling going on.
+HOSTILE_SCENES = {
+    "plant-hostile-120x40": (
+        (120, 40),
+        ["watch P 0 current pose", "watch IO 128-131", "watch I 0 cycle"],
+        "",
+    ),
+}
+
+
 @contextlib.contextmanager
 def mosquitto() -> Iterator[int | None]:
     """The benchmark's broker (benchmarks/plant_publish.py) on a free port; None when
@@ -225,6 +236,19 @@ async def main(only: list[str]) -> None:
                 address = parse_mqtt_address(f"mqtt://127.0.0.1:{port}/line2")
                 engine = Engine(None, interval=0.2, cycles=True, publish=address)
                 await take(name, size, lines, typed, engine=engine)
+    for name, (size, lines, typed) in HOSTILE_SCENES.items():
+        if not wanted(name):
+            continue
+        sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tests"))
+        from hostile_broker import hostile_broker
+
+        hostile = hostile_broker("a 256 MB CONNACK")
+        try:
+            address = parse_mqtt_address(f"mqtt://127.0.0.1:{hostile.port}/line2")
+            engine = Engine(None, interval=0.2, cycles=True, publish=address)
+            await take(name, size, lines, typed, engine=engine)
+        finally:
+            hostile.close()
     for name, (size, lines, keys) in CELL_SCENES.items():
         if wanted(name):
             with SimulatedCellThread(2) as sims:

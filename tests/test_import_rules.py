@@ -38,6 +38,7 @@ SOCKET_OWNERS = {
     "sim/server.py",  # the simulator's server: its listener and accept loop,
     "sim/session.py",  # each connection,
     "sim/lane.py",  # and the epoll lane that serves connections on Linux
+    "plant/metrics_server.py",  # /metrics: its listener and connections, on one thread
 }
 SOCKET_CALLS = {
     "create_connection",

@@ -447,9 +447,6 @@ _KEEPALIVE_TIMEOUT = 0x8D
 
 
 def _reason(failure: OSError) -> str:
-    """``Connection refused``, ``host not found``: the OS's words for a failed connect."""
-    import socket
-
-    if isinstance(failure, socket.gaierror):
-        return "host not found"
+    """``Connection refused``, ``Name or service not known``: the OS's words for a
+    failed connect (the sockets are paho's: this module touches none)."""
     return failure.strerror or str(failure) or type(failure).__name__
