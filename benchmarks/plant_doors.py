@@ -26,6 +26,7 @@ This checkout's watch reads ``[mqtt] keepalive = 2`` (the silent broker is found
 from __future__ import annotations
 
 import argparse
+import itertools
 import json
 import os
 import resource
@@ -139,7 +140,7 @@ class Watch:
         with self._lock:
             seen = self.times[max(0, start - 1) :]
         peak, threads = self.proc("VmHWM") / 1024, self.proc("Threads")
-        gaps = [b[0] - a[0] for a, b in zip(seen, seen[1:], strict=False)]
+        gaps = [b[0] - a[0] for a, b in itertools.pairwise(seen)]
         span = seen[-1][0] - seen[0][0] if len(seen) > 1 else 0.0
         cycles = seen[-1][1] - seen[0][1] if len(seen) > 1 else 0
         return Figures(
