@@ -13,9 +13,12 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 from rich.cells import cell_len
+from rich.segment import Segment
+from rich.style import Style
 from textual import _time
 from textual.binding import Binding
 from textual.dom import DOMNode
+from textual.strip import Strip
 from textual.widget import Widget
 from textual.widgets import Footer, Input, Log, RichLog
 from textual.widgets._footer import FooterKey
@@ -94,6 +97,26 @@ class InlineWidthLog(Log):
     def lines_width(self, lines: list[str]) -> int:
         """The widest of ``lines`` in cells."""
         return max(cell_len(line) for line in lines)
+
+    def _render_line(self, y: int, scroll_x: int, width: int) -> Strip:
+        """Log's line, cropped to the view, with "…" where it goes on past either
+        edge: a frame cut at the right must not end in a number that reads as whole
+        (``… 0.`` for ``0.30 ms``). Textual's private ``Log._render_line`` (8.2.8)."""
+        strip: Strip = super()._render_line(y, scroll_x, width)
+        drawn, width = width, min(width, self.scrollable_content_region.width or width)
+        if y >= len(self._lines) or width < 2:
+            return strip
+        full = self._render_line_strip(y, self.rich_style).cell_length
+        cut_right, cut_left = full > scroll_x + width, scroll_x > 0 and full > 0
+        if not (cut_right or cut_left):
+            return strip
+        mark = Strip([Segment("…", self.rich_style + Style(dim=True))], 1)
+        start, end = (1 if cut_left else 0), (width - 1 if cut_right else width)
+        parts = [mark] if cut_left else []
+        parts.append(strip.crop(start, end))
+        if cut_right:
+            parts.append(mark)
+        return Strip.join(parts).extend_cell_length(drawn, self.rich_style)
 
     def _update_size(self, updates: int, lines: list[str]) -> None:  # type: ignore[override]
         if lines:

@@ -1,6 +1,7 @@
 """The results pane: each command as typed and what came of it, wrapped to the width.
 
-Textual's RichLog wraps a line once, for the width it has when the line is written: after
+Textual's RichLog wraps a line once, for the width it has when the line is written (and
+never narrower than its ``min_width``, 78 unless told: set to 1 here): after
 the terminal narrowed, lines were cut at the right and a scrollbar hid the last one; after
 it widened, short lines stayed broken. This one keeps what it was given (as many entries
 as it shows lines) and writes them again, wrapped anew, when its width changes.
@@ -25,7 +26,16 @@ class ResultsLog(RichLog):
     """Written to with :meth:`write` (plain Rich renderables, never markup)."""
 
     def __init__(self, **kwargs: str | None) -> None:
-        super().__init__(max_lines=MAX_LINES, wrap=True, markup=False, highlight=False, **kwargs)  # type: ignore[arg-type]
+        # min_width: RichLog renders at 78 cells at least, which at 80 columns put the
+        # last character of a wrapped line under the scrollbar ("J3 3." for "J3 3.5").
+        super().__init__(
+            max_lines=MAX_LINES,
+            wrap=True,
+            markup=False,
+            highlight=False,
+            min_width=1,
+            **kwargs,  # type: ignore[arg-type]
+        )
         self._entries: deque[RenderableType] = deque(maxlen=MAX_LINES)
         self._wrapped_for = 0  # the width the lines were wrapped for
         self._waiting = 0  # entries written before the first size: RichLog writes them again
