@@ -132,10 +132,10 @@ def test_strings_in_results_show_empty_and_spaces(env: dict[str, str]) -> None: 
     assert 'read back "say \\"hi\\"" ✓' in lines[4], lines
 
 
-# ------------------------------------- the README's profile example works as printed
+# ------------------------- the profile example (docs/targets.md) works as printed
 
 
-README = Path(__file__).resolve().parent.parent / "README.md"
+PROFILES_DOC = Path(__file__).resolve().parent.parent / "docs" / "targets.md"
 
 
 @pytest.mark.slow
@@ -148,10 +148,10 @@ def test_the_readmes_simulator_profile_works_as_printed(
     from rac_console.commands.profiles import parse_config
     from rac_console.sim.thread import SimulatorThread
 
-    text = README.read_text(encoding="utf-8")
+    text = PROFILES_DOC.read_text(encoding="utf-8")
     block = text.split("```toml\n[target.bench]\n", 1)[1].split("```", 1)[0]
     example = "[target.bench]\n" + block
-    bench = parse_config(tomllib.loads(example), "README").profiles["bench"]
+    bench = parse_config(tomllib.loads(example), "docs/targets.md").profiles["bench"]
     assert bench.policy.allow is not None
     with SimulatorThread() as sim:
         config(example.replace("port = 5007", f"port = {sim.port}"))

@@ -230,9 +230,9 @@ def test_the_readmes_plant_config_parses_as_printed() -> None:
     import tomllib
     from pathlib import Path
 
-    readme = (Path(__file__).resolve().parent.parent / "README.md").read_text(encoding="utf-8")
-    example = "[mqtt]\n" + readme.split("```toml\n[mqtt]\n", 1)[1].split("```", 1)[0]
-    parsed = parse_config(tomllib.loads(example), "README")
+    doc = (Path(__file__).resolve().parent.parent / "docs" / "plant.md").read_text("utf-8")
+    example = "[mqtt]\n" + doc.split("```toml\n[mqtt]\n", 1)[1].split("```", 1)[0]
+    parsed = parse_config(tomllib.loads(example), "docs/plant.md")
     assert parsed.mqtt.username == "rac-cell3" and parsed.mqtt.ca_file is not None
     assert parsed.profiles["cell3"].publish == "mqtts://broker.plant:8883/line2"
     assert parsed.cells["line2"].publish == "mqtt://broker.plant:1883/line2"

@@ -1,5 +1,5 @@
 """What differs on Windows, checked where it can be on any system (issue 21): the extra
-that has no Windows build, and the paths the README gives."""
+that has no Windows build, and the paths docs/windows.md gives."""
 
 from __future__ import annotations
 
@@ -29,10 +29,10 @@ def test_paths_says_where_the_config_is_as_the_readme_does(env: dict[str, str]) 
     result = cli(env, "paths")
     assert result.returncode == 0, result.stderr
     config = result.stdout.splitlines()[0]
-    readme = (ROOT / "README.md").read_text(encoding="utf-8")
+    doc = (ROOT / "docs" / "windows.md").read_text(encoding="utf-8")
+    assert "%LOCALAPPDATA%\\rac-console\\rac-console\\config.toml" in doc
     if sys.platform == "win32":
         assert "rac-console\\rac-console\\config.toml" in config, config
-        assert "%LOCALAPPDATA%\\rac-console\\rac-console\\" in readme
     else:
         assert config.endswith("rac-console/config.toml, not there yet"), config
         assert env["XDG_CONFIG_HOME"] in config or sys.platform == "darwin"
