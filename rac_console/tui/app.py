@@ -318,6 +318,9 @@ class RacConsoleApp(CellMembers, PaletteActions, TableActions, LogActions, App[i
         for outbox in self.cell.outboxes:  # before the engines publish anything
             outbox.notify = self._wake
         self.show_prompt()
+        # Focused before the first paint: a key typed as soon as the screen shows acts
+        # (Up recalls, Enter submits: the cell keeps the line until the engine runs).
+        self.command_line.focus()
         if not self.is_headless:
             self._watch_terminal()
             # The first paint names the target ("connecting…") at once; the engine, and
