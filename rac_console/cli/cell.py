@@ -10,6 +10,7 @@ from __future__ import annotations
 import argparse
 import atexit
 import sys
+from collections.abc import Callable
 from typing import TYPE_CHECKING
 
 from ..commands.cells import DEMO_CELL, not_open, split_hosts
@@ -67,6 +68,45 @@ def pick_member(args: argparse.Namespace) -> str | None:
     args.target, args.cell_targets = found, None
     args.host, args.port, args.read_only = found.host, found.port, found.read_only
     return name
+
+
+def words_by_member(
+    words: list[str], args: argparse.Namespace
+) -> tuple[list[str], dict[str, list[str]]]:
+    """``watch IO 128 @robotA I 10 @robotB IO 64``: the words for every target (before
+    any ``@NAME``), and each named target's own, by its name as the cell writes it.
+    InputError for a name the cell does not hold, or ``@NAME`` with no cell open."""
+    members = getattr(args, "cell_targets", None)
+    names = [name for name, _ in members] if members else []
+    common: list[str] = []
+    own: dict[str, list[str]] = {}
+    current = common
+    for word in words:
+        if not word.startswith("@"):
+            current.append(word)
+            continue
+        if not names:
+            raise InputError(
+                f"{word} names a target of a cell: open one with --cell NAME or -H a,b"
+            )
+        name = find_name(names, word[1:])
+        if name is None:
+            raise not_open(word[1:], names)
+        current = own.setdefault(name, [])
+    return common, own
+
+
+def each_member(args: argparse.Namespace, run: Callable[[argparse.Namespace], int]) -> int:
+    """``check`` and ``latency`` on a cell: each target in turn, its name first (a line
+    on stdout, or ``"target"`` in each JSON object); the worst status."""
+    worst = 0
+    for name, target in args.cell_targets:
+        args.target, args.member_name = target, name
+        args.host, args.port, args.read_only = target.host, target.port, target.read_only
+        if not args.json:
+            print(f"{name}:", flush=True)
+        worst = max(worst, int(run(args)))
+    return worst
 
 
 def _members(args: argparse.Namespace) -> Members | None:

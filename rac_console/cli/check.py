@@ -80,6 +80,8 @@ def _show(
 ) -> None:
     if args.json:
         data = report_json(report, profile, simulator, no_profile)
+        if (name := getattr(args, "member_name", None)) is not None:
+            data = {"target": name} | data
         sys.stdout.write(json.dumps(data) + "\n")
         sys.stdout.flush()
         return

@@ -14,7 +14,7 @@ from __future__ import annotations
 import argparse
 import json
 import threading
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from typing import Any
 
 from ..commands.argv import exchange_from_words, input_line
@@ -46,7 +46,7 @@ from ..engine.where import Where
 from ..present.render import error_text, outcome_text, print_error
 from ..protocol import InputError, hresult_name
 from ..session import BadReply, ConnectFailed, RequestTimeout
-from .cell import pick_member
+from .cell import pick_member, words_by_member
 from .oneshot import Output
 from .pipes import reader_gone, stderr_may_close, write_line
 
@@ -79,9 +79,11 @@ def run_live(
     until_ctrl_c: bool,
     line: str | None = None,
     log_csv: str | None = None,
+    by_member: Mapping[str, tuple[VarRef, ...]] | None = None,
 ) -> ExitStatus:
     """``count`` cycles (None: without end) of ``variables``, ``interval`` apart, by an
-    engine's poller; each shown as it ends.
+    engine's poller; each shown as it ends. In a cell, ``by_member`` adds each target's
+    own (``watch @robotA IO 128``); a target with none is not polled.
 
     The status is the worst one seen. A closed stdout ends it quietly; Ctrl-C ends it
     the same way when ``until_ctrl_c`` (the usual end of a watch), else it goes on up
@@ -106,9 +108,11 @@ def run_live(
     except InputError as exc:  # --record cannot open its file
         print_error(output.err, str(exc))
         return ExitStatus.REFUSED
+    own = by_member or {}
     runs = [
-        _LiveRun(m.engine, None if cell.single else m.name, output, variables, show, line)
+        _LiveRun(m.engine, None if cell.single else m.name, output, watched, show, line)
         for m in cell.members
+        if (watched := tuple(dict.fromkeys((*variables, *own.get(m.name, ()))))) or not own
     ]
     cell.start(connect=False)
 
@@ -309,7 +313,11 @@ def watch(args: argparse.Namespace) -> ExitStatus:
     """
     output = Output(args.json)
     try:
-        variables = tuple(dict.fromkeys(watch_variables(args.variables)))
+        common, named = words_by_member(args.variables, args)
+        variables = tuple(dict.fromkeys(watch_variables(common))) if common else ()
+        by_member = {name: watch_variables(words) for name, words in named.items()}
+        if not variables and not any(by_member.values()):
+            raise InputError(f"missing variable: {WATCH_USAGE}")
     except InputError as exc:
         print_error(output.err, str(exc))
         return ExitStatus.REFUSED
@@ -337,6 +345,7 @@ def watch(args: argparse.Namespace) -> ExitStatus:
         interval=_every(args),
         until_ctrl_c=True,
         log_csv=args.log_csv,
+        by_member=by_member,
     )
 
 

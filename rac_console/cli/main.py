@@ -70,11 +70,13 @@ def _dispatch(args: argparse.Namespace) -> int:
             if not settle_plant(args):
                 return 2
         if in_cell and args.command in ("latency", "check"):
-            print(
-                f"rac-console: {args.command} measures one target: name it with -H NAME",
-                file=sys.stderr,
-            )
-            return 2
+            from .cell import each_member
+
+            if args.command == "latency":
+                from .oneshot import latency as measure
+            else:
+                from .check import check as measure
+            return each_member(args, measure)
     if args.command == "get" and (args.repeat, args.repeat_interval) != (None, None):
         from .live import repeat_get
 

@@ -334,7 +334,10 @@ def latency(args: argparse.Namespace) -> ExitStatus:
                 print_error(output.err, item.text)
         return ExitStatus.TRANSPORT
     if args.json:
-        sys.stdout.write(json.dumps(measured.summary.to_json()) + "\n")
+        data = measured.summary.to_json()
+        if (name := getattr(args, "member_name", None)) is not None:
+            data = {"target": name} | data
+        sys.stdout.write(json.dumps(data) + "\n")
     else:
         output.out.print(notice_text(measured.text))
     return output.status(ExitStatus.OK if measured.summary.count else ExitStatus.TRANSPORT)

@@ -29,6 +29,7 @@ from .options import (
     seconds_of,
     watch_options,
 )
+from .parse_errors import RacParser
 
 __all__ = ["ONE_SHOT", "CliParser", "build_cli", "build_parser"]
 
@@ -53,7 +54,7 @@ def build_parser() -> argparse.ArgumentParser:
 def build_cli(commands: bool = True) -> CliParser:
     """The grammar; without ``commands``, only what comes before a command word (the
     console started with no words parses nothing more, and its start is timed)."""
-    parser = argparse.ArgumentParser(
+    parser = RacParser(
         prog="rac-console",
         description=DESCRIPTION,
         epilog=EPILOG,
