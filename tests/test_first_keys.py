@@ -1,9 +1,10 @@
-"""Keys typed as soon as the console has painted act: the real console in tmux (a
+"""The console as it starts in a real terminal. Keys typed as soon as it has painted act: tmux (a
 terminal: the engine starts after the first paint only there), keys sent the moment
 the first screen shows, before the engine has started."""
 
 from __future__ import annotations
 
+import sys
 import time
 from pathlib import Path
 
@@ -30,3 +31,18 @@ def test_up_and_enter_at_the_first_paint_run_and_lines_typed_ahead_follow(
     screen = terminal.until("I3 = ")
     assert "I2 = " in screen, screen
     assert screen.index("I2 = ") < screen.index("I3 = ")
+
+
+def test_the_demo_cell_opens_watching_its_handshake_and_says_its_targets_are_simulators(
+    terminal: Terminal,
+) -> None:
+    command = f"{sys.executable} -m rac_console --cell demo"
+    terminal.tmux("new-session", "-d", "-s", "t", "-x", "120", "-y", "40", command)
+    screen = terminal.until("are simulators")
+    assert "robotA and robotB are simulators playing a handshake, not controllers" in screen
+    end = time.monotonic() + DEADLINE
+    while "Watch  2 rows" not in (screen := terminal.screen()):
+        assert time.monotonic() < end, f"the handshake not watched:\n{screen}"
+        time.sleep(0.1)
+    table = screen.split("Frames")[0]
+    assert "IO128" in table and "part placed" in table and "IO64" in table

@@ -165,20 +165,31 @@ def _named(typed: str, target: Target) -> tuple[str, Target]:
 
 
 def _demo(args: argparse.Namespace) -> Members:
+    """Simulators playing a handshake, said to be simulators (on stderr; the console
+    under its banner), and the handshake watched from the start."""
     from ..commands.target import Target
-    from ..sim.cell import SimulatedCellThread
+    from ..sim.cell import DEMO_WATCH, SimulatedCellThread
 
     simulated = SimulatedCellThread(DEMO_TARGETS).start()
     atexit.register(simulated.stop)
     if args.command is not None:
+        names = " and ".join(name for name, _, _ in simulated.cell.addresses)
         print(
-            "rac-console: --cell demo: simulators playing a handshake, not controllers",
+            f"rac-console: --cell demo: {names} are simulators playing a handshake, not "
+            "controllers",
             file=sys.stderr,
         )
+    args.cell_watch = DEMO_WATCH
     return [
         (
             name,
-            Target(host, port, read_only=bool(args.read_only), read_only_flag=bool(args.read_only)),
+            Target(
+                host,
+                port,
+                read_only=bool(args.read_only),
+                read_only_flag=bool(args.read_only),
+                simulated=True,  # the console says so under its banner
+            ),
         )
         for name, host, port in simulated.cell.addresses
     ]

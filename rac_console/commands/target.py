@@ -39,6 +39,8 @@ class Target:
     unreachable_hint: str | None = None
     #: Said once: profiles whose host could not be resolved, matched by text only.
     notices: tuple[str, ...] = ()
+    #: A simulator this program started (``--cell demo``), at a real address.
+    simulated: bool = False
 
     @property
     def writes(self) -> WritesShown:

@@ -40,3 +40,14 @@ def cell_banner(names: Sequence[str], next_key: str) -> Text:
         f"{next_key}) changes the current one.",
         style="bold",
     )
+
+
+def simulated_banner(names: Sequence[str]) -> Text:
+    """Targets that are simulators this program started (``--cell demo``): said under
+    the cell's banner, so that no one takes their values for a robot's."""
+    shown = terminal_safe(" and ".join(names))
+    verb = "is a simulator" if len(names) == 1 else "are simulators"
+    return Text.assemble(
+        ("SIMULATOR", "bold black on yellow"),
+        f" {shown} {verb} playing a handshake, not controllers (--cell demo).",
+    )

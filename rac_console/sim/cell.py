@@ -22,6 +22,8 @@ from .thread import LoopThread
 NAMES = tuple(f"robot{letter}" for letter in "ABCDEFGH")
 PART_PLACED = ("IO", 128)  # robotA's output
 GO = ("IO", 64)  # robotB's answer
+#: What ``--cell demo`` watches from the start: the handshake, each on its robot.
+DEMO_WATCH = (f"{NAMES[0]} IO 128 part placed", f"{NAMES[1]} IO 64 go")
 CYCLE = 4.0
 HOLD = 1.5
 REACTION = 0.35

@@ -405,7 +405,7 @@ class RacConsoleApp(CellMembers, PaletteActions, TableActions, LogActions, App[i
 
     def _welcome(self) -> None:
         from ..engine import SIMULATOR_NOTICE
-        from ..present.banner import cell_banner, live_banner
+        from ..present.banner import cell_banner, live_banner, simulated_banner
         from .help_screen import key_of
 
         results = self.results
@@ -413,6 +413,9 @@ class RacConsoleApp(CellMembers, PaletteActions, TableActions, LogActions, App[i
         if self.cell_mode:
             key = key_of(type(self), "next_target") or "F8"
             results.write(cell_banner(self.cell.names, key))
+            simulated = [m.name for m in self.cell.members if m.target.simulated]
+            if simulated:
+                results.write(simulated_banner(simulated))
         elif status is not None and status.is_simulator:
             results.write(
                 Text.assemble(
