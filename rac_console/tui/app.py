@@ -52,7 +52,7 @@ from .results import ResultsLog
 from .row_detail import RowDetail
 from .settings import SettingsKeeper
 from .status_bar import StatusBar
-from .table_actions import TableActions, toggle
+from .table_actions import TableActions, placeholder_for, toggle
 from .trend_view import TrendView
 from .watch_table import TableFilter, WatchTable, writes_refused
 
@@ -255,7 +255,7 @@ class RacConsoleApp(CellMembers, PaletteActions, TableActions, LogActions, App[i
             self.history,
             self._completion_indices,
             id="command",
-            placeholder="get P 1 · put IO 20 on · watch IO 0-7 · help",
+            placeholder=placeholder_for(None),
         )
         self.command_line.targets = tuple(connect_targets(self.engine.profiles))
         self.command_line.cell = tuple(cell_targets(self.cell))  # none for one target

@@ -30,9 +30,18 @@ if TYPE_CHECKING:
     from ..engine.status import Status
     from .host import ConsoleHost
 
-#: The command line's placeholder: examples that work on the target.
+#: The command line's placeholder: examples that work on the target. A write is
+#: suggested on the built-in simulator only: on a controller, the first thing a newcomer
+#: reads is a read.
 PLACEHOLDER = "get P 1 · put IO 20 on · watch IO 0-7 · help"
 READ_ONLY_PLACEHOLDER = "get P 1 · watch IO 0-7 · help"
+
+
+def placeholder_for(status: Status | None) -> str:
+    """The examples for this target (the reads alone until its status is known)."""
+    if status is None or writes_refused(status) or not status.is_simulator:
+        return READ_ONLY_PLACEHOLDER
+    return PLACEHOLDER
 
 
 class TableActions:
@@ -41,9 +50,7 @@ class TableActions:
     def follow_status(self: ConsoleHost, old: Status | None, new: Status) -> None:
         """A new status: the command line's examples follow it (the footer's keys
         follow it by the app's ``sync_bindings``)."""
-        self.command_line.placeholder = (
-            READ_ONLY_PLACEHOLDER if writes_refused(new) else PLACEHOLDER
-        )
+        self.command_line.placeholder = placeholder_for(new)
 
     # --------------------------------------------------------------- focus
 

@@ -1,0 +1,47 @@
+"""The first thing a newcomer reads at the command line is a read: the placeholder
+suggests a write (``put IO 20 on``) on the built-in simulator only, never on a live
+controller, a read-only one or a cell's."""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+from pathlib import Path
+
+import pytest
+from tui_helpers import make_app, until
+
+from rac_console.sim.thread import SimulatorThread
+
+
+@pytest.fixture
+def controller() -> Iterator[SimulatorThread]:
+    """A simulator at an address: to the console, a live controller."""
+    with SimulatorThread() as simulator:
+        yield simulator
+
+
+async def placeholder_once_connected(app, size=(100, 30)) -> str:  # type: ignore[no-untyped-def]
+    async with app.run_test(size=size) as pilot:
+        await until(pilot, lambda: "connected" in app.status_bar.line.plain, "connected")
+        await pilot.pause(0.1)
+        return str(app.command_line.placeholder)
+
+
+async def test_on_a_live_controller_the_placeholder_suggests_no_write(
+    tmp_path: Path, controller: SimulatorThread
+) -> None:
+    app = make_app(tmp_path, controller.host, controller.port)
+    shown = await placeholder_once_connected(app)
+    assert "get P 1" in shown and "put" not in shown
+
+
+async def test_on_a_read_only_target_the_placeholder_suggests_no_write(tmp_path: Path) -> None:
+    app = make_app(tmp_path, read_only=True)
+    shown = await placeholder_once_connected(app)
+    assert "get P 1" in shown and "put" not in shown
+
+
+async def test_on_the_built_in_simulator_a_write_is_suggested(tmp_path: Path) -> None:
+    app = make_app(tmp_path)
+    shown = await placeholder_once_connected(app)
+    assert "put IO 20 on" in shown
