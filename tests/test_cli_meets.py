@@ -94,3 +94,22 @@ def test_check_and_latency_on_a_cell_measure_each_target(env: dict[str, str], co
     text = cli(env, "--cell", "demo", command, *extra)
     assert text.returncode == 0, text.stderr
     assert text.stdout.startswith("robotA:\n") and "\nrobotB:\n" in text.stdout
+
+
+def test_a_refused_write_is_never_ticked_though_the_value_read_back_matches(
+    env: dict[str, str], recording: Callable[..., RecordingServer]
+) -> None:
+    """IO 0 is an input: the controller refuses the PUT, and the bit happens to be ON,
+    the value written. No ✓: the value read back is not the write's."""
+
+    def reply(line: bytes) -> bytes:
+        return b"-2147024891\r" if line.startswith(b"PUT") else b"0,11,-1\r"
+
+    server = recording(reply)
+    result = cli(env, *server.args, "put", "IO", "0", "on")
+    assert result.returncode == 1
+    assert "E_ACCESSDENIED" in result.stderr and "read back ON" in result.stderr
+    assert "✓" not in result.stderr + result.stdout
+    assert "the PUT was refused" in result.stderr
+    as_json = cli(env, *server.args, "--json", "put", "IO", "0", "on")
+    assert json.loads(as_json.stdout)["verified"] is False

@@ -187,6 +187,8 @@ def _read_back(session: Session, outcome: Outcome, var: VarRef, written: Variant
     held = after.variant
     checkable = written is not None and held is not None and comparable(var.kind, written)
     verified = same_value(var.kind, written, held) if checkable else None  # type: ignore[arg-type]
+    if outcome.response is not None and not outcome.response.ok:
+        verified = False  # refused: a value that happens to match is not the write's
     outcome = replace(outcome, read_back=held, verified=verified)
     if outcome.ok and verified is False:
         return replace(

@@ -116,7 +116,9 @@ def write_text(var: VarRef, outcome: Outcome) -> Text:
     if outcome.read_back is not None:
         line.append("  read back ")
         line.append_text(value_text(var, outcome.read_back))
-        if outcome.verified is True:
+        if response is not None and not response.ok:
+            line.append(" (the PUT was refused)", style="red")
+        elif outcome.verified is True:
             line.append(" ✓", style="bold green")
         elif outcome.verified is False:
             line.append(" ✗", style="bold red")
