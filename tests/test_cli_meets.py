@@ -113,3 +113,17 @@ def test_a_refused_write_is_never_ticked_though_the_value_read_back_matches(
     assert "the PUT was refused" in result.stderr
     as_json = cli(env, *server.args, "--json", "put", "IO", "0", "on")
     assert json.loads(as_json.stdout)["verified"] is False
+
+
+@pytest.mark.parametrize("command", [("get", "I", "1"), ("watch", "I", "1", "--count", "1")])
+def test_a_connection_that_fails_points_to_check(
+    env: dict[str, str], command: tuple[str, ...]
+) -> None:
+    import socket
+
+    with socket.socket() as unused:  # a port nothing listens on
+        unused.bind(("127.0.0.1", 0))
+        port = unused.getsockname()[1]
+    result = cli(env, "-H", "127.0.0.1", "-p", str(port), *command)
+    assert result.returncode == 3
+    assert f"(rac-console check -H 127.0.0.1 -p {port} says why)" in result.stderr

@@ -45,3 +45,22 @@ async def test_on_the_built_in_simulator_a_write_is_suggested(tmp_path: Path) ->
     app = make_app(tmp_path)
     shown = await placeholder_once_connected(app)
     assert "put IO 20 on" in shown
+
+
+async def test_the_repls_help_speaks_of_the_repl_and_leaving_is_suggested(
+    tmp_path: Path,
+) -> None:
+    from test_repl import Driver
+
+    driver = Driver(tmp_path)
+
+    async def steps(d: Driver) -> None:
+        d.type("help\r")
+        await d.until(lambda out: "raw RAC entry" in out, "the help")
+        d.type("exit\r")
+        await d.until(lambda out: "did you mean quit?" in out, "the suggestion")
+        d.type("q\r")
+        await d.until(lambda out: out.count("did you mean quit?") == 2, "again for q")
+
+    out = await driver.run(steps)
+    assert "live table" not in out and "leave the console" not in out

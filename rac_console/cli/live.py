@@ -29,6 +29,7 @@ from ..commands.language import (
     parse_var_list,
 )
 from ..commands.outcome import ExitStatus, Outcome, refused, worst
+from ..commands.target import Target
 from ..engine import (
     SIMULATOR_NOTICE,
     Alert,
@@ -47,7 +48,7 @@ from ..present.render import error_text, outcome_text, print_error
 from ..protocol import InputError, hresult_name
 from ..session import BadReply, ConnectFailed, RequestTimeout
 from .cell import pick_member, words_by_member
-from .oneshot import Output
+from .oneshot import Output, pointed_to_check
 from .pipes import reader_gone, stderr_may_close, write_line
 
 WATCH_USAGE = "rac-console watch TYPE INDEX [TYPE INDEX|TYPE FIRST-LAST]..., e.g. watch IO 128-135"
@@ -327,8 +328,10 @@ def watch(args: argparse.Namespace) -> ExitStatus:
     # Each variable's failure (by target), said on stderr once.
     reported: dict[tuple[str | None, VarRef], str] = {}
 
+    targets = dict(getattr(args, "cell_targets", None) or [(None, args.target)])
+
     def cycle(name: str | None, number: int, wall: float, results: Results) -> None:
-        _report_failures(output, name, results, reported)
+        _report_failures(output, name, results, reported, targets.get(name))
         started = timestamp(wall)
         if output.as_json:
             data = _cycle_json(number, started, results)
@@ -354,19 +357,21 @@ def _report_failures(
     name: str | None,
     results: dict[VarRef, Outcome | None],
     reported: dict[tuple[str | None, VarRef], str],
+    target: Target | None = None,
 ) -> None:
     """A failure on stderr when it starts or changes, not every cycle (the cycle's
-    line shows it each time)."""
+    line shows it each time); a connection that failed points to ``check``."""
     for var, outcome in results.items():
         if outcome is None:
             continue
         if outcome.ok:
             reported.pop((name, var), None)
             continue
-        message = error_text(outcome, f"{var}: " if name is None else f"{name}.{var}: ")
-        if reported.get((name, var)) != message:
-            reported[name, var] = message
-            print_error(output.err, message)
+        prefix = f"{var}: " if name is None else f"{name}.{var}: "
+        said = error_text(outcome, prefix)
+        if reported.get((name, var)) != said:
+            reported[name, var] = said
+            print_error(output.err, error_text(pointed_to_check(outcome, target), prefix))
 
 
 def _cycle_text(

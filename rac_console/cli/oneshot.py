@@ -33,7 +33,7 @@ from ..present.render import (
     print_outcome,
 )
 from ..protocol import InputError
-from ..session import Session
+from ..session import ConnectFailed, Session
 from .cell import pick_member
 from .target import open_session
 
@@ -120,8 +120,18 @@ def one_command(args: argparse.Namespace) -> ExitStatus:
         outcome = next(r for r in results if isinstance(r, Outcome))  # an exchange has one
     except InputError as exc:
         outcome = refused(line, str(exc))
-    output.show(outcome)
+    output.show(pointed_to_check(outcome, args.target))
     return output.status(outcome.status)
+
+
+def pointed_to_check(outcome: Outcome, target: Target | None) -> Outcome:
+    """A connection that failed says which command finds out why, as the console does
+    (``rac-console check -H HOST says why``); the built-in simulator has no such step."""
+    if not isinstance(outcome.failure, ConnectFailed) or target is None or target.host is None:
+        return outcome
+    from ..commands.check import check_pointer
+
+    return replace(outcome, error=f"{outcome.error} {check_pointer(target.host, target.port)}")
 
 
 def _script_lines(source: str) -> Iterator[str]:

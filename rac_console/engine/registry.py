@@ -135,6 +135,10 @@ class CommandSpec:
         return (self.hint or words_of(self.arguments))(args)
 
 
+#: Words typed for a command that has another name here (suggested, never run).
+_MEANT = {"exit": "quit", "q": "quit", ":q": "quit", "bye": "quit", "?": "help", "h": "help"}
+
+
 def _named(command: Command) -> str | None:
     """The name of a command whose object is shared by several entries (pause and
     resume are one :class:`Simple`; record and transcript one :class:`FrameFile`)."""
@@ -200,7 +204,8 @@ class Registry:
         word, rest = split_word(line.rstrip("\r\n"))
         spec = self._specs.get(word)
         if spec is None:
-            meant = close_match(word, self._specs)
+            meant = _MEANT.get(word.lower()) or close_match(word, self._specs)
+            meant = meant if meant in self._specs else None
             guess = f"did you mean {meant}? " if meant is not None else ""
             raise InputError(
                 f"unknown command {word!r}: {guess}type help for the list, "

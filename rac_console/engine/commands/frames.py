@@ -112,7 +112,9 @@ FILE_SPECS = (
 )
 
 CONSOLE_SPECS = (
-    CommandSpec("clear", "", "clear the frame log", no_argument(Step.CLEAR), run_step),
+    CommandSpec(
+        "clear", "", "clear the frame log (the REPL: the screen)", no_argument(Step.CLEAR), run_step
+    ),
     CommandSpec(
         "help",
         "[COMMAND]",
@@ -123,5 +125,11 @@ CONSOLE_SPECS = (
         complete=_commands,
         types=(Help,),
     ),
-    CommandSpec("quit", "", "leave the console", no_argument(Step.QUIT), run_step),
+    CommandSpec(
+        "quit",
+        "",
+        "leave (Ctrl+Q in the console, Ctrl+D in the REPL)",
+        no_argument(Step.QUIT),
+        run_step,
+    ),
 )

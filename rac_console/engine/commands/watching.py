@@ -201,7 +201,7 @@ SPECS = (
     CommandSpec(
         "watch",
         "TYPE INDEX [LABEL] [every SECONDS]",
-        "add variables to the live table",
+        "add variables to the watch list, polled and shown live",
         parse_watch,
         run_watch,
         "watch IO 128-135",
@@ -215,7 +215,7 @@ SPECS = (
     CommandSpec(
         "unwatch",
         "TYPE INDEX | all",
-        "remove variables from the live table",
+        "remove variables from the watch list",
         parse_unwatch,
         run_unwatch,
         "unwatch P 10",
