@@ -51,10 +51,12 @@ class WatchRow:
         return shown_changed
 
     def fail(self, status: str, now: float) -> bool:
-        """The poll failed: keep the last good value, marked stale. True when what a
-        table shows changed."""
-        shown_changed = self.status != status or not self.stale
-        self.status, self.stale, self.polled_at = status, True, now
+        """The poll failed: keep the last good value, marked stale (a row never read
+        has no value to be stale: it shows the failure alone). True when what a table
+        shows changed."""
+        stale = self.variant is not None
+        shown_changed = self.status != status or self.stale != stale
+        self.status, self.stale, self.polled_at = status, stale, now
         return shown_changed
 
     def view(self) -> RowView:

@@ -7,7 +7,7 @@ from typing import TYPE_CHECKING
 
 from rich.text import Text
 
-from ..engine.status import OK
+from ..engine.status import OK, WAITING
 from ..protocol.text import scalar_text
 from ..protocol.vartypes import vt_name
 
@@ -100,6 +100,8 @@ def status_cell(row: RowView) -> Text:
         return Text("OK", style="green", no_wrap=True)
     if row.stale:
         return Text(f"{row.status} (stale)", style="bold red", no_wrap=True)
+    if row.status != WAITING:  # failed before any value came
+        return Text(row.status, style="bold red", no_wrap=True)
     return Text(row.status, style="dim", no_wrap=True)
 
 
