@@ -18,6 +18,7 @@ from rac_console.commands.plant import parse_metrics_address
 from rac_console.engine import Engine
 from rac_console.plant.metrics import MetricsBoard
 from rac_console.plant.metrics_server import MetricsServer
+from rac_console.protocol import InputError
 
 prometheus = pytest.importorskip("prometheus_client")
 from prometheus_client.openmetrics.parser import (  # noqa: E402
@@ -205,6 +206,52 @@ def test_the_metrics_server_answers_only_what_it_serves(
     assert answer.split(b" ", 2)[1:2] == ([status] if status else [])
     if request_bytes.startswith(b"HEAD"):
         assert answer.endswith(b"\r\n\r\n")  # the head only
+
+
+@pytest.mark.parametrize(
+    "accept",
+    [
+        b"application/openmetrics-text; version=abc",  # prometheus-client's own parser chokes
+        b"text/plain; version=2.\nX-Injected: yes",  # a bare LF inside the header
+        b"application/openmetrics-text; version=1.0.0; x=" + b"y" * 2000,
+    ],
+    ids=["a version that is no number", "a header smuggled in", "a long one"],
+)
+def test_an_odd_accept_header_gets_one_of_two_pages_and_the_server_goes_on(
+    accept: bytes,
+) -> None:
+    server = MetricsServer(parse_metrics_address("127.0.0.1:0"), MetricsBoard())
+    try:
+        odd = raw_request(server.port, b"GET /metrics HTTP/1.1\r\nAccept: " + accept + b"\r\n\r\n")
+        after = raw_request(server.port, b"GET /metrics HTTP/1.1\r\n\r\n")
+    finally:
+        server.stop()
+    head = odd.split(b"\r\n\r\n", 1)[0]
+    assert head.startswith(b"HTTP/1.1 200")
+    assert b"X-Injected" not in head and b"version=abc" not in head and b"yyyy" not in head
+    content_type = next(ln for ln in head.split(b"\r\n") if ln.startswith(b"Content-Type"))
+    assert content_type in (
+        b"Content-Type: text/plain; version=0.0.4; charset=utf-8",
+        b"Content-Type: application/openmetrics-text; version=1.0.0; charset=utf-8",
+    )
+    assert after.startswith(b"HTTP/1.1 200")  # the server is still there
+
+
+def test_any_ipv6_address_takes_ipv4_too_where_the_system_can() -> None:
+    import socket
+
+    if not (socket.has_ipv6 and socket.has_dualstack_ipv6()):
+        pytest.skip("no dual-stack IPv6 here")
+    try:
+        server = MetricsServer(parse_metrics_address("[::]:0"), MetricsBoard())
+    except InputError as exc:
+        pytest.skip(f"cannot bind [::] here: {exc}")
+    try:
+        assert raw_request(server.port, b"GET /metrics HTTP/1.1\r\n\r\n").startswith(
+            b"HTTP/1.1 200"
+        )
+    finally:
+        server.stop()
 
 
 def proc_status(pid: int, field: str) -> int:

@@ -20,10 +20,12 @@ prometheus-client still makes the page (the text format, or OpenMetrics when ask
 from __future__ import annotations
 
 import contextlib
+import errno
 import selectors
 import socket
 import threading
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -32,6 +34,8 @@ from ..protocol import InputError
 from .extras import need
 
 MOST_CONNECTIONS = 256
+#: Seconds the listener rests when the process is out of descriptors (accept fails).
+DESCRIPTORS_REST = 0.5
 HEAD_TIMEOUT = 3.0
 SEND_TIMEOUT = 10.0
 MOST_HEAD = 8192
@@ -40,6 +44,12 @@ MOST_PER_SECOND = 20
 #: Responses that may go at once after a quiet spell (the token bucket's depth).
 BURST = 5
 _PATHS = ("/metrics", "/")
+#: The two pages: the text format, and OpenMetrics for a scraper that asks for it. Fixed
+#: content types: nothing of a request's Accept header is ever written back.
+TEXT, OPENMETRICS = (
+    "text/plain; version=0.0.4; charset=utf-8",
+    ("application/openmetrics-text; version=1.0.0; charset=utf-8"),
+)
 
 
 @dataclass
@@ -59,17 +69,18 @@ class MetricsServer:
     def __init__(self, address: MetricsAddress, board: Any) -> None:
         """InputError when the extra is missing or the address cannot be served."""
         client = need("prometheus_client", "--metrics")
-        from prometheus_client.exposition import choose_encoder
+        from prometheus_client.exposition import generate_latest
+        from prometheus_client.openmetrics.exposition import generate_latest as openmetrics
 
-        self._choose = choose_encoder
+        self._encoders: dict[str, Callable[[Any], bytes]] = {
+            TEXT: generate_latest,
+            OPENMETRICS: openmetrics,
+        }
         self._registry = client.CollectorRegistry(auto_describe=False)
         self._registry.register(board)
         try:
-            family = socket.AF_INET6 if ":" in address.host else socket.AF_INET
-            self._listener = socket.create_server(
-                (address.host, address.port), family=family, backlog=64
-            )
-        except (OSError, OverflowError) as exc:
+            self._listener = _listen(address)
+        except (OSError, OverflowError, UnicodeError) as exc:
             why = getattr(exc, "strerror", None) or str(exc)
             raise InputError(f"--metrics cannot serve {address}: {why}") from None
         self._listener.setblocking(False)
@@ -81,6 +92,8 @@ class MetricsServer:
             end.setblocking(False)
         self._selector.register(self._waker, selectors.EVENT_READ, None)
         self._listening = False
+        self._rest_until = 0.0  # out of descriptors: the listener rests until then
+        self._most = _most_connections()
         self._connections: dict[socket.socket, _Connection] = {}
         self._pages: dict[str, tuple[float, bytes]] = {}  # content type: made at, body
         self._tokens, self._filled_at = float(BURST), time.monotonic()
@@ -102,19 +115,28 @@ class MetricsServer:
 
     def _serve(self) -> None:
         while not self._stopping:
-            self._listen(len(self._connections) < MOST_CONNECTIONS)
+            now = time.monotonic()
+            self._listen(len(self._connections) < self._most and now >= self._rest_until)
             for key, mask in self._selector.select(self._rest()):
                 if key.fileobj is self._listener:
                     self._accept()
                 elif key.fileobj is self._waker:
                     with contextlib.suppress(OSError):
                         self._waker.recv(64)
-                elif mask & selectors.EVENT_READ:
-                    self._read(key.data)
                 else:
-                    self._send(key.data)
+                    self._serve_one(key.data, mask)
             self._expire()
             self._answer_waiting()
+
+    def _serve_one(self, connection: _Connection, mask: int) -> None:
+        """One connection's turn: whatever goes wrong with it ends it, never the server."""
+        try:
+            if mask & selectors.EVENT_READ:
+                self._read(connection)
+            else:
+                self._send(connection)
+        except Exception:  # a request no one foresaw: that connection goes, the rest stay
+            self._close(connection)
 
     def _listen(self, room: bool) -> None:
         if room and not self._listening:
@@ -127,17 +149,21 @@ class MetricsServer:
         """Seconds until a deadline passes or a waiting request's turn comes."""
         now = time.monotonic()
         soonest = min((c.deadline for c in self._connections.values()), default=now + 1.0)
+        if now < self._rest_until:
+            soonest = min(soonest, self._rest_until)
         if any(c.waiting is not None for c in self._connections.values()):
             soonest = min(soonest, now + max(0.0, (1 - self._tokens) / MOST_PER_SECOND))
         return max(0.0, soonest - now)
 
     def _accept(self) -> None:
-        while len(self._connections) < MOST_CONNECTIONS:
+        while len(self._connections) < self._most:
             try:
                 sock, _ = self._listener.accept()
             except (BlockingIOError, InterruptedError):
                 return
-            except OSError:  # out of descriptors, a connection reset in the queue
+            except OSError as exc:  # out of descriptors, or a connection reset in the queue
+                if exc.errno in (errno.EMFILE, errno.ENFILE, errno.ENOBUFS, errno.ENOMEM):
+                    self._rest_until = time.monotonic() + DESCRIPTORS_REST  # or it spins
                 return
             sock.setblocking(False)
             connection = _Connection(sock, time.monotonic() + HEAD_TIMEOUT)
@@ -199,7 +225,11 @@ class MetricsServer:
             if self._tokens < 1:
                 return
             self._tokens -= 1
-            content_type, body = self._page(connection.waiting.decode("latin-1"), now)
+            try:
+                content_type, body = self._page(connection.waiting.decode("latin-1"), now)
+            except Exception:  # the page could not be made: said as such, the server goes on
+                content_type, body = "text/plain; charset=utf-8", b"the page failed\n"
+                self._pages.clear()
             connection.waiting = None
             self._respond(
                 connection,
@@ -210,12 +240,12 @@ class MetricsServer:
             )
 
     def _page(self, accept: str, now: float) -> tuple[str, bytes]:
-        """The page in the format ``accept`` asks for: made again only when older than
-        :data:`FRESH_FOR`."""
-        encoder, content_type = self._choose(accept)
+        """OpenMetrics when ``accept`` names it, else the text format: one of two pages,
+        each made again only when older than :data:`FRESH_FOR`."""
+        content_type = OPENMETRICS if "application/openmetrics-text" in accept else TEXT
         made = self._pages.get(content_type)
         if made is None or now - made[0] >= FRESH_FOR:
-            made = (now, encoder(self._registry))
+            made = (now, self._encoders[content_type](self._registry))
             self._pages[content_type] = made
         return content_type, made[1]
 
@@ -277,6 +307,29 @@ class MetricsServer:
         with contextlib.suppress(KeyError, ValueError):
             self._selector.unregister(connection.sock)
         connection.sock.close()
+
+
+def _listen(address: MetricsAddress) -> socket.socket:
+    """The listening socket: the family the address resolves to; ``::`` takes IPv4 too
+    where the system can (as prometheus-client's server did)."""
+    family = socket.getaddrinfo(address.host, address.port, type=socket.SOCK_STREAM)[0][0]
+    both = family == socket.AF_INET6 and address.host in ("::", "") and socket.has_dualstack_ipv6()
+    return socket.create_server(
+        (address.host, address.port), family=family, backlog=64, dualstack_ipv6=both
+    )
+
+
+def _most_connections() -> int:
+    """:data:`MOST_CONNECTIONS`, or fewer where the process may open few descriptors (a
+    quarter of them: the controllers' and the broker's sockets need the rest)."""
+    try:
+        import resource
+    except ImportError:  # Windows: select() takes 512 sockets; 256 leave room
+        return MOST_CONNECTIONS
+    soft, _ = resource.getrlimit(resource.RLIMIT_NOFILE)
+    if soft == resource.RLIM_INFINITY:
+        return MOST_CONNECTIONS
+    return max(8, min(MOST_CONNECTIONS, soft // 4))
 
 
 _REASONS = {
