@@ -35,6 +35,8 @@ SAYS = {
     "a CONNACK, then junk": "broke the protocol (it sent ",
     "a CONNACK, then a PUBACK storm": "broke the protocol (it acknowledged ",
     "a CONNACK, then silence": "stopped answering (no reply to a ping in 2 s)",
+    "a CONNACK, then a packet dripped": "broke the protocol (it took over 2 s to send one PUBACK",
+    "an ack, then a PUBLISH never asked for": "broke the protocol (it sent a PUBLISH",
 }
 #: The watch's peak resident memory, at most (it is about 40 MB at rest).
 MOST_RSS_MB = 150
@@ -50,9 +52,12 @@ def guard(sent: int = 0, clock: Callable[[], float] = lambda: 0.0) -> InboundGua
 def test_an_honest_brokers_answers_pass_byte_by_byte_and_whole() -> None:
     stream = CONNACK + bytes((0x40, 2, 0, 1)) + bytes((0x40, 3, 0, 2, 0)) + bytes((0xD0, 0))
     one = guard(sent=2)
+    one.pinged()
     for byte in stream:
         one.take(bytes((byte,)))
-    guard(sent=2).take(stream)
+    whole = guard(sent=2)
+    whole.pinged()
+    whole.take(stream)
     assert one.broke is None
 
 
@@ -87,15 +92,36 @@ def test_what_no_broker_sends_a_publisher_is_refused(stream: bytes, says: str, f
 
 
 def test_pings_are_answered_no_more_often_than_they_are_sent() -> None:
-    now = [0.0]
-    one = guard(clock=lambda: now[0])
-    one.take(CONNACK + bytes((0xD0, 0)) * 2)
+    """Counted against the pings that went out: a broker that shortens the keepalive in
+    its CONNACK makes paho ping more often, and its answers are all honest."""
+    one = guard()
+    one.take(CONNACK)
+    for _ in range(12):
+        one.pinged()
+    one.take(bytes((0xD0, 0)) * 12)
     with pytest.raises(BrokerMisbehaved, match="pings"):
         one.take(bytes((0xD0, 0)))
-    later = guard(clock=lambda: now[0])
-    later.take(CONNACK)
-    now[0] = 75.0  # five keepalives: up to twelve answers
-    later.take(bytes((0xD0, 0)) * 12)
+
+
+def test_an_acknowledgement_cut_by_a_lost_connection_is_not_counted() -> None:
+    """The connection went after the first byte of a PUBACK: paho sends the message
+    again and the broker acknowledges it again: one acknowledgement, not two."""
+    one = guard(sent=3)
+    one.take(CONNACK + bytes((0x40, 2, 0, 1)) + bytes((0x40,)))  # the second ack cut
+    one.new_connection()
+    one.take(CONNACK + bytes((0x40, 2, 0, 2)) + bytes((0x40, 2, 0, 3)))
+    assert one.broke is None
+
+
+def test_a_packet_dripped_slower_than_a_keepalive_is_refused() -> None:
+    now = [0.0]
+    one = guard(sent=5, clock=lambda: now[0])
+    one.take(CONNACK + bytes((0x40, 0x80, 0x80, 0x04)) + b"x")  # 64 KiB announced
+    now[0] = 10.0
+    one.take(b"x")  # within the keepalive (15 s)
+    now[0] = 15.5
+    with pytest.raises(BrokerMisbehaved, match="took over 15 s to send one PUBACK"):
+        one.take(b"x")
 
 
 def test_the_private_parts_of_paho_the_hooks_override_are_still_there() -> None:
@@ -168,3 +194,27 @@ def test_a_hostile_broker_is_dropped_in_one_line_and_cannot_take_memory_or_polli
     assert "Traceback" not in "\n".join(watch.err)
     values = [json.loads(line)["values"]["I1"] for line in watch.out if line.startswith("{")]
     assert len(values) >= 20
+
+
+@pytest.mark.slow
+def test_an_honest_broker_that_shortens_the_keepalive_is_kept(
+    env: dict[str, str], running: list[Running], tmp_path: Path
+) -> None:
+    """Its CONNACK says ping every second (Server Keep Alive): paho does, and every
+    answer is to a ping that went out. Nothing is said, the connection stays."""
+    broker = hostile_broker("honest, with a 1 s Server Keep Alive")
+    try:
+        config = tmp_path / "rac.toml"
+        config.write_text("[mqtt]\nkeepalive = 60\n")
+        watch = Running(
+            env | {"RAC_CONSOLE_CONFIG": str(config)},
+            "--json", "watch", "I", "1", "--every", "0.05",
+            "--mqtt", f"mqtt://127.0.0.1:{broker.port}/plant",
+        )  # fmt: skip
+        running.append(watch)
+        watch.wait_for("six pings answered", lambda: broker.pings >= 6, deadline=60)
+        assert watch.stop() == 0
+    finally:
+        broker.close()
+    assert broker.count()[0] == 1, "the client hung up on an honest broker"
+    assert mqtt_lines(watch) == [], watch.err

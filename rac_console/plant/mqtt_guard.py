@@ -8,7 +8,8 @@ the interpreter), and takes any number of acknowledgements for nothing. This gua
 every byte before paho does: a packet longer than :data:`MOST_PACKET` (the maximum
 packet size the feed announces in its CONNECT), a type the feed never asked for, a
 first answer that is not a CONNACK, or more acknowledgements than messages sent ends the
-connection at once, saying why in one line.
+connection at once, saying why in one line. So does a packet that takes longer than a
+keepalive to arrive (a drip of a byte a second keeps paho's own keepalive content).
 
 Pure: bytes in, :class:`BrokerMisbehaved` out.
 """
@@ -55,16 +56,20 @@ class InboundGuard:
         clock: Callable[[], float] = time.monotonic,
     ) -> None:
         """``sent``: messages handed for sending so far, over every connection (each
-        gets one acknowledgement at most); ``keepalive``: seconds between pings."""
+        gets one acknowledgement at most); ``keepalive``: the seconds a packet may take."""
         self._sent, self._keepalive, self._most, self._clock = sent, keepalive, most, clock
-        self._acks = 0  # over every connection, as ``sent`` counts
+        self._acks = 0  # whole acknowledgements, over every connection, as ``sent`` counts
         self.new_connection()
+
+    def pinged(self) -> None:
+        """A PINGREQ went out on this connection: one PINGRESP may come for it."""
+        self._pings_sent += 1
 
     def new_connection(self) -> None:
         self.broke: BrokerMisbehaved | None = None  # why this connection was dropped
-        self._state, self._packets, self._pings = _HEADER, 0, 0
+        self._state, self._packets, self._pings, self._pings_sent = _HEADER, 0, 0, 0
         self._kind = self._length = self._left = self._length_bytes = 0
-        self._since = self._clock()
+        self._started = 0.0  # when the packet being read began to arrive
 
     def take(self, data: bytes) -> None:
         """Follow ``data``; BrokerMisbehaved at the first byte that cannot be honest."""
@@ -76,6 +81,10 @@ class InboundGuard:
 
     def _follow(self, data: bytes) -> None:
         at, end = 0, len(data)
+        if self._state != _HEADER and self._clock() - self._started > self._keepalive:
+            raise BrokerMisbehaved(
+                f"it took over {self._keepalive:g} s to send one {_NAMES[self._kind][2:]}"
+            )
         while at < end:
             if self._state == _HEADER:
                 self._header(data[at])
@@ -88,7 +97,18 @@ class InboundGuard:
                 at += step
                 self._left -= step
                 if not self._left:
-                    self._state = _HEADER
+                    self._packet_done()
+
+    def _packet_done(self) -> None:
+        """A whole packet read: only now is an acknowledgement counted (a connection
+        lost mid-packet leaves the message unacknowledged, and paho sends it again)."""
+        self._state = _HEADER
+        if self._kind == PUBACK:
+            self._acks += 1
+            if self._acks > self._sent():
+                raise BrokerMisbehaved(
+                    f"it acknowledged {self._acks:,} messages, {self._sent():,} were sent"
+                )
 
     def _header(self, byte: int) -> None:
         kind, flags = byte >> 4, byte & 0x0F
@@ -100,17 +120,11 @@ class InboundGuard:
             raise BrokerMisbehaved(f"it sent {_NAMES[kind]}, which this client never asks for")
         if kind == CONNACK and not first:
             raise BrokerMisbehaved("it sent a second CONNACK")
-        if kind == PUBACK:
-            self._acks += 1
-            if self._acks > self._sent():
-                raise BrokerMisbehaved(
-                    f"it acknowledged {self._acks:,} messages, {self._sent():,} were sent"
-                )
         if kind == PINGRESP:
             self._pings += 1
-            if self._pings > 2 + 2 * (self._clock() - self._since) / self._keepalive:
+            if self._pings > self._pings_sent:
                 raise BrokerMisbehaved("it answers pings that were not sent")
-        self._kind, self._state = kind, _LENGTH
+        self._kind, self._state, self._started = kind, _LENGTH, self._clock()
         self._length = self._length_bytes = 0
 
     def _length_byte(self, byte: int) -> None:
@@ -123,8 +137,10 @@ class InboundGuard:
         if self._length > self._most:
             raise BrokerMisbehaved(
                 f"it announced {_NAMES[self._kind]} of {self._length:,} bytes "
-                f"({self._most:,} at most)",
-                first=self._packets == 1 and self._kind != CONNACK,
+                f"({self._most:,} at most)"
             )
         self._left = self._length
-        self._state = _BODY if self._length else _HEADER
+        if self._length:
+            self._state = _BODY
+        else:
+            self._packet_done()

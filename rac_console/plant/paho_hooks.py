@@ -1,7 +1,7 @@
 """The private parts of paho-mqtt the feed leans on, all in this one module.
 
 paho has no hook for what it reads, for why a connection attempt failed, or for how
-long it waits before the next: the client here overrides five of its methods, for the
+long it waits before the next: the client here overrides six of its methods, for the
 versions pyproject pins (``paho-mqtt>=2.0,<2.3``). ``tests/test_plant_guard.py`` fails
 when any of them moves.
 
@@ -9,6 +9,8 @@ when any of them moves.
   and no read asks for more than :data:`~.mqtt_guard.CHUNK` bytes;
 - ``_create_socket`` / ``_ssl_wrap_socket``: the reason of a failed attempt, and whether
   it failed at TLS, kept for the line that says it;
+- ``_send_pingreq``: the guard takes only as many ping answers as pings went out (a
+  broker may shorten the keepalive in its CONNACK: paho then pings more often);
 - ``_reconnect_wait``: a backoff that a broker which connects and then misbehaves does
   not reset (paho starts again from the shortest wait after every CONNACK);
 - ``_thread_main``: what paho does not catch ends publishing with one line, never a
@@ -28,7 +30,7 @@ from .mqtt_guard import CHUNK, InboundGuard
 #: The private names used, checked by the tests against the installed paho.
 PRIVATE = (
     "_sock_recv", "_create_socket", "_ssl_wrap_socket", "_reconnect_wait", "_thread_main",
-    "_thread_terminate", "_state",
+    "_send_pingreq", "_thread_terminate", "_state",
 )  # fmt: skip
 
 
@@ -82,6 +84,10 @@ def _client_class(mqtt: ModuleType) -> type[Any]:
                 raise
             self.rac_guard.new_connection()
             return sock
+
+        def _send_pingreq(self) -> Any:
+            self.rac_guard.pinged()  # before it goes: its answer may come at once
+            return super()._send_pingreq()
 
         def _ssl_wrap_socket(self, tcp_sock: Any) -> Any:
             self.rac_at_tls = True
