@@ -100,21 +100,28 @@ class Word:
     width: int  # 8 or 16
     stale: bool = False
     changed: bool = False
+    span: int = 0  # the bits the number is made of: 8 when a line's high byte is unwatched
+
+    @property
+    def bits(self) -> int:
+        return self.span or self.width
 
     @property
     def complete(self) -> bool:
-        return self.known == (1 << self.width) - 1
+        return self.known == (1 << self.bits) - 1
 
     def hex_text(self) -> str:
-        """``0x000D``; a hex digit with any unknown bit is ``?`` (``0x??0D``)."""
-        digits = []
-        for nibble in reversed(range(self.width // 4)):
+        """``0x000D``; a hex digit with any unknown bit is ``?`` (``0x00?1``); a 16-bit
+        line watched in its low byte only is that byte (``  0x0D``: IO 0-7 watched is
+        no number with unknown digits)."""
+        digits = [" " * ((self.width - self.bits) // 4), "0x"]
+        for nibble in reversed(range(self.bits // 4)):
             shift = nibble * 4
             if (self.known >> shift) & 0xF == 0xF:
                 digits.append(f"{(self.value >> shift) & 0xF:X}")
             else:
                 digits.append("?")
-        return "0x" + "".join(digits)
+        return "".join(digits)
 
     def dec_text(self) -> str:
         return str(self.value) if self.complete else NO_DECIMAL
@@ -197,12 +204,14 @@ def word_of(bits: tuple[Bit, ...]) -> Word:
             known |= 1 << n
             if bit.state is BitState.ON:
                 value |= 1 << n
+    byte = len(bits) == 16 and all(bit.state is BitState.UNWATCHED for bit in bits[8:])
     return Word(
         value,
         known,
         len(bits),
         stale=any(bit.stale for bit in bits),
         changed=any(bit.changed for bit in bits),
+        span=8 if byte else 0,
     )
 
 
