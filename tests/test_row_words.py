@@ -18,3 +18,14 @@ def test_a_variable_never_read_is_an_error_not_a_stale_value() -> None:
     row.update(Variant(VT.R4, 1.0), now=2.0)
     row.fail("TIMEOUT", now=3.0)  # a value was shown: now it is stale
     assert status_cell(row.view()).plain == "TIMEOUT (stale)"
+
+
+def test_the_history_keeps_each_line_once_at_its_last_use(tmp_path) -> None:  # type: ignore[no-untyped-def]
+    """The docs say the last 1,000 distinct commands: Up walks each line once."""
+    from rac_console.present.history import History
+
+    history = History(tmp_path / "history")
+    for line in ("get I 1", "get I 2", "get I 1", "watch IO 0-7", "get I 2"):
+        history.append(line)
+    assert history.entries == ["get I 1", "watch IO 0-7", "get I 2"]
+    assert History(tmp_path / "history").entries == ["get I 1", "watch IO 0-7", "get I 2"]

@@ -35,12 +35,17 @@ def default_history_path() -> Path:
     return user_state_path("rac-console") / "history"
 
 
+def _distinct(lines: list[str]) -> list[str]:
+    """Each line once, at its last use (the file keeps every use: it is appended to)."""
+    return list(reversed(dict.fromkeys(reversed(lines))))
+
+
 class History:
     def __init__(self, path: Path | str, limit: int = DEFAULT_LIMIT) -> None:
         self.path = Path(path)
         self.limit = limit
         lines = self._read()
-        self.entries: list[str] = lines[-limit:]
+        self.entries: list[str] = _distinct(lines)[-limit:]
         self._pending: list[str] = []  # entered, result not known yet: not on file yet
         self._refused: set[str] = set()  # refused in this session: never suggested
         self._written = lines[-1] if lines else None  # no line is written twice in a row
@@ -70,6 +75,8 @@ class History:
         if not line.strip():
             return
         if not (self.entries and self.entries[-1] == line):
+            if line in self.entries:  # each line once, where it was last used
+                self.entries.remove(line)
             self.entries.append(line)
             del self.entries[: -self.limit]
         self._pending.append(line)
