@@ -131,7 +131,7 @@ def test_word_of_8_bits_is_a_byte() -> None:
 def test_unknown_bits_make_their_hex_digit_a_question_mark_and_no_decimal() -> None:
     # IO 0-7 watched, 8-15 not: the line's number is its low byte, aligned with the rest.
     word = grid_lines(bits({0, 2, 3}, range(8)), 16)[0].word
-    assert word.hex_text() == "  0x0D"
+    assert (word.hex_text(), word.pad) == ("0x0D", 2)  # aligned with 16-bit lines' words
     assert word.dec_text() == "13"
     # One bit without a value yet spoils only its own nibble.
     waiting = bits({0}, range(16)) | {5: Bit(5, BitState.UNKNOWN)}

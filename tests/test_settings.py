@@ -687,3 +687,23 @@ def test_snapshot_a_just_changed_row_in_the_light_theme(snap_compare, tmp_path: 
         await pilot.pause(0.1)
 
     assert snap_compare(app, terminal_size=(120, 34), run_before=run_before)
+
+
+@pytest.mark.slow
+async def test_keys_toggled_and_back_make_no_config_file(tmp_path: Path) -> None:
+    """A newcomer with no config file looks at the polls and the hex, and back: no file
+    appears to hold what the console would do anyway."""
+    assert not config_path().exists()
+    app = console(tmp_path)
+    async with app.run_test(size=WIDE) as pilot:
+        await started(pilot)
+        await pilot.press("f3", "f5", "f7")
+        await pilot.pause(1.0)  # past the save's half second: an existing file would be
+        await pilot.press("f3", "f5", "f7")
+        await pilot.pause(1.0)
+    assert not config_path().exists()
+    once = console(tmp_path)
+    async with once.run_test(size=WIDE) as pilot:
+        await started(pilot)
+        await pilot.press("f7")  # a real change is kept: written at exit at the latest
+    assert tomllib.loads(config_path().read_text())["settings"] == {"hex_view": True}

@@ -55,6 +55,17 @@ class SettingsFile:
         values, problems = read_settings(config.settings, str(self.path), themes)
         return LoadedSettings(values, problems)
 
+    def can_write(self) -> None:
+        """Whether the file could be made (its folder made, none in the way): InputError
+        of one line when not. Nothing is written."""
+        try:
+            self.path.parent.mkdir(parents=True, exist_ok=True)
+            if not os.access(self.path.parent, os.W_OK):
+                raise PermissionError(13, "Permission denied")
+        except OSError as exc:
+            reason = exc.strerror or str(exc)
+            raise InputError(f"cannot write {self.path}: {reason}") from None
+
     def save(self, values: Mapping[str, Value]) -> None:
         """Set ``values`` in the file's ``[settings]``, keeping every other byte;
         InputError (one line) when it cannot, the file then left as it was."""

@@ -110,11 +110,16 @@ class Word:
     def complete(self) -> bool:
         return self.known == (1 << self.bits) - 1
 
+    @property
+    def pad(self) -> int:
+        """Blanks before the hex, so that a byte's lines up with a line's 16 bits."""
+        return (self.width - self.bits) // 4
+
     def hex_text(self) -> str:
         """``0x000D``; a hex digit with any unknown bit is ``?`` (``0x00?1``); a 16-bit
-        line watched in its low byte only is that byte (``  0x0D``: IO 0-7 watched is
-        no number with unknown digits)."""
-        digits = [" " * ((self.width - self.bits) // 4), "0x"]
+        line watched in its low byte only is that byte (``0x0D``: IO 0-7 watched is no
+        number with unknown digits; drawn after :attr:`pad` blanks, aligned)."""
+        digits = ["0x"]
         for nibble in reversed(range(self.bits // 4)):
             shift = nibble * 4
             if (self.known >> shift) & 0xF == 0xF:
@@ -312,14 +317,14 @@ def fit_label(label: str, width: int) -> str:
 
 
 def word_text(word: Word, gap: int = 2, change: ChangeStyle = CHANGED_DARK) -> Text:
-    text = Text(" " * gap)
+    text = Text(" " * (gap + word.pad))
     text.append(word.hex_text(), style=STYLE_HEX)
     digits = len(str((1 << word.width) - 1))
     text.append(f" {word.dec_text():>{digits}}")
     if word.stale:
-        text.stylize(STYLE_STALE, gap)
+        text.stylize(STYLE_STALE, gap + word.pad)
     elif word.changed:
-        text.stylize(change.value, gap)
+        text.stylize(change.value, gap + word.pad)
     return text
 
 

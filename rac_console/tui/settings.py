@@ -50,6 +50,9 @@ class SettingsKeeper:
         self._problems: list[str] = []
         self._due: Timer | None = None  # the save after the last change
         self._loaded: LoadedSettings | None = None  # read by load(), applied by apply()
+        self._at_start: dict[str, Value] | None = None  # as applied at mount
+        self._new_file = False  # no config file at start: none is made to hold the start
+        self._probed = False  # whether a new file could be written, found out once
 
     def load(self, themes: Collection[str]) -> None:
         """Read the file now (before the app runs: no file is read on its loop); a
@@ -57,6 +60,7 @@ class SettingsKeeper:
         if self.store is None:
             return
         try:
+            self._new_file = not self.store.path.exists()  # read here: off the app's loop
             self._loaded = self.store.load(themes)
         except InputError as exc:
             self._problems = [f"settings not read, and not saved this session: {exc}"]
@@ -100,6 +104,7 @@ class SettingsKeeper:
         if isinstance(shown := values.get("frame_gaps"), bool):
             log.show_gaps = shown
         self._saved = self.current()
+        self._at_start = dict(self._saved)
 
     def say_problems(self) -> None:
         """The start's problems, a line each in the results (after the welcome)."""
@@ -139,6 +144,16 @@ class SettingsKeeper:
         changed = {key: value for key, value in now.items() if self._saved.get(key) != value}
         if not changed or now == self._tried:
             return  # nothing new, or what failed last time
+        if self._new_file and (not at_exit or now == self._at_start):
+            # No config file yet: one is made at the exit, and only when the settings
+            # then differ from the start (keys toggled and back make none). Whether it
+            # can be is found out now, and said once.
+            if not at_exit and not self._probed:
+                self._probed = True
+                probe = self.host.files.run(self.store.can_write)
+                probe.add_done_callback(partial(self._saved_or_not, now, self._saved, False))
+            return
+        self._new_file = False
         before = dict(self._saved)
         self._saved.update(changed)  # the next save, queued behind this, needs not repeat it
         written = self.host.files.run(partial(self.store.save, changed))
