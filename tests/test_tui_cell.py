@@ -314,3 +314,18 @@ async def test_a_cell_of_one_is_the_console_as_before(tmp_path: Path) -> None:
             await until(pilot, lambda: "› watch I 10" in results_text(app), "the echo")
             assert "sim ›" not in results_text(app)
             assert "LIVE" in app.status_bar.line.plain  # the status line as it was
+
+
+async def test_T_keeps_the_table_so_the_next_rows_T_joins_the_trend(tmp_path: Path, two) -> None:
+    """T on a row opens its trend and leaves the cursor in the table: Down, T, and the
+    next row is overlaid, with no key to go back first."""
+    app = make_cell_app(tmp_path, two)
+    async with app.run_test(size=(120, 40)) as pilot:
+        await connected(pilot, app)
+        await watch_handshake(pilot, app)
+        app.table.focus()
+        await pilot.press("T")
+        await until(pilot, lambda: app.trend_view.has_class("-open"), "the trend")
+        await pilot.press("down", "T")
+        await until(pilot, lambda: len(app.trend_view.series) == 2, "two series")
+        assert app.focused is app.table

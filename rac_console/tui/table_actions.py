@@ -258,8 +258,9 @@ def detail_follows_cursor(host: ConsoleHost) -> None:
         host.row_detail.show_row(host.table.cursor_view(), time.monotonic())
 
 
-def open_trend(host: ConsoleHost, row: RowView, target: str = "") -> None:
-    """``t`` on a row: its trend in the frame log's place (again: closed)."""
+def open_trend(host: ConsoleHost, row: RowView, target: str = "", focus: bool = True) -> None:
+    """``t`` on a row: its trend in the frame log's place (again: closed); focused
+    unless ``focus`` is False (``T``: the table keeps it, for the next row's ``T``)."""
     view = host.trend_view
     if view.has_class("-open") and view.var == row.var and view.target == target:
         close_trend(host)
@@ -271,7 +272,8 @@ def open_trend(host: ConsoleHost, row: RowView, target: str = "") -> None:
     view.show_row(row.var, terminal_safe(row.label), field, target)
     view.add_class("-open")
     host.frame_log.add_class("-under-trend")
-    view.focus()
+    if focus:
+        view.focus()
 
 
 def overlay_trend(host: ConsoleHost, row: RowView, target: str) -> None:
@@ -279,7 +281,7 @@ def overlay_trend(host: ConsoleHost, row: RowView, target: str) -> None:
     (robotA's IO128 over robotB's IO64: the handshake); no trend open: ``t``'s."""
     view = host.trend_view
     if not view.has_class("-open"):
-        open_trend(host, row, target)
+        open_trend(host, row, target, focus=False)  # the next row's T, from the table
         return
     field = host.table.field_of((target, row.var))
     if not view.add_row(row.var, terminal_safe(row.label), field, target):
