@@ -205,6 +205,12 @@ def test_a_wait_after_another_targets_condition_says_the_delay_between_them() ->
     assert f"{b} IO64 on " in said and f" s after {a} IO128 on" in said
     delay = float(said.split(f"{b} IO64 on ")[1].split(" s after")[0])
     assert 0.0 < delay < 1.0  # robotB answers 0.2 s after robotA, read to within 10 ms
+    # Each condition names its robot, and the second's time is that one delay.
+    from rac_console.commands.outcome import Outcome
+
+    waits = [f.waited for f in result.feedback if isinstance(f, Outcome) and f.waited]
+    assert [w.condition for w in waits] == [f"{a} IO128 on", f"{b} IO64 on"]
+    assert f"{waits[1].seconds:.3f}" == f"{delay:.3f}"
     assert "IO65 on: not met within 0.3 s" in text(missed)
 
 

@@ -10,6 +10,8 @@ machine, each to within one read: reads are at most 10 ms apart).
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 from ..commands.outcome import Outcome
 from .events import Feedback, Message
 
@@ -23,7 +25,7 @@ def chained_feedback(
     condition = first_waited.condition if first_waited is not None else "its condition"
     if second is None:
         return (
-            first,
+            _named(first, first_name),
             Message(
                 f"{second_name} was not waited for: {first_name} {condition} did not hold",
                 "error",
@@ -40,12 +42,26 @@ def chained_feedback(
         return (first, second)
     delay = second_waited.met_at - first_waited.met_at
     return (
-        first,
-        second,
+        _named(first, first_name),
+        # One delay, said the same on both lines: from the reply that showed the first
+        # condition to the one that showed the second (its wait began a moment later).
+        _named(second, second_name, seconds=delay),
         Message(
             f"{second_name} {second_waited.condition} {delay:.3f} s after "
             f"{first_name} {first_waited.condition}"
         ),
+    )
+
+
+def _named(outcome: Outcome, name: str, seconds: float | None = None) -> Outcome:
+    """``outcome`` with its condition naming its target (``robotA IO128 on``): the two
+    lines of a chained wait come from two robots."""
+    waited = outcome.waited
+    if waited is None:
+        return outcome
+    timed = waited.seconds if seconds is None else seconds
+    return replace(
+        outcome, waited=replace(waited, condition=f"{name} {waited.condition}", seconds=timed)
     )
 
 
