@@ -168,7 +168,7 @@ def test_ctrl_c_while_a_command_waits_cancels_it_and_keeps_the_repl() -> None:
         os.write(fd, b"\x03")  # Ctrl-C while the GET waits (a 30 s timeout)
         read_until(b"cancelled")
         os.write(fd, b"help\r")
-        read_until(b"Ctrl+D in the REPL")  # the REPL is still there and answers
+        read_until(b"leave (Ctrl+Q")  # the REPL is still there and answers
         assert os.waitpid(pid, os.WNOHANG) == (0, 0)
         os.write(fd, b"quit\r")
     finally:
