@@ -7,6 +7,8 @@ import time
 from collections.abc import Callable
 from pathlib import Path
 
+from tui_helpers import REQUEST_TIMEOUT
+
 from rac_console.commands.policy import TargetProfile, WritePolicy, Writes
 from rac_console.commands.target import Target
 from rac_console.engine import Alert, Result, RowView
@@ -41,7 +43,7 @@ def make_cell_app(
     *,
     confirm: tuple[str, ...] = (),
     interval: float = 0.05,
-    timeout: float = 1.0,
+    timeout: float = REQUEST_TIMEOUT,
 ) -> RacConsoleApp:
     """The console on a cell of the simulators, on a private history."""
     options = EngineOptions(timeout=timeout, interval=interval, cycles=True)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import socket
 import threading
 from collections.abc import Callable
@@ -119,3 +120,54 @@ class RecordingServer:
         self._sock.close()
         for thread in self._threads:
             thread.join(timeout=2)
+
+
+class Valve:
+    """A TCP path from 127.0.0.1:``port`` to a server (the simulator) whose answers the
+    test lets through: while :meth:`shut`, what the server sends waits (nothing is lost,
+    nothing reordered); :meth:`open` sends it on. What the client sends always goes
+    through. A reply is then in flight for exactly as long as the test says, whatever
+    the load of the machine (a delay set on the simulator is a race with the test)."""
+
+    def __init__(self, host: str, port: int) -> None:
+        self.host, self.port_to = host, port
+        self._open = threading.Event()
+        self._open.set()
+        self._ends: list[socket.socket] = []
+        self._listener = socket.create_server(("127.0.0.1", 0))
+        self.port: int = self._listener.getsockname()[1]
+        threading.Thread(target=self._accept, daemon=True).start()
+
+    def _accept(self) -> None:
+        while True:
+            try:
+                client, _ = self._listener.accept()
+            except OSError:  # closed
+                return
+            server = socket.create_connection((self.host, self.port_to), timeout=10)
+            server.settimeout(None)
+            self._ends += [client, server]
+            threading.Thread(target=self._pump, args=(client, server, False), daemon=True).start()
+            threading.Thread(target=self._pump, args=(server, client, True), daemon=True).start()
+
+    def _pump(self, source: socket.socket, sink: socket.socket, held: bool) -> None:
+        with contextlib.suppress(OSError):
+            while data := source.recv(65536):
+                if held:
+                    self._open.wait()
+                sink.sendall(data)
+        for end in (sink, source):
+            with contextlib.suppress(OSError):
+                end.shutdown(socket.SHUT_RDWR)
+
+    def shut(self) -> None:
+        self._open.clear()
+
+    def open(self) -> None:
+        self._open.set()
+
+    def close(self) -> None:
+        self.open()
+        self._listener.close()
+        for end in self._ends:
+            end.close()

@@ -185,6 +185,7 @@ async def test_the_repl_prompt_names_the_current_target_and_at_name_runs_elsewhe
     assert sims[0].server.controller.value(I, 6) != 66
 
 
+@pytest.mark.slow  # over half a second
 def test_a_wait_after_another_targets_condition_says_the_delay_between_them() -> None:
     from rac_console.sim.cell import SimulatedCellThread
 

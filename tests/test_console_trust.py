@@ -7,6 +7,7 @@ a paste or a slow ssh link delivers them.
 
 from __future__ import annotations
 
+import threading
 from pathlib import Path
 
 import pytest
@@ -175,25 +176,37 @@ async def test_per_request_failures_are_marked_in_the_frame_log(tmp_path: Path) 
 
 
 async def test_status_line_shows_a_request_waiting_and_no_stale_figures(tmp_path: Path) -> None:
-    server, answering = silent_server(b"0,3,1\r")
+    answer = threading.Event()  # cleared: the controller holds its reply until the test says
+    answer.set()
+
+    def reply(line: bytes) -> bytes:
+        answer.wait(60)
+        return b"0,3,1\r"
+
+    server = RecordingServer(reply)
     try:
-        app = make_app(tmp_path, "127.0.0.1", server.port, timeout=2)
+        # A long timeout: the request waits as long as the test holds the reply, however
+        # slowly a busy machine lets the status line be drawn and read.
+        app = make_app(tmp_path, "127.0.0.1", server.port, timeout=60)
         async with app.run_test(size=(160, 40)) as pilot:
             status = app.query_one(StatusBar)
             await type_line(pilot, "get I 1")
             await until(pilot, lambda: "I1 = 1" in results_text(app), "the first reply")
             await until(pilot, lambda: " ms" in str(status.render()), "a round-trip time")
-            answering.answer = None  # the controller goes quiet
+            answer.clear()  # the controller goes quiet
             await type_line(pilot, "get I 2")
             await until(
                 pilot, lambda: "waiting for a reply" in str(status.render()), "a waiting request"
             )
+            answer.set()
+            await until(pilot, lambda: "I2 = 1" in results_text(app), "the late reply")
             await type_line(pilot, "disconnect")
             await until(pilot, lambda: "disconnected" in str(status.render()), "disconnected")
             text = str(status.render())
             assert "waiting" not in text
             assert " ms" not in text  # no round trip of a connection that is gone
     finally:
+        answer.set()
         server.close()
 
 

@@ -9,6 +9,7 @@ import time
 from collections.abc import Callable
 from pathlib import Path
 
+import pytest
 from servers import RecordingServer
 
 from rac_console.engine import Alert, Engine, Message, Note, Result, RowView, Status
@@ -159,6 +160,7 @@ def test_save_then_load_restores_the_watch_list(front: Front, tmp_path: Path) ->
     assert front.errors(f"load {tmp_path / 'missing.toml'}")[0].startswith("cannot read")
 
 
+@pytest.mark.slow  # over half a second
 def test_a_typed_command_waits_for_at_most_the_poll_in_flight() -> None:
     """50 rows polled back to back on a slow controller: a typed GET goes out right after
     the poll in flight, ahead of the 49 others of the cycle."""

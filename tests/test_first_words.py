@@ -35,6 +35,7 @@ async def test_on_a_live_controller_the_placeholder_suggests_no_write(
     assert "get P 1" in shown and "put" not in shown
 
 
+@pytest.mark.slow  # over half a second
 async def test_on_a_read_only_target_the_placeholder_suggests_no_write(tmp_path: Path) -> None:
     app = make_app(tmp_path, read_only=True)
     shown = await placeholder_once_connected(app)

@@ -164,6 +164,7 @@ def test_a_timed_out_put_is_unknown_in_plain_text_too(
     assert "✗" not in result.stderr + result.stdout
 
 
+@pytest.mark.slow  # over half a second
 def test_the_console_says_a_timed_out_put_is_unknown(
     sim: SimulatorThread, proxy: HoldingProxy
 ) -> None:
@@ -313,6 +314,7 @@ def test_a_put_on_a_dead_connection_is_never_sent_twice(
     assert [line for _, line in server.lines].count(b"PUT:RC8:2:I:3,5") == 1
 
 
+@pytest.mark.slow  # over half a second
 def test_an_idle_engine_notices_its_connection_died(
     dropping: Callable[..., DroppingServer],
 ) -> None:

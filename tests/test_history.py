@@ -6,6 +6,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import pytest
+
 from rac_console.commands.language import Get, Put, VarRef
 from rac_console.commands.outcome import ExitStatus, Outcome, refused
 from rac_console.engine import Message, Result, UiStep
@@ -84,6 +86,7 @@ def test_which_results_are_refused() -> None:
     assert not is_refused(Result(6, (), "# a comment", None))
 
 
+@pytest.mark.slow  # over half a second
 async def test_the_console_does_not_suggest_a_refused_line(tmp_path: Path) -> None:
     from tui_helpers import make_app, results_text, type_line, until
 

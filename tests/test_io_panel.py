@@ -8,9 +8,11 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
+from servers import Valve
 from tui_helpers import FrameTap, make_app, results_text, type_line, until
 
 from rac_console.present.iogrid import GridLine
+from rac_console.sim.thread import SimulatorThread
 from rac_console.tui.app import RacConsoleApp
 from rac_console.tui.io_panel import IoPanel
 
@@ -101,7 +103,19 @@ async def test_wide_terminal_puts_the_grid_beside_the_table(tmp_path: Path) -> N
 
 
 async def test_space_toggles_the_bit_under_the_cursor_once_per_flight(tmp_path: Path) -> None:
-    app = make_app(tmp_path)
+    with SimulatorThread() as sim:
+        valve = Valve(sim.host, sim.port)
+        try:
+            # The write stays in flight while the valve holds the simulator's answers (a
+            # long timeout: the test says how long, not a clock that load can outrun).
+            await _one_write_per_flight(
+                make_app(tmp_path, sim.host, valve.port, timeout=60), valve, tmp_path
+            )
+        finally:
+            valve.close()
+
+
+async def _one_write_per_flight(app: RacConsoleApp, valve: Valve, tmp_path: Path) -> None:
     tap = FrameTap(tmp_path)
 
     def writes() -> list[bytes]:
@@ -114,9 +128,7 @@ async def test_space_toggles_the_bit_under_the_cursor_once_per_flight(tmp_path: 
         # Paused, no poll can show the write: it stays in flight through the burst.
         await type_line(pilot, "pause")
         await until(pilot, lambda: app.status is not None and app.status.paused, "the pause")
-        # A slow controller: the write and its read-back stay in flight through the burst.
-        await type_line(pilot, "send SIM:SET:delay_ms=400")
-        await until(pilot, lambda: "SIM:SET:delay_ms=400" in results_text(app), "the delay")
+        valve.shut()  # the controller's answers held: the write and its read-back wait
         app.io_panel.focus()
         await pilot.pause()
         assert app.io_panel.cursor == 128
@@ -132,11 +144,16 @@ async def test_space_toggles_the_bit_under_the_cursor_once_per_flight(tmp_path: 
         )
         await until(pilot, lambda: len(writes()) == 1, "the write")
         assert writes() == [b"PUT:RC8:129:IO:11,-1\r"]
-        assert app.io_panel.grid is not None
-        assert "underline" in str(app.io_panel.grid.text.spans)  # drawn as in flight
+        await until(
+            pilot,
+            lambda: (
+                app.io_panel.grid is not None and "underline" in str(app.io_panel.grid.text.spans)
+            ),
+            "the bit drawn as in flight",
+        )
+        valve.open()
 
         await pilot.press("escape")  # back to the command line
-        await type_line(pilot, "send SIM:SET:delay_ms=0")
         await type_line(pilot, "resume")
         await until(pilot, lambda: word_is(app, 128, 0b1111), "IO 129 ON")
         await until(

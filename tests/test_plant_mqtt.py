@@ -20,6 +20,7 @@ import pytest
 from mqtt_broker import (
     Broker,
     Cable,
+    Gate,
     Running,
     Subscriber,
     broker,
@@ -195,6 +196,30 @@ def test_a_hostile_controller_string_arrives_intact_and_harmless(
     # No topic other than the variable's and the status was made of it.
     assert {t for t, _, _ in subscriber.messages} <= {topic, f"{base}/status"}
     assert "\x1b" not in result.stderr
+
+
+def test_a_reading_taken_before_the_broker_answered_is_published_at_the_end(
+    env: dict[str, str], broker: Broker, subscriber: Subscriber, sim: SimulatorThread,
+    running: list[Running],
+) -> None:  # fmt: skip
+    """A ``watch --count 1`` has its reading before a slow broker has answered the
+    CONNECT: the end waits for the connection, then publishes it and says offline."""
+    put(sim, "I", 5, Variant(VT.I4, 55))
+    gate = Gate(broker.port)  # the broker's CONNACK held until the reading is shown
+    try:
+        watch = Running(
+            env, "-H", sim.host, "-p", str(sim.port), "--json", "watch", "I", "5",
+            "--count", "1", "--mqtt", f"mqtt://127.0.0.1:{gate.port}/plant",
+        )  # fmt: skip
+        running.append(watch)
+        watch.wait_for("the reading", lambda: len(watch.out) >= 1)
+        gate.open()
+        assert watch.process.wait(20) == 0, watch.err
+        base = f"plant/{sim.host}:{sim.port}"
+        subscriber.wait_for("the reading", subscriber.has_value(f"{base}/I5", 55))
+        subscriber.wait_for("offline", lambda s: s.last.get(f"{base}/status") == b"offline")
+    finally:
+        gate.close()
 
 
 def test_nothing_received_from_the_broker_reaches_the_controller(

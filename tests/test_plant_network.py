@@ -170,7 +170,10 @@ def test_a_pulled_cable_sends_the_last_will_and_the_feed_comes_back_with_the_cab
             arrives(listener, 0, (STATUS, is_text("online")), (I1, value_is(1))),
             QUICK,
         )
-        assert said(watch, "publishing sim's watched values to") == 1
+        # Said on stderr, which the test reads apart from the listener: not yet, maybe.
+        watch.wait_for(
+            "publishing said", lambda: said(watch, "publishing sim's watched values to") >= 1, QUICK
+        )
 
         simulator = simulator_port(watch)
 
@@ -224,6 +227,7 @@ def test_a_pulled_cable_sends_the_last_will_and_the_feed_comes_back_with_the_cab
         assert said(watch, LOST) == 1, watch.err
         assert said(watch, BACK) == 1, watch.err
         assert said(watch, "Traceback") == 0, watch.err
+        assert said(watch, "publishing sim's watched values to") == 1, watch.err
     finally:
         if process.poll() is None:
             process.send_signal(signal.SIGTERM)

@@ -18,9 +18,10 @@ from test_profiles_present import CELL3, SIM
 from test_repl import Driver
 
 from rac_console.commands.policy import WritePolicy, Writes
-from rac_console.engine import ConfirmWrite
+from rac_console.engine import CONFIRM_GUARD_SECONDS, ConfirmWrite
 from rac_console.engine.config import CONFIG_ENV, load_config
 from rac_console.present.status import LABEL_WIDTH
+from rac_console.repl import repl as repl_module
 from rac_console.repl.prompt_parts import confirm_message, prompt_fragments, toolbar_fragments
 from rac_console.sim.thread import SimulatorThread
 
@@ -64,6 +65,7 @@ def test_the_question() -> None:
 QUESTION = ConfirmWrite(9, "I10", "14", "15", "PUT:RC8:10:I:3,15", "LIVE h:1", "Cell 3")
 
 
+@pytest.mark.slow  # over half a second
 async def test_a_confirm_question_is_asked_and_answered(tmp_path: Path) -> None:
     driver = Driver(tmp_path)
     answers: list[tuple[int, bool]] = []
@@ -85,6 +87,7 @@ async def test_a_confirm_question_is_asked_and_answered(tmp_path: Path) -> None:
     assert answers == [(9, yes) for yes in (False, False, True, True)]
 
 
+@pytest.mark.slow  # over half a second
 async def test_a_confirm_target_writes_only_after_yes(tmp_path: Path) -> None:
     driver = Driver(tmp_path, policy=WritePolicy(Writes.CONFIRM, source="profile cell3"))
 
@@ -106,16 +109,23 @@ async def test_a_confirm_target_writes_only_after_yes(tmp_path: Path) -> None:
     assert b"PUT:RC8:10:I:3,15\r" not in driver.tap.sent
 
 
-async def test_a_yes_typed_right_after_the_question_is_not_taken(tmp_path: Path) -> None:
+@pytest.mark.slow  # over half a second
+async def test_a_yes_typed_right_after_the_question_is_not_taken(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
     """As in the console: a y within 0.4 s of the question came typed ahead, or pasted
     spread out over a slow link; it is not an answer."""
     driver = Driver(tmp_path, policy=WritePolicy(Writes.CONFIRM, source="profile cell3"))
 
     async def steps(d: Driver) -> None:
+        # "At once" is within the guard time however busy the machine: a guard of a
+        # minute for the first answer (a y typed 0.4 s late would be a yes).
+        monkeypatch.setattr(repl_module, "CONFIRM_GUARD_SECONDS", 60.0)
         d.type("put I 10 15\r")
         await d.until(lambda _: d.repl.asking is not None, "the question")
         d.type("y\r")  # at once
         await d.until(lambda out: "answer again" in out, "the question asked again")
+        monkeypatch.setattr(repl_module, "CONFIRM_GUARD_SECONDS", CONFIRM_GUARD_SECONDS)
         assert b"PUT:RC8:10:I:3,15\r" not in d.tap.sent
         asked = time.monotonic()
         await d.until(lambda _: time.monotonic() > asked + 0.5, "the guard time to pass")

@@ -39,7 +39,7 @@ def utc(monkeypatch: pytest.MonkeyPatch) -> None:
 
 
 def test_hex_view_with_gaps(snap_compare, tmp_path: Path, utc: None) -> None:
-    app = make_app(tmp_path)
+    app = make_app(tmp_path, timeout=1.0)  # the picture's timeouts say 1 s
 
     async def run_before(pilot) -> None:
         await until(pilot, lambda: app.status is not None, "the first status")

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import pytest
 from test_engine import Front
 from tui_helpers import make_app, results_text, type_line, until
 
@@ -26,6 +27,7 @@ def test_a_row_shows_no_value_or_change_of_the_old_target(front: Front) -> None:
     assert front.rows["I10"].changed_at is None  # 22 → 0 happened on neither controller
 
 
+@pytest.mark.slow  # over half a second
 async def test_the_trends_of_the_old_target_go(tmp_path: Path) -> None:
     app = make_app(tmp_path)
     async with app.run_test(size=(120, 40)) as pilot:

@@ -22,6 +22,9 @@ from rac_console.sim.controller import SimulatedController
 from rac_console.tui.app import RacConsoleApp
 from rac_console.tui.confirm_screen import ConfirmWriteScreen
 
+#: A console on two or three simulators: a second or more each, seconds on a busy machine.
+pytestmark = pytest.mark.slow
+
 #: A quick handshake: robotA's IO 128 on every 0.8 s, robotB's IO 64 0.1 s after it.
 QUICK = {"cycle": 0.8, "hold": 0.4, "reaction": 0.1}
 

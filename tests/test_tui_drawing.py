@@ -37,6 +37,7 @@ def shown_of_kept(log: FrameLog) -> tuple[int, int]:
 # ------------------------------------------------------------- the count
 
 
+@pytest.mark.slow  # over half a second
 def test_with_polls_hidden_the_border_counts_the_typed_frames_a_fast_poll_outlives() -> None:
     log = FrameLog()
     add_exchanges(log, KEPT, poll=True)

@@ -13,7 +13,7 @@ from textual import events
 from textual.pilot import Pilot
 from textual.widgets import Footer
 from textual.widgets._footer import FooterKey
-from tui_helpers import make_app, results_text, type_line, until
+from tui_helpers import REQUEST_TIMEOUT, make_app, results_text, type_line, until
 
 from rac_console.commands.policy import TargetProfile, WritePolicy, Writes
 from rac_console.engine import Engine
@@ -41,7 +41,7 @@ def confirm_console(tmp_path: Path, cell: SimulatorThread) -> RacConsoleApp:
     engine = Engine(
         profile.host,
         profile.port,
-        timeout=1.0,
+        timeout=REQUEST_TIMEOUT,
         interval=0.05,
         cycles=True,
         policy=profile.policy,

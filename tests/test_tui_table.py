@@ -6,10 +6,12 @@ import math
 from pathlib import Path
 
 import pytest
+from servers import Valve
 from textual.pilot import Pilot
 from tui_helpers import FrameTap, make_app, results_text, type_line, until
 
 from rac_console.present.trends import span_text
+from rac_console.sim.thread import SimulatorThread
 from rac_console.tui.app import RacConsoleApp
 from rac_console.tui.trend_view import TrendView
 
@@ -159,21 +161,33 @@ async def test_a_second_space_before_the_first_came_back_is_ignored(tmp_path: Pa
     """Each Space toggles from the value shown; a second one before the row shows the
     first one's effect would write OFF again (or a value nobody meant), so it is refused
     until the write is read back. Polling paused: only the read-back can show it."""
-    app = make_app(tmp_path)
+    with SimulatorThread() as sim:
+        valve = Valve(sim.host, sim.port)
+        try:
+            # The write stays in flight while the valve holds the simulator's answers (a
+            # long timeout: the test says how long, not a clock that load can outrun).
+            app = make_app(tmp_path, sim.host, valve.port, timeout=60)
+            await _a_second_space_is_ignored(app, valve, tmp_path)
+        finally:
+            valve.close()
+
+
+async def _a_second_space_is_ignored(app: RacConsoleApp, valve: Valve, tmp_path: Path) -> None:
     async with app.run_test(size=SIZE) as pilot:
         tap = FrameTap(tmp_path)
         await watch(pilot, "watch IO 128", 1)
         await type_line(pilot, "pause")
         await until(pilot, lambda: app.status is not None and app.status.paused, "the pause")
-        await type_line(pilot, "send SIM:SET:delay_ms=300")  # slow: the write stays in flight
-        await until(pilot, lambda: "SIM:SET:delay_ms=300" in results_text(app), "the delay")
         await pilot.press("f6")
         await until(pilot, lambda: app.focused is app.table, "the table's focus")
+        valve.shut()  # the controller's answers held: the write stays in flight
         await pilot.press("space", "space")  # the second before the first came back
-        done = "IO128: ON → OFF  S_OK  read back OFF ✓"
-        await until(pilot, lambda: done in results_text(app), "the first one's reply")
         refusal = "IO128: the last toggle has not come back yet"
         await until(pilot, lambda: refusal in results_text(app), "the refusal")
+        await until(pilot, lambda: len(puts(tap)) == 1, "the write sent")
+        valve.open()
+        done = "IO128: ON → OFF  S_OK  read back OFF ✓"
+        await until(pilot, lambda: done in results_text(app), "the first one's reply")
         assert puts(tap) == [b"PUT:RC8:128:IO:11,0\r"]
         await until(  # the read-back shows the row its value, polling paused
             pilot, lambda: app.table.get_cell("IO128", "value").plain.strip() == "OFF", "OFF"

@@ -17,7 +17,7 @@ from pathlib import Path
 import pytest
 from textual import events
 from textual.pilot import Pilot
-from tui_helpers import WIRE_RECORD, FrameTap, results_text, until
+from tui_helpers import REQUEST_TIMEOUT, WIRE_RECORD, FrameTap, results_text, until
 
 from rac_console.commands.policy import TargetProfile, WritePolicy, Writes, parse_allow
 from rac_console.engine import Engine
@@ -46,7 +46,7 @@ def confirm_console(
     engine = Engine(
         cell.host,
         cell.port,
-        timeout=1.0,
+        timeout=REQUEST_TIMEOUT,
         interval=0.05,
         record=str(tmp_path / WIRE_RECORD),
         cycles=True,

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import pytest
 from textual.timer import Timer
 from tui_helpers import log_text, make_app, until
 
@@ -27,6 +28,7 @@ def running_timers(app: RacConsoleApp) -> list[Timer]:
     return [timer for timer in app._timers if timer._task is not None and not timer._task.done()]
 
 
+@pytest.mark.slow  # over half a second
 async def test_the_only_timer_is_the_clock_and_a_get_reaches_the_log_when_the_engine_notifies(
     tmp_path: Path,
 ) -> None:

@@ -132,6 +132,7 @@ def test_a_moving_position_changes(front: Front) -> None:
     assert outcome.ok and outcome.waited is not None and outcome.waited.met
 
 
+@pytest.mark.slow  # over half a second
 def test_watched_rows_are_polled_during_a_wait(front: Front) -> None:
     front.run("watch I 0")
     front.until(lambda: "I0" in front.rows and front.rows["I0"].status == "OK", "I0's value")
@@ -263,6 +264,7 @@ def test_a_condition_reaches_the_terminal_escaped() -> None:
     assert "\\x1b[31mRED\\x07" in shown
 
 
+@pytest.mark.slow  # over half a second
 def test_no_poll_that_could_outlast_the_deadline_starts_during_a_wait(
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:

@@ -15,6 +15,11 @@ from rac_console.present.history import History
 from rac_console.tui.app import RacConsoleApp
 from rac_console.tui.frame_log import FrameLog
 
+#: The request timeout of the tests' consoles unless a test gives its own: one no busy
+#: machine reaches (a reply an in-process simulator sends late is no timeout of the
+#: controller's); a test of timeouts says how short it wants them.
+REQUEST_TIMEOUT = 30.0
+
 
 def make_app(
     tmp_path: Path,
@@ -23,7 +28,7 @@ def make_app(
     *,
     read_only: bool = False,
     interval: float = 0.05,
-    timeout: float = 1.0,
+    timeout: float = REQUEST_TIMEOUT,
     watch_file: str | None = None,
     record: str | None = None,
 ) -> RacConsoleApp:

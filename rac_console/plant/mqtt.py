@@ -50,6 +50,9 @@ IN_FLIGHT = 200
 QOS = 1
 #: Seconds between tries while the broker is away: from the first to the last, doubling.
 RETRY_FIRST, RETRY_MOST = 1, 30
+#: Keepalives a connection must have worked for before the broker counts as good again
+#: (the backoff starts over, a breach of the protocol is said again).
+GOOD_FOR = 2
 #: Seconds a TCP connection and a TLS handshake may take.
 CONNECT_TIMEOUT = 5.0
 ONLINE, OFFLINE = b"online", b"offline"
@@ -103,6 +106,9 @@ class MqttFeed:
         self._connected = False
         self._proved = False  # this connection's broker has taken a message
         self._republished = 0  # values published again at the last connection
+        self._connected_at = 0.0  # when the last CONNACK came (monotonic)
+        self._broken_said = False  # a breach of the protocol said in this spell
+        self._back_said = False  # the broker said back in this spell of breaches
         self._trouble: str | None = None  # the kind of trouble said last: away, refused…
         self._stopping = False
         self.sent = 0  # messages acknowledged by the broker
@@ -203,10 +209,19 @@ class MqttFeed:
             return "connected"
         return self._trouble or "connecting"
 
-    def stop(self, timeout: float = 1.0) -> None:
+    def stop(self, timeout: float = 1.0, connecting: float = CONNECT_TIMEOUT) -> None:
         """Hand over what is pending (for up to ``timeout``), say ``offline`` on the
-        status topic, and disconnect: a clean end sends no last will."""
+        status topic, and disconnect: a clean end sends no last will.
+
+        A feed still on its first connection, with nothing said against the broker, is
+        given up to ``connecting`` seconds to make it: a ``watch --count 1`` ends
+        before a broker has answered, and its reading would be lost without a word."""
         with self._lock:
+            if not self._connected and self._trouble is None and not self._dead:
+                self._lock.wait_for(
+                    lambda: self._connected or self._trouble is not None or self._dead,
+                    connecting,
+                )
             if self._connected:
                 self._lock.wait_for(lambda: not self._pending and not self._in_flight, timeout)
             self._stopping = True
@@ -320,6 +335,7 @@ class MqttFeed:
             if self._stopping:  # offline is said, or about to be: never online after it
                 return
             self._connected, self._proved = True, False
+            self._connected_at = time.monotonic()
             self._in_flight += 1  # the status; paho sends again what it had in flight
             self._pending = dict(self._latest)  # the broker may have lost them all
             self._sent_at.clear()
@@ -329,14 +345,18 @@ class MqttFeed:
         self._changed()
 
     def _proves_good(self) -> None:
-        """The broker took a message on this connection: it is back (said when its
-        absence was), and the next loss starts again from the shortest wait."""
+        """The broker took a message on this connection: it is back, said when its
+        absence was (once in a spell of a broker breaking the protocol: see
+        :meth:`_lasted`)."""
         self._proved = True
-        self._backoff.good()
         if self._trouble is not None:  # the start was said by whoever started the feed
+            quiet = self._trouble == "broken" and self._back_said
+            self._back_said = self._back_said or self._trouble == "broken"
             self._trouble = None
             count = self._republished
             self._changed()
+            if quiet:
+                return
             self._say(
                 f"the MQTT broker is back: {self.target}'s {count} value"
                 f"{'s' * (count != 1)} published again"
@@ -383,8 +403,15 @@ class MqttFeed:
             self._lock.notify_all()
         if stopping:
             return
+        self._lasted(was)
         broke, again = self._guard.broke, f"trying again every {RETRY_MOST} s at most"
-        if broke is not None and not broke.first:
+        if broke is not None and not broke.first and self._broken_said:
+            with self._lock:  # the same spell: shown on the status line, not said again
+                self._trouble = "broken"
+                self._lock.notify_all()
+            self._changed()
+        elif broke is not None and not broke.first:
+            self._broken_said = True
             self._trouble_once(
                 "broken",
                 f"the MQTT broker {self._where} broke the protocol ({broke.why}): dropped it; "
@@ -411,6 +438,17 @@ class MqttFeed:
                 f"TLS); {again}, polling goes on",
             )
 
+    def _lasted(self, was: bool) -> None:
+        """A connection ended: when it had worked (a message taken) for
+        :data:`GOOD_FOR` keepalives, the broker has proved good, and the next attempt
+        waits the shortest time; a spell of breaking the protocol is over (its next
+        breach is said again). A broker that answers and then breaks the protocol at
+        once is retried ever more slowly, and said once."""
+        good_for = GOOD_FOR * self._keepalive
+        if was and self._proved and time.monotonic() - self._connected_at >= good_for:
+            self._backoff.good()
+            self._broken_said = self._back_said = False
+
     def _on_publish(
         self, client: Any, userdata: Any, mid: int, reason: Any, properties: Any
     ) -> None:
@@ -423,7 +461,7 @@ class MqttFeed:
             else:
                 self._catch_up(*sent)
             self._lock.notify_all()
-        if not self._proved:
+        if not self._proved and not reason.is_failure:  # a refusal proves nothing
             self._proves_good()
         if sent is not None:
             self._acknowledged(sent[0], reason)
@@ -437,7 +475,9 @@ class MqttFeed:
         """Say ``text`` unless this kind of trouble was said already: a broker away
         (lost, then not reachable at each retry) is one line; a refusal after it, one more."""
         if self._trouble != kind:
-            self._trouble = kind
+            with self._lock:  # a stop waiting for the first connection ends its wait
+                self._trouble = kind
+                self._lock.notify_all()
             self._changed()
             self._say(text)
 
