@@ -303,54 +303,6 @@ class Cable:
         self.restore()
 
 
-class Gate:
-    """A TCP path from 127.0.0.1:``port`` to a broker that holds back what the broker
-    says (its CONNACK first of all) until :meth:`open`: a broker slow to answer, whose
-    slowness the test controls. What the client sends goes through at once."""
-
-    def __init__(self, broker_port: int) -> None:
-        self.broker_port = broker_port
-        self.opened = threading.Event()
-        self._ends: list[socket.socket] = []
-        self._listener = socket.create_server(("127.0.0.1", 0))
-        self.port = int(self._listener.getsockname()[1])
-        threading.Thread(target=self._accept, daemon=True).start()
-
-    def _accept(self) -> None:
-        while True:
-            try:
-                client, _ = self._listener.accept()
-            except OSError:  # closed
-                return
-            upstream = socket.create_connection(("127.0.0.1", self.broker_port), timeout=10)
-            upstream.settimeout(None)
-            self._ends += [client, upstream]
-            threading.Thread(target=self._pump, args=(client, upstream, None), daemon=True).start()
-            threading.Thread(
-                target=self._pump, args=(upstream, client, self.opened), daemon=True
-            ).start()
-
-    def _pump(
-        self, source: socket.socket, sink: socket.socket, gate: threading.Event | None
-    ) -> None:
-        with contextlib.suppress(OSError):
-            while data := source.recv(65536):
-                if gate is not None:
-                    gate.wait()
-                sink.sendall(data)
-        with contextlib.suppress(OSError):
-            sink.shutdown(socket.SHUT_WR)
-
-    def open(self) -> None:
-        self.opened.set()
-
-    def close(self) -> None:
-        self.open()
-        self._listener.close()
-        for end in self._ends:
-            end.close()
-
-
 def listen(host: str, port: int, topic: str) -> None:
     """Subscribe to ``topic`` on ``host:port`` and print, as JSON lines, each connection
     (``{"connected": REASON}``) and each message (``{"topic", "payload", "retain"}``, the

@@ -43,6 +43,6 @@ def test_the_demo_cell_opens_watching_its_handshake_and_says_its_targets_are_sim
     end = time.monotonic() + DEADLINE
     while "Watch  2 rows" not in (screen := terminal.screen()):
         assert time.monotonic() < end, f"the handshake not watched:\n{screen}"
-        time.sleep(0.1)
+        time.sleep(0.1)  # between looks at the screen, until the deadline
     table = screen.split("Frames")[0]
     assert "IO128" in table and "part placed" in table and "IO64" in table

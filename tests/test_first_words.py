@@ -22,8 +22,8 @@ def controller() -> Iterator[SimulatorThread]:
 
 async def placeholder_once_connected(app, size=(100, 30)) -> str:  # type: ignore[no-untyped-def]
     async with app.run_test(size=size) as pilot:
+        # The placeholder follows a status as it arrives, before the status line is drawn.
         await until(pilot, lambda: "connected" in app.status_bar.line.plain, "connected")
-        await pilot.pause(0.1)
         return str(app.command_line.placeholder)
 
 

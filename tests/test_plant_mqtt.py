@@ -20,7 +20,6 @@ import pytest
 from mqtt_broker import (
     Broker,
     Cable,
-    Gate,
     Running,
     Subscriber,
     broker,
@@ -28,7 +27,7 @@ from mqtt_broker import (
     running,
     subscriber,
 )
-from servers import RecordingServer
+from servers import RecordingServer, Valve
 from test_cli import cli, env, fixed_reply, one_error_line, recording
 
 from rac_console.commands.plant import parse_mqtt_address
@@ -205,7 +204,8 @@ def test_a_reading_taken_before_the_broker_answered_is_published_at_the_end(
     """A ``watch --count 1`` has its reading before a slow broker has answered the
     CONNECT: the end waits for the connection, then publishes it and says offline."""
     put(sim, "I", 5, Variant(VT.I4, 55))
-    gate = Gate(broker.port)  # the broker's CONNACK held until the reading is shown
+    gate = Valve("127.0.0.1", broker.port)  # the broker's CONNACK held until the reading is shown
+    gate.shut()
     try:
         watch = Running(
             env, "-H", sim.host, "-p", str(sim.port), "--json", "watch", "I", "5",

@@ -698,7 +698,10 @@ async def test_keys_toggled_and_back_make_no_config_file(tmp_path: Path) -> None
     async with app.run_test(size=WIDE) as pilot:
         await started(pilot)
         await pilot.press("f3", "f5", "f7")
-        await pilot.pause(1.0)  # past the save's half second: an existing file would be
+        # Each toggle held twice the save's half second (SAVE_AFTER), so that a save that
+        # follows a change, as one does for an existing file, would have written by now.
+        # The check itself is after the exit, which saves whatever is due: no wait for it.
+        await pilot.pause(1.0)
         await pilot.press("f3", "f5", "f7")
         await pilot.pause(1.0)
     assert not config_path().exists()

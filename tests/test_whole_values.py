@@ -64,7 +64,7 @@ async def test_a_put_of_many_numbers_shows_every_one_whole(
         await until(
             pilot, lambda: any("read back" in s.text for s in pane.lines), "the read-back"
         )
-        await pilot.pause(0.2)  # the scrollbar, if any, drawn
+        await pilot.pause()  # the screen drawn after the write (no time: until it is idle)
         held = "\n".join(strip.text for strip in pane.lines)
         for value in values:  # the new value and its read-back, each in one piece
             assert whole(value, held) >= 2, f"{name} {value} cut in the pane:\n{held}"
