@@ -109,7 +109,7 @@ async def measure_console(
         async with app.run_test(size=(120, 40)) as pilot:
             await pilot.pause(0.3)
             out["memory_start_mb"] = rss_mb()
-            command_line = app.command_line
+            command_line = app.main_screen.panes.command_line
             for line in watch:
                 command_line.insert_text_at_cursor(line)
                 await pilot.press("enter")

@@ -10,7 +10,7 @@ gaps between the watch's own lines (each poll prints one), its peak resident mem
 and its threads (``/proc``), what the broker saw.
 
 - ``quiet``: ``--every 0.05``, no plant: the longest gap between two polls, the peak RSS;
-- the four brokers of ``tests/hostile_broker.py`` (a 256 MB CONNACK, junk, a PUBACK
+- the four brokers of ``tests/support/brokers.py`` (a 256 MB CONNACK, junk, a PUBACK
   storm, silence), each with ``--mqtt`` to it: the longest gap, the peak RSS, the
   connections the broker saw (a broker dropped and tried again with backoff: a few);
 - ``idle 1000``: ``--metrics 0`` and 1,000 connections to it that send nothing: threads,
@@ -45,10 +45,10 @@ from pathlib import Path
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
 sys.path.insert(0, str(HERE))
-sys.path.insert(0, str(ROOT / "tests"))
+sys.path.insert(0, str(ROOT))  # the tests' brokers: tests.support.brokers
 
 from bench_common import CPrograms, start_responder  # noqa: E402
-from hostile_broker import HOSTILE, hostile_broker  # noqa: E402
+from tests.support.brokers import HOSTILE, hostile_broker  # noqa: E402
 
 SCRAPER = """
 import sys, time, urllib.request

@@ -132,7 +132,7 @@ PLANT_SCENES = {
 
 
 #: The console publishing to a broker that announces a 256 MB CONNACK (the tests' own,
-#: tests/hostile_broker.py): dropped in one line, the badge red, polling going on.
+#: tests/support/brokers.py): dropped in one line, the badge red, polling going on.
 HOSTILE_SCENES = {
     "plant-hostile-120x40": (
         (120, 40),
@@ -192,7 +192,7 @@ async def take(
         app = RacConsoleApp(engine, History(Path(home) / "history"))
         async with app.run_test(size=size) as pilot:
             for line in lines:
-                app.command_line.insert_text_at_cursor(line)
+                app.main_screen.panes.command_line.insert_text_at_cursor(line)
                 await pilot.press("enter")
                 await pilot.pause(0.15)
             await pilot.pause(1.2)
@@ -205,7 +205,7 @@ async def take(
                 if name == "completion":
                     await pilot.press("tab")
                 await pilot.pause(0.6)
-            app.command_line.cursor_blink = False
+            app.main_screen.panes.command_line.cursor_blink = False
             app.save_screenshot(f"{name}.svg", str(OUT))
     print(f"wrote screenshots/{name}.svg", file=sys.stderr)
 
@@ -239,8 +239,8 @@ async def main(only: list[str]) -> None:
     for name, (size, lines, typed) in HOSTILE_SCENES.items():
         if not wanted(name):
             continue
-        sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tests"))
-        from hostile_broker import hostile_broker
+        sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+        from tests.support.brokers import hostile_broker
 
         hostile = hostile_broker("a 256 MB CONNACK")
         try:

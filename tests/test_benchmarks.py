@@ -13,7 +13,8 @@ import sys
 from pathlib import Path
 
 import pytest
-from mqtt_broker import needs_mosquitto
+
+from tests.support.fixtures import needs_mosquitto
 
 #: Over half a second each (a terminal app, a subprocess, a timed server):
 #: `pytest -m "not slow"` skips them.

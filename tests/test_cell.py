@@ -9,8 +9,6 @@ from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
-from cell_helpers import CellFront
-from test_repl import Driver
 
 from rac_console.commands.cells import parse_cells, split_address, split_hosts
 from rac_console.commands.policy import WritePolicy, Writes
@@ -19,6 +17,8 @@ from rac_console.engine import Result
 from rac_console.engine.cell import Cell
 from rac_console.protocol import InputError, kind_of
 from rac_console.sim.thread import SimulatorThread
+from tests.support.cells import CellFront
+from tests.support.drivers import Driver
 
 I = kind_of("I")  # noqa: E741
 
@@ -58,7 +58,7 @@ def test_lines_go_to_their_at_name_or_to_the_current_target(sims: list[Simulator
         assert len({put_b, put_current, use, put_c}) == 4  # one number, one job in the cell
     finally:
         cell.stop()
-    values = [[s.server.controller.value(I, n) for n in (10, 11, 12)] for s in sims]
+    values = [[s.server.controller.value(I, n) for n in (10, 11, 12)] for s in sims]  # type: ignore[union-attr]
     assert values[0][1] == 8 and values[1][0] == 7 and values[2][2] == 9
     assert values[0][0] != 7 and values[2][0] != 7 and values[1][1] != 8 and values[1][2] != 9
 
@@ -94,8 +94,8 @@ def test_each_targets_rules_apply_to_it_alone(sims: list[SimulatorThread]) -> No
         drained.result(written)
     finally:
         cell.stop()
-    assert sims[0].server.controller.value(I, 10) == 7
-    assert sims[1].server.controller.value(I, 10) != 7
+    assert sims[0].server.controller.value(I, 10) == 7  # type: ignore[union-attr]
+    assert sims[1].server.controller.value(I, 10) != 7  # type: ignore[union-attr]
 
 
 def test_one_controller_down_leaves_the_others_polling(sims: list[SimulatorThread]) -> None:
@@ -108,7 +108,7 @@ def test_one_controller_down_leaves_the_others_polling(sims: list[SimulatorThrea
         drained.result(cell.submit("@robotB interval 0.05"))
         sims[1].stop()
 
-        def row(name: str):  # type: ignore[no-untyped-def]
+        def row(name: str):
             rows = [b.rows for b in drained.batches.get(name, []) if b.rows]
             return next((r for batch in reversed(rows) for r in batch.values()), None)
 
@@ -157,8 +157,8 @@ def test_the_pure_parts() -> None:
 async def test_the_repl_prompt_names_the_current_target_and_at_name_runs_elsewhere(
     tmp_path: Path, sims: list[SimulatorThread]
 ) -> None:
-    sims[1].server.controller.set("I", 5, 55)
-    sims[0].server.controller.set("I", 5, 33)
+    sims[1].server.controller.set("I", 5, 55)  # type: ignore[union-attr]
+    sims[0].server.controller.set("I", 5, 33)  # type: ignore[union-attr]
     cell = Cell(
         [
             ("robotA", Target(sims[0].host, sims[0].port)),
@@ -181,8 +181,8 @@ async def test_the_repl_prompt_names_the_current_target_and_at_name_runs_elsewhe
 
     out = await driver.run(steps)
     assert "robotB\x1b[0m ›" in out  # the prompt after use
-    assert sims[1].server.controller.value(I, 6) == 66
-    assert sims[0].server.controller.value(I, 6) != 66
+    assert sims[1].server.controller.value(I, 6) == 66  # type: ignore[union-attr]
+    assert sims[0].server.controller.value(I, 6) != 66  # type: ignore[union-attr]
 
 
 @pytest.mark.slow  # over half a second
@@ -244,4 +244,4 @@ async def test_the_repl_asks_a_cells_confirm_question_naming_its_target(
         await d.until(lambda out: "robotB › PUT I10 not confirmed" in out, "the No, named")
 
     await driver.run(steps)
-    assert sims[1].server.controller.value(I, 10) != 5
+    assert sims[1].server.controller.value(I, 10) != 5  # type: ignore[union-attr]

@@ -10,10 +10,10 @@ from collections.abc import Callable, Iterator
 from pathlib import Path
 
 import pytest
-from test_cli import cli, env  # noqa: F401  (fixtures)
 
 from rac_console.protocol import kind_of
 from rac_console.sim.thread import SimulatorThread
+from tests.support.drivers import cli
 
 pytestmark = pytest.mark.slow
 
@@ -24,18 +24,6 @@ I = kind_of("I")  # noqa: E741
 def two() -> Iterator[tuple[SimulatorThread, SimulatorThread]]:
     with SimulatorThread() as first, SimulatorThread() as second:
         yield first, second
-
-
-@pytest.fixture
-def config(tmp_path: Path, env: dict[str, str]) -> Callable[[str], Path]:  # noqa: F811
-    path = tmp_path / "config.toml"
-    env["RAC_CONSOLE_CONFIG"] = str(path)
-
-    def write(text: str) -> Path:
-        path.write_text(text, encoding="utf-8")
-        return path
-
-    return write
 
 
 def cell_config(first: SimulatorThread, second: SimulatorThread, extra: str = "") -> str:
@@ -51,12 +39,12 @@ def hosts(*sims: SimulatorThread) -> str:
 
 
 def test_watch_on_two_targets_names_each_lines_target(
-    env: dict[str, str],  # noqa: F811
+    env: dict[str, str],
     two: tuple[SimulatorThread, SimulatorThread],
 ) -> None:
     first, second = two
-    first.server.controller.set("I", 5, 33)
-    second.server.controller.set("I", 5, 55)
+    first.server.controller.set("I", 5, 33)  # type: ignore[union-attr]
+    second.server.controller.set("I", 5, 55)  # type: ignore[union-attr]
     done = cli(env, "-H", hosts(first, second), "watch", "I", "5", "--count", "2", "--every", "0")
     assert done.returncode == 0, done.stderr
     lines = done.stdout.splitlines()
@@ -67,13 +55,13 @@ def test_watch_on_two_targets_names_each_lines_target(
 
 
 def test_watch_json_carries_the_profiles_name_as_target(
-    env: dict[str, str],  # noqa: F811
+    env: dict[str, str],
     two: tuple[SimulatorThread, SimulatorThread],
     config: Callable[[str], Path],
 ) -> None:
     config(cell_config(*two))
-    two[0].server.controller.set("I", 5, 33)
-    two[1].server.controller.set("I", 5, 55)
+    two[0].server.controller.set("I", 5, 33)  # type: ignore[union-attr]
+    two[1].server.controller.set("I", 5, 55)  # type: ignore[union-attr]
     done = cli(env, "--cell", "line2", "watch", "I", "5", "--count", "1", "--json")
     assert done.returncode == 0, done.stderr
     by_target = {o["target"]: o for o in map(json.loads, done.stdout.splitlines())}
@@ -82,11 +70,11 @@ def test_watch_json_carries_the_profiles_name_as_target(
 
 
 def test_one_target_down_is_that_targets_failure_and_the_worst_exit_status(
-    env: dict[str, str],  # noqa: F811
+    env: dict[str, str],
     two: tuple[SimulatorThread, SimulatorThread],
 ) -> None:
     first, second = two
-    first.server.controller.set("I", 5, 33)
+    first.server.controller.set("I", 5, 33)  # type: ignore[union-attr]
     gone = second.port
     second.stop()
     done = cli(
@@ -111,7 +99,7 @@ def test_one_target_down_is_that_targets_failure_and_the_worst_exit_status(
 
 
 def test_a_write_names_its_target_and_lands_on_that_controller_only(
-    env: dict[str, str],  # noqa: F811
+    env: dict[str, str],
     two: tuple[SimulatorThread, SimulatorThread],
 ) -> None:
     first, second = two
@@ -119,12 +107,12 @@ def test_a_write_names_its_target_and_lands_on_that_controller_only(
     done = cli(env, "-H", hosts(first, second), "put", f"@{b}", "I", "10", "77", "--json")
     assert done.returncode == 0, done.stderr
     assert json.loads(done.stdout)["target"] == b
-    assert second.server.controller.value(I, 10) == 77
-    assert first.server.controller.value(I, 10) != 77
+    assert second.server.controller.value(I, 10) == 77  # type: ignore[union-attr]
+    assert first.server.controller.value(I, 10) != 77  # type: ignore[union-attr]
 
 
 def test_a_write_without_its_target_is_refused_before_anything_is_sent(
-    env: dict[str, str],  # noqa: F811
+    env: dict[str, str],
     two: tuple[SimulatorThread, SimulatorThread],
 ) -> None:
     first, second = two
@@ -135,7 +123,7 @@ def test_a_write_without_its_target_is_refused_before_anything_is_sent(
 
 
 def test_a_targets_own_rules_apply_to_it_alone(
-    env: dict[str, str],  # noqa: F811
+    env: dict[str, str],
     two: tuple[SimulatorThread, SimulatorThread],
     config: Callable[[str], Path],
 ) -> None:
@@ -144,18 +132,18 @@ def test_a_targets_own_rules_apply_to_it_alone(
     assert refused.returncode == 2 and "read-only" in refused.stderr
     written = cli(env, "--cell", "line2", "put", "@cell3", "I", "10", "5")
     assert written.returncode == 0, written.stderr
-    assert two[0].server.controller.value(I, 10) == 5
-    assert two[1].server.controller.value(I, 10) != 5
+    assert two[0].server.controller.value(I, 10) == 5  # type: ignore[union-attr]
+    assert two[1].server.controller.value(I, 10) != 5  # type: ignore[union-attr]
 
 
 def test_run_routes_at_name_lines_and_use(
-    env: dict[str, str],  # noqa: F811
+    env: dict[str, str],
     two: tuple[SimulatorThread, SimulatorThread],
     config: Callable[[str], Path],
 ) -> None:
     config(cell_config(*two))
-    two[0].server.controller.set("I", 5, 33)
-    two[1].server.controller.set("I", 5, 55)
+    two[0].server.controller.set("I", 5, 33)  # type: ignore[union-attr]
+    two[1].server.controller.set("I", 5, 55)  # type: ignore[union-attr]
     script = "get I 5\n@cell4 get I 5\nuse cell4\nget I 5\n@cell9 get I 5\n"
     done = cli(env, "--cell", "line2", "run", "-", "--json", stdin=script)
     assert done.returncode == 2  # the line naming no open target
@@ -166,7 +154,7 @@ def test_run_routes_at_name_lines_and_use(
 
 
 def test_a_cell_that_is_not_in_the_config_says_which_are(
-    env: dict[str, str],  # noqa: F811
+    env: dict[str, str],
     two: tuple[SimulatorThread, SimulatorThread],
     config: Callable[[str], Path],
 ) -> None:
@@ -177,7 +165,7 @@ def test_a_cell_that_is_not_in_the_config_says_which_are(
 
 
 def test_a_cell_naming_a_missing_profile_is_one_line(
-    env: dict[str, str],  # noqa: F811
+    env: dict[str, str],
     two: tuple[SimulatorThread, SimulatorThread],
     config: Callable[[str], Path],
 ) -> None:
@@ -188,14 +176,14 @@ def test_a_cell_naming_a_missing_profile_is_one_line(
 
 
 def test_watch_logs_one_csv_column_per_target_and_variable(
-    env: dict[str, str],  # noqa: F811
+    env: dict[str, str],
     two: tuple[SimulatorThread, SimulatorThread],
     config: Callable[[str], Path],
     tmp_path: Path,
 ) -> None:
     config(cell_config(*two))
-    two[0].server.controller.set("I", 5, 33)
-    two[1].server.controller.set("S", 1, "=cmd|' /C calc'!A0")
+    two[0].server.controller.set("I", 5, 33)  # type: ignore[union-attr]
+    two[1].server.controller.set("S", 1, "=cmd|' /C calc'!A0")  # type: ignore[union-attr]
     log = tmp_path / "cell.csv"
     done = cli(
         env,
@@ -223,7 +211,7 @@ def test_watch_logs_one_csv_column_per_target_and_variable(
 
 
 def test_run_on_a_cell_records_one_file_whose_lines_name_their_target(
-    env: dict[str, str],  # noqa: F811
+    env: dict[str, str],
     two: tuple[SimulatorThread, SimulatorThread],
     config: Callable[[str], Path],
     tmp_path: Path,

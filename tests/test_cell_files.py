@@ -15,14 +15,14 @@ from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
-from cell_helpers import CellFront
-from servers import RecordingServer
 
 from rac_console.commands.target import Target
 from rac_console.engine import EngineOptions
 from rac_console.engine.cell import Cell
 from rac_console.sim.replay import load_recordings
 from rac_console.sim.thread import SimulatorThread
+from tests.support.cells import CellFront
+from tests.support.servers import RecordingServer
 
 DEADLINE = 10.0
 HOSTILE = "=cmd|' /C calc'!A0\x1b[2J"

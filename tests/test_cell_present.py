@@ -124,7 +124,7 @@ def test_the_log_escapes_a_target_name_from_the_config() -> None:
 
     log = FrameLog()
     log.target_width = 8
-    frame = Frame(1_700_000_000.0, "tx", b"GET:RC8:1:I:\r", None)  # type: ignore[arg-type]
+    frame = Frame(1_700_000_000.0, "tx", b"GET:RC8:1:I:\r", None)
     log.add(frame, "bad\x1b[2J")
     line, _ = log._frame_line(frame, None)
     assert "\x1b" not in line and "GET:RC8:1:I:" in line

@@ -13,11 +13,10 @@ import socket
 import subprocess
 import sys
 import threading
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from pathlib import Path
 
 import pytest
-from test_replay import env  # noqa: F401  (fixture: a private HOME)
 
 pytestmark = pytest.mark.slow
 
@@ -79,7 +78,7 @@ class Sim:
 
 
 @pytest.fixture
-def sim(env: dict[str, str]) -> Iterator[type[Sim]]:  # noqa: F811
+def sim(env: dict[str, str]) -> Iterator[Callable[..., Sim]]:
     started: list[Sim] = []
 
     class Started(Sim):
@@ -107,7 +106,7 @@ def ask(port: int, line: bytes) -> bytes:
 
 
 def test_a_recorded_cell_replays_each_target_on_its_own_port(
-    sim: type[Sim], tmp_path: Path
+    sim: Callable[..., Sim], tmp_path: Path
 ) -> None:
     path = tmp_path / "cell.jsonl"
     path.write_text("\n".join(CELL_RECORDING) + "\n")
@@ -121,7 +120,7 @@ def test_a_recorded_cell_replays_each_target_on_its_own_port(
 
 
 def test_a_file_mixing_a_cell_and_no_cell_is_refused_in_one_line(
-    env: dict[str, str],  # noqa: F811
+    env: dict[str, str],
     tmp_path: Path,
 ) -> None:
     path = tmp_path / "mixed.jsonl"
@@ -135,7 +134,7 @@ def test_a_file_mixing_a_cell_and_no_cell_is_refused_in_one_line(
 
 
 def test_sim_cell_starts_n_simulators_each_answering_and_ctrl_c_stops_all(
-    sim: type[Sim],
+    sim: Callable[..., Sim],
 ) -> None:
     running = sim(["--cell", "2"])
     ports = running.listening(2)
@@ -151,7 +150,7 @@ def test_sim_cell_starts_n_simulators_each_answering_and_ctrl_c_stops_all(
 
 
 def test_sim_cell_and_replay_together_are_refused(
-    env: dict[str, str],  # noqa: F811
+    env: dict[str, str],
     tmp_path: Path,
 ) -> None:
     path = tmp_path / "cell.jsonl"

@@ -2,21 +2,20 @@
 and its exit status; the WinSock table behind the words; and the pointers to it from the
 console's, the REPL's and a write's connection failures.
 
-The CLI runs as a subprocess (``cli``/``env`` from test_cli.py) against the built-in
-simulator, a closed port, a name that cannot resolve, and servers written here (one that
-keeps a single session, one that pushes the first session out, one that never answers).
+The CLI runs as a subprocess (``cli`` and ``env`` from tests/support) against the built-in
+simulator, a closed port, a name that cannot resolve, and recording servers
+(``tests/support/servers.py``: one that keeps a single session, one that pushes the first
+session out, one that never answers).
 Every server binds 127.0.0.1 port 0; every wait has a deadline.
 """
 
 from __future__ import annotations
 
-import contextlib
 import errno
 import json
 import os
 import shutil
 import socket
-import struct
 import subprocess
 import sys
 import threading
@@ -24,9 +23,6 @@ from collections.abc import Callable, Iterator
 from pathlib import Path
 
 import pytest
-from servers import RecordingServer
-from test_cli import cli, env, unused_port  # noqa: F401  (env is a fixture)
-from test_engine import Front
 
 from rac_console.commands.check import (
     STEPS,
@@ -40,7 +36,10 @@ from rac_console.commands.check import (
 )
 from rac_console.commands.outcome import ExitStatus
 from rac_console.engine import Engine
-from rac_console.session.blocking import _problem, _reason
+from rac_console.session.sockets import problem_of as _problem
+from rac_console.session.sockets import reason_of as _reason
+from tests.support.drivers import Front, cli
+from tests.support.servers import RecordingServer, Sessions, fixed_reply, unused_port
 
 GET_I0 = b"GET:RC8:0:I:"
 ANSWER = b"0,3,123\r"
@@ -54,7 +53,8 @@ def report_of(result: subprocess.CompletedProcess[str]) -> dict:
     """The one JSON object of ``check --json``, and nothing else on stdout."""
     assert "Traceback" not in result.stderr, result.stderr
     [line] = result.stdout.splitlines()
-    return json.loads(line)
+    report: dict = json.loads(line)
+    return report
 
 
 def steps_by_name(report: dict) -> dict[str, dict]:
@@ -65,7 +65,7 @@ def steps_by_name(report: dict) -> dict[str, dict]:
 def assert_stopped_after(report: dict, failed: str) -> dict:
     """Steps before ``failed`` ok, ``failed`` failed with a hint, later ones not tried."""
     steps = steps_by_name(report)
-    at = STEPS.index(failed)  # type: ignore[arg-type]
+    at = STEPS.index(failed)
     for name in STEPS[:at]:
         assert steps[name]["ok"] is True, steps[name]
         assert steps[name]["hint"] is None
@@ -84,98 +84,15 @@ def assert_stopped_after(report: dict, failed: str) -> dict:
     return step
 
 
-class SessionServer:
-    """A RAC server on 127.0.0.1:0 that answers every line ``0,3,123`` and keeps one
-    session: ``mode="one"`` closes (resets) any connection made while one is open;
-    ``mode="newest"`` closes the open one when another comes and serves the newcomer."""
-
-    def __init__(self, mode: str) -> None:
-        self.mode = mode
-        self.lines: list[bytes] = []
-        self.turned_away = 0
-        self._open: socket.socket | None = None
-        self._lock = threading.Lock()
-        self._stop = threading.Event()
-        self._sock = socket.create_server(("127.0.0.1", 0))
-        self._sock.settimeout(0.05)
-        self.port: int = self._sock.getsockname()[1]
-        self._threads = [threading.Thread(target=self._accept_loop, daemon=True)]
-        self._threads[0].start()
-
-    @property
-    def args(self) -> list[str]:
-        return ["-H", "127.0.0.1", "-p", str(self.port)]
-
-    def _accept_loop(self) -> None:
-        while not self._stop.is_set():
-            try:
-                conn, _ = self._sock.accept()
-            except TimeoutError:
-                continue
-            except OSError:
-                return
-            with self._lock:
-                held = self._open
-                if held is not None and self.mode == "one":
-                    self.turned_away += 1
-                    _reset(conn)
-                    continue
-                if held is not None:  # newest: the older session is pushed out
-                    self.turned_away += 1
-                    _reset(held)
-                self._open = conn
-            thread = threading.Thread(target=self._serve, args=(conn,), daemon=True)
-            self._threads.append(thread)
-            thread.start()
-
-    def _serve(self, conn: socket.socket) -> None:
-        conn.settimeout(0.05)
-        buffer = b""
-        try:
-            while not self._stop.is_set():
-                try:
-                    data = conn.recv(4096)
-                except TimeoutError:
-                    continue
-                except OSError:
-                    return
-                if not data:
-                    return
-                buffer += data
-                while b"\r" in buffer:
-                    line, _, buffer = buffer.partition(b"\r")
-                    self.lines.append(line)
-                    conn.sendall(ANSWER)
-        except OSError:
-            return
-        finally:
-            with self._lock:
-                if self._open is conn:
-                    self._open = None
-            with contextlib.suppress(OSError):
-                conn.close()
-
-    def close(self) -> None:
-        self._stop.set()
-        self._sock.close()
-        for thread in self._threads:
-            thread.join(timeout=2)
-
-
-def _reset(conn: socket.socket) -> None:
-    """Close with a reset (SO_LINGER 0), as a controller turning a session away."""
-    with contextlib.suppress(OSError):
-        conn.setsockopt(socket.SOL_SOCKET, socket.SO_LINGER, struct.pack("ii", 1, 0))
-    with contextlib.suppress(OSError):
-        conn.close()
-
-
 @pytest.fixture
-def session_server() -> Iterator[Callable[[str], SessionServer]]:
-    servers: list[SessionServer] = []
+def session_server() -> Iterator[Callable[[Sessions], RecordingServer]]:
+    """A RAC server that answers every line ``0,3,123`` and keeps one session: ``"one"``
+    closes (resets) any connection made while one is open; ``"newest"`` closes the open
+    one when another comes and serves the newcomer."""
+    servers: list[RecordingServer] = []
 
-    def make(mode: str) -> SessionServer:
-        servers.append(SessionServer(mode))
+    def make(sessions: Sessions) -> RecordingServer:
+        servers.append(RecordingServer(fixed_reply(ANSWER), sessions=sessions))
         return servers[-1]
 
     yield make
@@ -200,7 +117,7 @@ def recording() -> Iterator[Callable[[bytes | None], RecordingServer]]:
 
 
 @pytest.mark.slow
-def test_the_simulator_passes_every_step(env: dict[str, str]) -> None:  # noqa: F811
+def test_the_simulator_passes_every_step(env: dict[str, str]) -> None:
     result = cli(env, "check", "--json")
     assert result.returncode == 0, result.stderr
     report = report_of(result)
@@ -218,7 +135,7 @@ def test_the_simulator_passes_every_step(env: dict[str, str]) -> None:  # noqa: 
 
 @pytest.mark.slow
 def test_the_text_says_it_checks_the_simulator_one_line_a_step(
-    env: dict[str, str],  # noqa: F811
+    env: dict[str, str],
 ) -> None:
     result = cli(env, "check", "--read-only")  # only GETs: read-only changes nothing
     assert result.returncode == 0, result.stderr
@@ -234,7 +151,7 @@ def test_the_text_says_it_checks_the_simulator_one_line_a_step(
 
 @pytest.mark.slow
 def test_a_closed_port_is_refused_and_names_the_port_and_the_rac_server(
-    env: dict[str, str],  # noqa: F811
+    env: dict[str, str],
 ) -> None:
     port = unused_port()
     result = cli(env, "check", "-H", "127.0.0.1", "-p", str(port), "--json")
@@ -253,7 +170,7 @@ def test_a_closed_port_is_refused_and_names_the_port_and_the_rac_server(
 
 @pytest.mark.slow
 def test_a_name_that_does_not_resolve_stops_at_the_first_step(
-    env: dict[str, str],  # noqa: F811
+    env: dict[str, str],
 ) -> None:
     result = cli(env, "check", "-H", "robot9.invalid", "--json")
     assert result.returncode == 3, result.stderr
@@ -265,8 +182,8 @@ def test_a_name_that_does_not_resolve_stops_at_the_first_step(
 
 @pytest.mark.slow
 def test_a_controller_that_keeps_one_session_fails_the_second_session(
-    env: dict[str, str],  # noqa: F811
-    session_server: Callable[[str], SessionServer],
+    env: dict[str, str],
+    session_server: Callable[[Sessions], RecordingServer],
 ) -> None:
     server = session_server("one")
     result = cli(env, "check", *server.args, "--json")
@@ -280,8 +197,8 @@ def test_a_controller_that_keeps_one_session_fails_the_second_session(
 
 @pytest.mark.slow
 def test_a_controller_that_pushes_the_first_session_out_is_said_so(
-    env: dict[str, str],  # noqa: F811
-    session_server: Callable[[str], SessionServer],
+    env: dict[str, str],
+    session_server: Callable[[Sessions], RecordingServer],
 ) -> None:
     server = session_server("newest")
     result = cli(env, "check", *server.args, "--json")
@@ -294,7 +211,7 @@ def test_a_controller_that_pushes_the_first_session_out_is_said_so(
 
 @pytest.mark.slow
 def test_a_server_that_never_answers_fails_the_get_within_the_timeout(
-    env: dict[str, str],  # noqa: F811
+    env: dict[str, str],
     recording: Callable[[bytes | None], RecordingServer],
 ) -> None:
     server = recording(None)
@@ -310,7 +227,7 @@ def test_a_server_that_never_answers_fails_the_get_within_the_timeout(
 
 @pytest.mark.slow
 def test_an_error_to_the_get_is_exit_1(
-    env: dict[str, str],  # noqa: F811
+    env: dict[str, str],
     recording: Callable[[bytes | None], RecordingServer],
 ) -> None:
     server = recording(E_ACCESSDENIED)
@@ -323,7 +240,7 @@ def test_an_error_to_the_get_is_exit_1(
 
 @pytest.mark.slow
 def test_a_read_only_profile_is_checked_by_name_with_gets_only(
-    env: dict[str, str],  # noqa: F811
+    env: dict[str, str],
     recording: Callable[[bytes | None], RecordingServer],
     tmp_path: Path,
 ) -> None:
@@ -344,7 +261,7 @@ def test_a_read_only_profile_is_checked_by_name_with_gets_only(
 
 @pytest.mark.slow
 def test_check_records_its_frames_with_record(
-    env: dict[str, str],  # noqa: F811
+    env: dict[str, str],
     tmp_path: Path,
 ) -> None:
     record = tmp_path / "check.jsonl"
@@ -365,7 +282,7 @@ def test_the_console_points_to_check_when_it_cannot_connect_at_start() -> None:
     try:
         front = Front(engine)
         front.until(lambda: 0 in front.results, "the start's connection failure")
-        [said] = [f.text for f in front.results[0].feedback]  # type: ignore[attr-defined]
+        [said] = [f.text for f in front.results[0].feedback]  # type: ignore[union-attr]
         assert said == (
             f"cannot connect to 127.0.0.1:{port}: Connection refused: commands will retry "
             f"(rac-console check -H 127.0.0.1 -p {port} says why)"
@@ -380,7 +297,7 @@ def test_the_console_points_to_check_when_it_cannot_connect_at_start() -> None:
 
 @pytest.mark.slow
 def test_a_write_whose_first_read_fails_points_to_check_not_to_no_verify(
-    env: dict[str, str],  # noqa: F811
+    env: dict[str, str],
     recording: Callable[[bytes | None], RecordingServer],
 ) -> None:
     server = recording(None)
@@ -405,7 +322,7 @@ def test_a_name_server_that_never_answers_is_given_up_on_in_time(
         release.wait(10)  # a name server that does not answer (released when the test ends)
         raise socket.gaierror(socket.EAI_AGAIN, "Temporary failure in name resolution")
 
-    monkeypatch.setattr(probe.socket, "getaddrinfo", stuck)
+    monkeypatch.setattr(socket, "getaddrinfo", stuck)
     try:
         # The stuck lookup is released only after this returns: returning is giving up.
         report = probe.diagnose("robot3.plant", 5006, timeout=0.5, resolve_within=0.2)
@@ -594,7 +511,7 @@ def _check_in(
 @pytest.mark.slow
 def test_a_controller_that_never_answers_the_connect_times_out(
     blackhole: str,
-    env: dict[str, str],  # noqa: F811
+    env: dict[str, str],
 ) -> None:
     result = _check_in(blackhole, env, "-H", "10.79.0.2", "--timeout", "0.5", "--json")
     assert result.returncode == 3, result.stderr
@@ -607,7 +524,7 @@ def test_a_controller_that_never_answers_the_connect_times_out(
 @pytest.mark.slow
 def test_an_address_with_no_route_says_cable_address_and_subnet(
     blackhole: str,
-    env: dict[str, str],  # noqa: F811
+    env: dict[str, str],
 ) -> None:
     result = _check_in(blackhole, env, "-H", "10.80.0.2", "--json")
     assert result.returncode == 3, result.stderr

@@ -1,5 +1,5 @@
 """The real CLI, run as a subprocess, against the built-in simulator, a recording
-server written here, and a ``rac-console sim`` subprocess.
+server (``tests/support/servers.py``), and a ``rac-console sim`` subprocess.
 
 Every server binds 127.0.0.1 port 0; HOME (and the XDG directories) point into
 a temporary directory, so nothing here touches the real home directory.
@@ -8,7 +8,6 @@ a temporary directory, so nothing here touches the real home directory.
 from __future__ import annotations
 
 import json
-import os
 import queue
 import socket
 import subprocess
@@ -18,97 +17,16 @@ from collections.abc import Callable, Iterator
 from pathlib import Path
 
 import pytest
-from servers import RecordingServer, Reply
+
+from tests.support.drivers import cli, json_lines, one_error_line
+from tests.support.servers import RecordingServer, fixed_reply, sample_reply, unused_port
 
 #: Over half a second each (a terminal app, a subprocess, a timed server):
 #: `pytest -m "not slow"` skips them.
 pytestmark = pytest.mark.slow
 
-SAMPLES = json.loads((Path(__file__).parent / "rac-samples.json").read_text(encoding="utf-8"))
-GET_SAMPLES = {s["request"].encode("ascii"): s["response"].encode("ascii") for s in SAMPLES["get"]}
 JSON_KEYS = {"request", "response", "ok", "result", "result_name", "vt", "value", "rtt_ms"}
 E_INVALIDARG = 0x80070057
-
-
-# ----------------------------------------------------------------- helpers
-
-
-def sample_reply(line: bytes) -> bytes | None:
-    """The vendor's sample answers: every GET of index 10 its sample, every PUT S_OK."""
-    if line.startswith(b"PUT:"):
-        return b"0\r"
-    if line in GET_SAMPLES:
-        return GET_SAMPLES[line] + b"\r"
-    return b"0,3,123\r"
-
-
-def fixed_reply(data: bytes | None) -> Reply:
-    return lambda line: data
-
-
-@pytest.fixture
-def recording() -> Iterator[Callable[..., RecordingServer]]:
-    servers: list[RecordingServer] = []
-
-    def make(reply: Reply = sample_reply) -> RecordingServer:
-        server = RecordingServer(reply)
-        servers.append(server)
-        return server
-
-    yield make
-    for server in servers:
-        server.close()
-
-
-@pytest.fixture
-def env(tmp_path: Path) -> dict[str, str]:
-    home = tmp_path / "cli-home"
-    home.mkdir()
-    environment = dict(os.environ)
-    environment.update(
-        HOME=str(home),
-        XDG_CONFIG_HOME=str(home / ".config"),
-        XDG_DATA_HOME=str(home / ".local" / "share"),
-        XDG_STATE_HOME=str(home / ".local" / "state"),
-        XDG_CACHE_HOME=str(home / ".cache"),
-        PYTHONIOENCODING="utf-8",
-        COLUMNS="200",
-    )
-    return environment
-
-
-def cli(
-    env: dict[str, str], *args: str, stdin: str = "", timeout: float = 20
-) -> subprocess.CompletedProcess[str]:
-    return subprocess.run(
-        [sys.executable, "-m", "rac_console", *args],
-        env=env,
-        input=stdin,
-        capture_output=True,
-        text=True,
-        encoding="utf-8",
-        errors="backslashreplace",
-        timeout=timeout,
-    )
-
-
-def one_error_line(result: subprocess.CompletedProcess[str]) -> str:
-    """The stderr of a failed command: exactly one line, no traceback."""
-    assert "Traceback" not in result.stderr
-    lines = result.stderr.strip("\n").split("\n")
-    assert len(lines) == 1, result.stderr
-    assert lines[0].startswith("rac-console: ")
-    return lines[0]
-
-
-def json_lines(stdout: str) -> list[dict]:
-    return [json.loads(line) for line in stdout.splitlines() if line.strip()]
-
-
-def unused_port() -> int:
-    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as sock:
-        sock.bind(("127.0.0.1", 0))
-        return sock.getsockname()[1]
 
 
 # ----------------------------------------------- the built-in simulator (no -H)
@@ -406,20 +324,12 @@ def test_garbled_reply_is_exit_3_and_shown_escaped(
     assert data["error"]
 
 
-def test_closed_without_reply_is_exit_3(env: dict[str, str]) -> None:
-    with socket.create_server(("127.0.0.1", 0)) as listener:
-        port = listener.getsockname()[1]
-
-        def serve() -> None:
-            conn, _ = listener.accept()
-            with conn:
-                conn.recv(1024)
-                conn.sendall(b"0,3,1")  # cut short, then closed
-
-        thread = threading.Thread(target=serve, daemon=True)
-        thread.start()
-        result = cli(env, "-H", "127.0.0.1", "-p", str(port), "get", "I", "10")
-        thread.join(timeout=5)
+def test_closed_without_reply_is_exit_3(
+    env: dict[str, str], recording: Callable[..., RecordingServer]
+) -> None:
+    server = recording(fixed_reply(b"0,3,1"), answers=1)  # cut short, then closed
+    port = server.port
+    result = cli(env, "-H", "127.0.0.1", "-p", str(port), "get", "I", "10")
     assert result.returncode == 3
     assert "0,3,1" in one_error_line(result)
 

@@ -15,10 +15,8 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import pytest
-import test_cli
 from hypothesis import given
 from hypothesis import strategies as st
-from test_cli import GET_SAMPLES, RecordingServer, cli, json_lines, one_error_line, sample_reply
 
 from rac_console.commands.argv import (
     Option,
@@ -31,8 +29,9 @@ from rac_console.commands.argv import (
 )
 from rac_console.commands.language import Get, Put, Raw, VarRef
 from rac_console.protocol import KINDS, VT, InputError, Variant
-
-env = test_cli.env  # the fixture: HOME and the XDG directories in a temporary directory
+from tests.support.drivers import cli, json_lines, one_error_line
+from tests.support.samples import GET_SAMPLES
+from tests.support.servers import RecordingServer, sample_reply
 
 PORT = "{port}"  # replaced by the recording server's port
 TARGET = ["-H", "127.0.0.1", "-p", PORT]

@@ -21,14 +21,13 @@ from pathlib import Path
 from typing import ClassVar
 
 import pytest
-import test_cli as shared
-from servers import CLOSE, RecordingServer
-from test_cli import cli, fixed_reply, json_lines, unused_port
+
+from tests.support import drivers as shared
+from tests.support.drivers import cli, json_lines
+from tests.support.servers import CLOSE, RecordingServer, fixed_reply, unused_port
 
 pytestmark = pytest.mark.slow
 
-env = shared.env  # the fixtures of test_cli: a private HOME, servers that stop with the test
-recording = shared.recording
 
 STAMP_RE = re.compile(r"\d{4}-\d\d-\d\dT\d\d:\d\d:\d\d\.\d{3}[+-]\d\d:\d\d")
 E_INVALIDARG = b"-2147024809\r"

@@ -9,10 +9,9 @@ import json
 from collections.abc import Callable
 
 import pytest
-from servers import RecordingServer
-from test_cli import cli, env, one_error_line, recording
 
-env, recording = env, recording  # the fixtures: a private HOME, servers stopped at the end
+from tests.support.drivers import cli, one_error_line
+from tests.support.servers import RecordingServer
 
 
 def test_host_and_port_in_one_word_reach_that_port(

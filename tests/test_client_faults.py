@@ -1,4 +1,5 @@
-"""The session against the simulator and against misbehaving servers written here.
+"""The session against the simulator and against misbehaving servers (each test's
+handler on a :class:`~tests.support.servers.FaultServer`).
 
 Every server binds 127.0.0.1 port 0 and runs on the test's own event loop (each test
 is a plain function running it with ``asyncio.run``); the blocking session runs on a
@@ -8,95 +9,28 @@ worker thread of its own (:class:`AsyncSession`). Waits are conditions with dead
 from __future__ import annotations
 
 import asyncio
-import json
 import select
 import socket
 from collections.abc import Awaitable, Callable
-from dataclasses import dataclass
-from pathlib import Path
+from typing import cast
 
 import pytest
-from session_helpers import AsyncSession
 
 from rac_console.protocol import KINDS, Variant, kind_of
 from rac_console.protocol.vartypes import VT
-from rac_console.session import BadReply, Disconnected, Frame, RequestTimeout, blocking
+from rac_console.session import BadReply, Disconnected, Frame, RequestTimeout
 from rac_console.sim.server import SimulatorServer
+from tests.support.samples import SAMPLES
+from tests.support.servers import Conn, FaultServer, Handler
+from tests.support.sessions import AsyncSession
 
-SAMPLES = json.loads((Path(__file__).parent / "rac-samples.json").read_text(encoding="utf-8"))
 HOST = "127.0.0.1"
 #: How long a test waits for what must come: a hung request fails the test, and nothing
 #: checks how fast anything came (that is for benchmarks/).
 DEADLINE = 10.0
 
-Handler = Callable[["Conn"], Awaitable[None]]
-
 
 # ----------------------------------------------------------------- helpers
-
-
-@dataclass
-class Conn:
-    """One accepted connection of a FaultServer, as its handler sees it."""
-
-    server: FaultServer
-    number: int
-    reader: asyncio.StreamReader
-    writer: asyncio.StreamWriter
-
-    async def line(self) -> bytes:
-        """One request line without its CR; IncompleteReadError at EOF."""
-        line = (await self.reader.readuntil(b"\r"))[:-1]
-        self.server.lines.append(line)
-        return line
-
-    async def send(self, data: bytes) -> None:
-        self.writer.write(data)
-        await self.writer.drain()
-
-
-class FaultServer:
-    """A TCP server on 127.0.0.1:0 running ``handler(conn)`` for each connection."""
-
-    def __init__(self, handler: Handler) -> None:
-        self.handler = handler
-        self.connections = 0
-        self.lines: list[bytes] = []
-        self.ended: list[int] = []
-        self._tasks: set[asyncio.Task[None]] = set()
-        self._server: asyncio.Server | None = None
-        self.port = 0
-
-    async def __aenter__(self) -> FaultServer:
-        self._server = await asyncio.start_server(self._serve, HOST, 0)
-        self.port = self._server.sockets[0].getsockname()[1]
-        return self
-
-    async def __aexit__(self, *exc_info: object) -> None:
-        assert self._server is not None
-        self._server.close()
-        for task in list(self._tasks):
-            task.cancel()
-        await asyncio.gather(*self._tasks, return_exceptions=True)
-        await self._server.wait_closed()
-
-    async def _serve(self, reader: asyncio.StreamReader, writer: asyncio.StreamWriter) -> None:
-        task = asyncio.current_task()
-        assert task is not None
-        self._tasks.add(task)
-        self.connections += 1
-        conn = Conn(self, self.connections, reader, writer)
-        try:
-            await self.handler(conn)
-        except (ConnectionError, asyncio.IncompleteReadError):
-            pass
-        finally:
-            self.ended.append(conn.number)
-            writer.close()
-            self._tasks.discard(task)
-
-    def session(self, **kwargs: object) -> AsyncSession:
-        return AsyncSession(HOST, self.port, **kwargs)
 
 
 def index_of(line: bytes) -> int:
@@ -140,7 +74,7 @@ async def unread(session: AsyncSession) -> bool:
 
 
 def run(coro: Awaitable[None]) -> None:
-    asyncio.run(asyncio.wait_for(coro, 6 * DEADLINE))  # type: ignore[arg-type]
+    asyncio.run(asyncio.wait_for(coro, 6 * DEADLINE))
 
 
 # ------------------------------------------------- the simulator, normally
@@ -389,7 +323,7 @@ def test_a_byte_waiting_on_a_fresh_connection_keeps_the_request_timeout(
         select.select([sock], [], [], DEADLINE)  # the LF has landed before the session looks
         return sock
 
-    monkeypatch.setattr(blocking.socket, "create_connection", connect_once_the_peer_spoke)
+    monkeypatch.setattr(socket, "create_connection", connect_once_the_peer_spoke)
 
     async def main() -> None:
         async with FaultServer(handler) as server:
@@ -865,30 +799,28 @@ def test_each_exchange_publishes_a_tx_and_an_rx_frame() -> None:
     run(main())
 
 
-async def _slow_echo_server(delay: float) -> tuple[asyncio.Server, int]:
-    async def serve(reader: asyncio.StreamReader, writer: asyncio.StreamWriter) -> None:
-        try:
-            while line := await reader.readuntil(b"\r"):
-                index = line.split(b":")[2]
-                await asyncio.sleep(delay)
-                writer.write(b"0,3," + index + b"\r")
-        except (asyncio.IncompleteReadError, ConnectionError):
-            pass
+def slow_echo(delay: float) -> Handler:
+    """Answers each request with its index (``0,3,n``), ``delay`` seconds after it came."""
 
-    server = await asyncio.start_server(serve, "127.0.0.1", 0)
-    return server, server.sockets[0].getsockname()[1]
+    async def handler(conn: Conn) -> None:
+        while True:
+            line = await conn.line()
+            await asyncio.sleep(delay)
+            await conn.send(echo_reply(line))
+
+    return handler
 
 
 def test_a_cancelled_request_never_leaves_its_reply_for_the_next() -> None:
     async def scenario() -> int:
-        server, port = await _slow_echo_server(0.2)
-        async with server, AsyncSession("127.0.0.1", port, timeout=2) as session:
+        async with FaultServer(slow_echo(0.2)) as server, server.session(timeout=2) as session:
             with pytest.raises(TimeoutError):
                 # The await is given up; the GET itself still runs on the session's
                 # thread and takes its own reply, so the next request waits for it.
                 await asyncio.wait_for(session.get(kind_of("I"), 1), 0.05)
             reply = await session.get(kind_of("I"), 2)
-            return reply.response.variant.value
+            value: int = cast(Variant, reply.response.variant).value
+            return value
 
     assert asyncio.run(scenario()) == 2
 
@@ -907,6 +839,6 @@ def test_a_failing_frame_observer_does_not_break_the_session() -> None:
             await session.put(kind_of("I"), 2, Variant(3, 22))
             first = await session.get(kind_of("I"), 1)
             second = await session.get(kind_of("I"), 2)
-            return [first.response.variant.value, second.response.variant.value]
+            return [cast(Variant, r.response.variant).value for r in (first, second)]
 
     assert asyncio.run(scenario()) == [11, 22]

@@ -62,7 +62,8 @@ def bits(x: float) -> int:
 
 
 def f32(pattern: int) -> float:
-    return struct.unpack("<f", pattern.to_bytes(4, "little"))[0]
+    value: float = struct.unpack("<f", pattern.to_bytes(4, "little"))[0]
+    return value
 
 
 def through_double(text: str) -> float | None:
@@ -93,7 +94,8 @@ def nudged(value: Decimal, direction: int, hair: int = 30) -> str:
 def r4(text: str) -> float | None:
     """Our codec's reading of VT_R4 text, None when it refuses it as out of range."""
     try:
-        return parse_variant("4," + text).value
+        value: float | None = parse_variant("4," + text).value
+        return value
     except ProtocolError as exc:
         assert "out of range" in str(exc)
         return None

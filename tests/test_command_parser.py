@@ -5,6 +5,7 @@ to write it."""
 from __future__ import annotations
 
 import math
+from typing import TypeVar
 
 import pytest
 
@@ -29,8 +30,10 @@ from rac_console.commands.language import (
 from rac_console.engine.commands import parse_command
 from rac_console.protocol import InputError
 
+C = TypeVar("C")
 
-def parsed(line: str, cls: type) -> object:
+
+def parsed(line: str, cls: type[C]) -> C:
     command = parse_command(line)
     assert isinstance(command, cls), f"{line!r} gave {command!r}, not a {cls.__name__}"
     return command

@@ -288,7 +288,8 @@ def test_a_long_list_is_cut_leaving_a_line_to_say_how_many_more() -> None:
 @pytest.mark.slow  # over half a second
 async def test_the_console_lists_the_nine_types_whole(tmp_path: Path) -> None:
     from textual.widgets import Static
-    from tui_helpers import make_app, until
+
+    from tests.support.drivers import make_app, until
 
     app = make_app(tmp_path)
     async with app.run_test(size=(100, 30)) as pilot:

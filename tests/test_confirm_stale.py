@@ -6,10 +6,10 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
-from tui_helpers import make_app, until
 
 from rac_console.engine import ConfirmWrite, Message, Result
 from rac_console.tui.confirm_screen import ConfirmWriteScreen
+from tests.support.drivers import make_app, until
 
 pytestmark = pytest.mark.slow
 
@@ -17,9 +17,11 @@ pytestmark = pytest.mark.slow
 async def test_a_question_whose_result_came_closes(tmp_path: Path) -> None:
     app = make_app(tmp_path)
     async with app.run_test(size=(100, 30)) as pilot:
-        await until(pilot, lambda: app.status is not None, "the first status")
+        await until(pilot, lambda: app.main_screen.status is not None, "the first status")
         question = ConfirmWrite(99, "I10", "14", "15", "PUT:RC8:10:I:3,15", "LIVE h:5006", None)
-        app.engine.outbox.put_many([question])
+        app.main_screen.members.engine.outbox.put_many([question])
         await until(pilot, lambda: isinstance(app.screen, ConfirmWriteScreen), "the question")
-        app.engine.outbox.put_many([Result(99, (Message("not run: cancelled", "error"),))])
+        app.main_screen.members.engine.outbox.put_many(
+            [Result(99, (Message("not run: cancelled", "error"),))]
+        )
         await until(pilot, lambda: not isinstance(app.screen, ConfirmWriteScreen), "it closes")

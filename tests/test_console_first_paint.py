@@ -13,7 +13,7 @@ from pathlib import Path
 import pytest
 
 pytest.importorskip("pty")  # POSIX: a pty
-from pty_console import read_until, spawn_console, stop
+from tests.support.drivers import read_until, spawn_console, stop
 
 #: A terminal app in a subprocess: `pytest -m "not slow"` skips it.
 pytestmark = pytest.mark.slow

@@ -19,7 +19,7 @@ from rac_console.tui.hangup import HANGUP_STATUS
 
 fcntl = pytest.importorskip("fcntl")  # POSIX
 termios = pytest.importorskip("termios")  # POSIX
-from pty_console import read_until, spawn_console, stop  # noqa: E402
+from tests.support.drivers import read_until, spawn_console, stop  # noqa: E402
 
 #: A terminal app in a subprocess: `pytest -m "not slow"` skips it.
 pytestmark = pytest.mark.slow

@@ -62,7 +62,7 @@ def test_the_first_paint_loads_no_engine_part_session_language_or_simulator(
     tmp_path: Path,
 ) -> None:
     pty = pytest.importorskip("pty")
-    from pty_console import read_until, stop
+    from tests.support.drivers import read_until, stop
 
     out = tmp_path / "modules"
     env = os.environ | {

@@ -11,15 +11,15 @@ import threading
 from pathlib import Path
 
 import pytest
-from servers import CLOSE, Answering, RecordingServer
 from textual import events
 from textual.pilot import Pilot
-from tui_helpers import FrameTap, log_text, make_app, results_text, type_line, until
 
 from rac_console.tui.app import RacConsoleApp
 from rac_console.tui.command_line import CommandLine
 from rac_console.tui.frame_log import FrameLog
 from rac_console.tui.status_bar import StatusBar
+from tests.support.drivers import FrameTap, log_text, make_app, results_text, type_line, until
+from tests.support.servers import CLOSE, Answering, RecordingServer
 
 #: Over half a second each (a terminal app, a subprocess, a timed server):
 #: `pytest -m "not slow"` skips them.
@@ -47,7 +47,7 @@ def _key_name(char: str) -> str:
 
 
 def connected(app: RacConsoleApp) -> bool:
-    return app.status is not None and app.status.connection == "connected"
+    return app.main_screen.status is not None and app.main_screen.status.connection == "connected"
 
 
 def sent_lines(tap: FrameTap) -> list[bytes]:
@@ -60,7 +60,10 @@ async def test_a_burst_of_typed_lines_runs_each_line_once_in_order(tmp_path: Pat
         tap = FrameTap(tmp_path)
         await until(
             pilot,
-            lambda: app.status is not None and app.status.connection == "connected",
+            lambda: (
+                app.main_screen.status is not None
+                and app.main_screen.status.connection == "connected"
+            ),
             "the first connection",
         )
         burst(pilot, "put I 10 1\n5\nget I 1\nget I 2\nget I 3\n")
@@ -130,7 +133,9 @@ async def test_the_frame_log_follows_after_layout_changes(tmp_path: Path) -> Non
         await until(pilot, lambda: tuple(app.size) == (80, 24), "the resize")
         await type_line(pilot, "get ", enter=False, keys=True)
         await pilot.press("tab")
-        await until(pilot, lambda: app.completions.has_class("-visible"), "the candidates")
+        await until(
+            pilot, lambda: app.main_screen.panes.completions.has_class("-visible"), "the candidates"
+        )
         await pilot.press("ctrl+u")
         for n in range(30, 60):
             await type_line(pilot, f"get I {n}")

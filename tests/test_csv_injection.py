@@ -18,9 +18,6 @@ from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
-from servers import RecordingServer
-from test_cli import cli, env, recording  # noqa: F401  (fixtures)
-from test_engine import Front
 
 from rac_console.commands.language import VarRef
 from rac_console.engine import Engine
@@ -28,6 +25,8 @@ from rac_console.engine.csvlog import CsvLog
 from rac_console.protocol import VT, Variant, kind_of
 from rac_console.session.blocking import Session
 from rac_console.sim.thread import SimulatorThread
+from tests.support.drivers import Front, cli
+from tests.support.servers import RecordingServer
 
 #: What the simulator is given (put as typed), and how each cell must read back.
 FORMULAS = {
@@ -185,7 +184,7 @@ def test_each_text_cell_reads_back_as_shown_one_row_per_line(
 
 @pytest.mark.slow
 def test_watch_log_csv_prefixes_formulas_from_the_simulator(
-    env: dict[str, str],  # noqa: F811
+    env: dict[str, str],
     tmp_path: Path,
 ) -> None:
     log = tmp_path / "watch.csv"
@@ -211,9 +210,9 @@ def test_watch_log_csv_prefixes_formulas_from_the_simulator(
 
 @pytest.mark.slow
 def test_watch_log_csv_escapes_what_a_controller_string_holds(
-    env: dict[str, str],  # noqa: F811
+    env: dict[str, str],
     tmp_path: Path,
-    recording,  # noqa: F811
+    recording,
 ) -> None:
     server = recording(hostile_controller)
     log = tmp_path / "watch.csv"

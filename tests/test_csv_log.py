@@ -15,12 +15,12 @@ from pathlib import Path
 from typing import TypeVar
 
 import pytest
-from servers import RecordingServer
-from test_engine import Front
 
 from rac_console.engine import Engine, Status
 from rac_console.engine.csvlog import columns_of
 from rac_console.protocol import InputError
+from tests.support.drivers import Front
+from tests.support.servers import RecordingServer
 
 P1_COLUMNS = ["P1.X", "P1.Y", "P1.Z", "P1.Rx", "P1.Ry", "P1.Rz", "P1.Fig"]
 T = TypeVar("T")
@@ -468,7 +468,7 @@ def test_a_path_under_home_is_expanded(
 
 
 async def test_the_repl_says_when_a_watch_is_not_in_the_csv_columns(tmp_path: Path) -> None:
-    from test_repl import Driver
+    from tests.support.drivers import Driver
 
     path = tmp_path / "repl.csv"
     driver = Driver(tmp_path)

@@ -6,72 +6,13 @@ Each test drains the outbox as a front end does and waits on conditions with a d
 from __future__ import annotations
 
 import time
-from collections.abc import Callable
 from pathlib import Path
 
 import pytest
-from servers import RecordingServer
 
-from rac_console.engine import Alert, Engine, Message, Note, Result, RowView, Status
-from rac_console.session import Frame
-
-DEADLINE = 10.0
-
-
-class Front:
-    """A front end in miniature: drains the outbox and keeps what a screen would show."""
-
-    def __init__(self, engine: Engine) -> None:
-        self.engine = engine
-        self.results: dict[int, Result] = {}
-        self.rows: dict[str, RowView] = {}
-        self.frames: list[Frame] = []
-        self.notes: list[str] = []
-        self.alerts: list[str] = []
-        self.status: Status | None = None
-
-    def drain(self) -> None:
-        batch = self.engine.outbox.drain()
-        self.status = batch.status or self.status
-        for var in batch.removed:
-            self.rows.pop(str(var), None)
-        self.rows.update({str(var): view for var, view in batch.rows.items()})
-        for event in batch.events:
-            if isinstance(event, Result):
-                self.results[event.seq] = event
-            elif isinstance(event, Frame):
-                self.frames.append(event)
-            elif isinstance(event, Note):
-                self.notes.append(event.text)
-            elif isinstance(event, Alert):
-                self.alerts.append(event.text)
-
-    def until(self, predicate: Callable[[], bool], what: str) -> None:
-        deadline = time.monotonic() + DEADLINE
-        while True:
-            self.drain()
-            if predicate():
-                return
-            assert time.monotonic() < deadline, f"timed out waiting for {what}"
-            time.sleep(0.01)
-
-    def run(self, line: str) -> list[str]:
-        """Submit a line and wait for its result: the texts of its feedback."""
-        seq = self.engine.submit(line)
-        self.until(lambda: seq in self.results, f"the answer to {line!r}")
-        return [getattr(f, "text", None) or str(f) for f in self.results[seq].feedback]
-
-    def errors(self, line: str) -> list[str]:
-        seq = self.engine.submit(line)
-        self.until(lambda: seq in self.results, f"the answer to {line!r}")
-        return [
-            f.text
-            for f in self.results[seq].feedback
-            if isinstance(f, Message) and f.level == "error"
-        ]
-
-    def sent(self) -> list[bytes]:
-        return [f.data for f in self.frames if f.direction == "tx"]
+from rac_console.engine import Engine
+from tests.support.drivers import Front
+from tests.support.servers import RecordingServer
 
 
 def test_starts_on_the_simulator_and_says_so(front: Front) -> None:

@@ -10,15 +10,17 @@ import asyncio
 import os
 import socket
 import time
+from typing import cast
 
 import pytest
-from session_helpers import AsyncSession
 
 from rac_console.engine import Alert, Engine, Result, RowView
-from rac_console.protocol import kind_of, parse_response
+from rac_console.protocol import Variant, kind_of, parse_response
 from rac_console.session import BadReply, Disconnected, Frame, RequestTimeout
+from rac_console.sim.controller import SimulatedController
 from rac_console.sim.faults import GARBAGE, FaultPlan, FaultSettings
 from rac_console.sim.server import SimulatorServer
+from tests.support.sessions import AsyncSession
 
 #: Over half a second each (a terminal app, a subprocess, a timed server):
 #: `pytest -m "not slow"` skips them.
@@ -34,10 +36,11 @@ def expected(index: int) -> int:
 
 async def faulty_simulator(**settings: object) -> SimulatorServer:
     simulator = SimulatorServer(faults=FaultSettings(**settings), transcript=True)  # type: ignore[arg-type]
-    store = simulator.controller._store["I"]
+    controller = cast(SimulatedController, simulator.controller)  # not a replay
+    store = controller._store["I"]
     for index in range(COUNT):
         store[index] = expected(index)
-    simulator.controller.value = lambda kind, index: simulator.controller._store[kind.code][index]  # type: ignore[method-assign]
+    controller.value = lambda kind, index: controller._store[kind.code][index]  # type: ignore[method-assign]
     return await simulator.start()
 
 
@@ -63,7 +66,7 @@ def test_fault_plan_is_reproducible_from_its_seed() -> None:
     ]
 
 
-FAULT_MODES = {
+FAULT_MODES: dict[str, dict[str, object]] = {
     "delay+jitter": {"delay_ms": 5, "jitter_ms": 5},
     "slow": {"slow_every": 15},
     "drop": {"drop_every": 7},
@@ -104,7 +107,7 @@ def test_the_client_never_takes_a_reply_for_another_request(mode: str) -> None:
                                 assert exc.raw is not None
                             continue
                         if reply.response.ok:
-                            if reply.response.variant.value != expected(index):
+                            if cast(Variant, reply.response.variant).value != expected(index):
                                 wrong.append(index)
                         else:
                             failures.append(reply.response.name or hex(reply.response.code))
@@ -132,7 +135,7 @@ def test_the_client_never_takes_a_reply_for_another_request(mode: str) -> None:
 
 
 def test_a_garbled_reply_is_reported_with_its_bytes_escaped() -> None:
-    async def scenario() -> str:
+    async def scenario() -> tuple[str, bytes | None]:
         simulator = await faulty_simulator(garble_every=1)
         try:
             async with AsyncSession(simulator.host, simulator.port, timeout=0.5) as session:

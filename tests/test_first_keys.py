@@ -9,9 +9,9 @@ import time
 from pathlib import Path
 
 import pytest
-from test_ascii_screen import DEADLINE, Terminal, terminal
 
-terminal = terminal  # the fixture: a tmux server of the test's own
+from tests.support.drivers import TERMINAL_DEADLINE as DEADLINE
+from tests.support.drivers import Terminal
 
 pytestmark = pytest.mark.slow
 

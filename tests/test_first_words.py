@@ -8,9 +8,9 @@ from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
-from tui_helpers import make_app, until
 
 from rac_console.sim.thread import SimulatorThread
+from tests.support.drivers import make_app, until
 
 
 @pytest.fixture
@@ -20,11 +20,13 @@ def controller() -> Iterator[SimulatorThread]:
         yield simulator
 
 
-async def placeholder_once_connected(app, size=(100, 30)) -> str:  # type: ignore[no-untyped-def]
+async def placeholder_once_connected(app, size=(100, 30)) -> str:
     async with app.run_test(size=size) as pilot:
         # The placeholder follows a status as it arrives, before the status line is drawn.
-        await until(pilot, lambda: "connected" in app.status_bar.line.plain, "connected")
-        return str(app.command_line.placeholder)
+        await until(
+            pilot, lambda: "connected" in app.main_screen.panes.status_bar.line.plain, "connected"
+        )
+        return str(app.main_screen.panes.command_line.placeholder)
 
 
 async def test_on_a_live_controller_the_placeholder_suggests_no_write(
@@ -51,7 +53,7 @@ async def test_on_the_built_in_simulator_a_write_is_suggested(tmp_path: Path) ->
 async def test_the_repls_help_speaks_of_the_repl_and_leaving_is_suggested(
     tmp_path: Path,
 ) -> None:
-    from test_repl import Driver
+    from tests.support.drivers import Driver
 
     driver = Driver(tmp_path)
 

@@ -6,7 +6,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-from test_engine import Front
+from tests.support.drivers import Front
 
 
 def test_record_starts_and_stops_inside(front: Front, tmp_path: Path) -> None:

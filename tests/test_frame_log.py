@@ -8,17 +8,19 @@ from __future__ import annotations
 
 import re
 from pathlib import Path
+from typing import cast
 
 import pytest
 from textual.pilot import Pilot
-from tui_helpers import log_text, make_app, results_text, type_line, until
 
 from rac_console.present.filtering import FrameFilter
 from rac_console.present.frames import gap_text, hex_text
 from rac_console.protocol import parse_request, parse_response
 from rac_console.session import Frame
 from rac_console.tui.app import RacConsoleApp
-from rac_console.tui.frame_log import KEPT, FrameHighlighter, FrameLog
+from rac_console.tui.frame_lines import FrameHighlighter
+from rac_console.tui.frame_log import KEPT, FrameLog
+from tests.support.drivers import log_text, make_app, results_text, type_line, until
 
 SIZE = (150, 40)
 #: A frame line: the time, the gap since the previous frame, the arrow.
@@ -119,11 +121,13 @@ def test_a_slow_reply_gap_is_highlighted_and_a_short_one_dim() -> None:
 
 
 def frame_lines(app: RacConsoleApp) -> list[str]:
-    return [line for line in app.frame_log.lines if " → " in line or " ← " in line]
+    return [
+        line for line in app.main_screen.panes.frame_log.lines if " → " in line or " ← " in line
+    ]
 
 
 async def get(pilot: Pilot, line: str, result: str) -> None:
-    app = pilot.app
+    app = cast(RacConsoleApp, pilot.app)
     await type_line(pilot, line)
     await until(pilot, lambda: result in results_text(app), f"the result of {line}")
 
@@ -132,7 +136,7 @@ async def focus_log(pilot: Pilot) -> None:
     app = pilot.app
     assert isinstance(app, RacConsoleApp)
     await pilot.press("f6", "f6")
-    assert app.focused is app.frame_log
+    assert app.focused is app.main_screen.panes.frame_log
 
 
 @pytest.mark.slow
@@ -143,16 +147,16 @@ async def test_hex_view_shows_the_bytes_of_frames_already_shown_and_new(tmp_path
         await until(pilot, lambda: "GET:RC8:1:I:" in log_text(app), "the frame")
         assert "47 45 54" not in log_text(app)
         await pilot.press("f7")
-        assert app.frame_log.hex_view
-        assert "hex" in app.frame_log.title_text
+        assert app.main_screen.panes.frame_log.hex_view
+        assert "hex" in app.main_screen.panes.frame_log.title_text
         get_i1 = "47 45 54 3a 52 43 38 3a 31 3a 49 3a 0d"
         await until(pilot, lambda: get_i1 in log_text(app), "the hex of a frame shown before")
-        line = next(line for line in app.frame_log.lines if get_i1 in line)
+        line = next(line for line in app.main_screen.panes.frame_log.lines if get_i1 in line)
         assert "→ GET:RC8:1:I:↵" in line  # beside its text, at this width
         await get(pilot, "get I 2", "I2 = ")
         await until(pilot, lambda: "3a 32 3a 49 3a 0d" in log_text(app), "the hex of a new frame")
         await pilot.press("f7")
-        assert not app.frame_log.hex_view
+        assert not app.main_screen.panes.frame_log.hex_view
         await until(pilot, lambda: "47 45 54" not in log_text(app), "the hex gone")
         assert "GET:RC8:2:I:" in log_text(app)
 
@@ -161,10 +165,10 @@ async def test_hex_view_shows_the_bytes_of_frames_already_shown_and_new(tmp_path
 async def test_hex_goes_under_the_text_at_narrow_widths(tmp_path: Path) -> None:
     app = make_app(tmp_path)
     async with app.run_test(size=(60, 30)) as pilot:
-        app.frame_log.hex_view = True
+        app.main_screen.panes.frame_log.hex_view = True
         await get(pilot, "get P 1", "P1 = ")
         await until(pilot, lambda: "→ GET:RC8:1:P:↵" in log_text(app), "the frame")
-        lines = list(app.frame_log.lines)
+        lines = list(app.main_screen.panes.frame_log.lines)
         at = next(n for n, line in enumerate(lines) if "→ GET:RC8:1:P:↵" in line)
         assert "47 45 54" not in lines[at]
         assert lines[at + 1].lstrip().startswith("47 45 54 3a")
@@ -182,14 +186,14 @@ async def test_each_frame_shows_the_time_since_the_previous_one(tmp_path: Path) 
         assert all(GAP_LINE.match(line) for line in lines[1:]), lines
         await focus_log(pilot)
         await pilot.press("t")
-        assert not app.frame_log.show_gaps
+        assert not app.main_screen.panes.frame_log.show_gaps
         await until(
             pilot,
             lambda: all(re.match(r"^\d\d:\d\d:\d\d\.\d{3} [→←] ", x) for x in frame_lines(app)),
             "the gaps gone from every line",
         )
-        app.action_toggle_frame_times()
-        assert app.frame_log.show_gaps
+        app.main_screen.action_toggle_frame_times()
+        assert app.main_screen.panes.frame_log.show_gaps
 
 
 @pytest.mark.slow
@@ -199,28 +203,36 @@ async def test_filter_by_variable_keeps_its_frames_and_their_replies(tmp_path: P
         await type_line(pilot, "watch I 1 I 2")
         await until(pilot, lambda: log_text(app).count("GET:RC8:2:I:") >= 3, "polls of both")
         await type_line(pilot, "pause")
-        await until(pilot, lambda: app.status is not None and app.status.paused, "the pause")
+        await until(
+            pilot,
+            lambda: app.main_screen.status is not None and app.main_screen.status.paused,
+            "the pause",
+        )
         await get(pilot, "get IO 128", "IO128 = ")
         await type_line(pilot, "send GET:RC8:1:I:")  # a raw line names I1 too
         await until(pilot, lambda: log_text(app).count("GET:RC8:1:I:") >= 4, "the raw line")
-        await until(pilot, lambda: app.frames_per_second() == 0, "every frame drawn")
+        await until(pilot, lambda: app.main_screen.frames_per_second() == 0, "every frame drawn")
         await focus_log(pilot)
         await pilot.press("slash")
-        assert app.focused is app.log_filter
+        assert app.focused is app.main_screen.panes.log_filter
         await pilot.press(*"I 1")
-        await until(pilot, lambda: 'filter "I 1"' in app.frame_log.title_text, "the filter")
+        await until(
+            pilot,
+            lambda: 'filter "I 1"' in app.main_screen.panes.frame_log.title_text,
+            "the filter",
+        )
         lines = frame_lines(app)
         assert lines
         for request, reply in zip(lines[::2], lines[1::2], strict=True):
             assert "→ GET:RC8:1:I:↵" in request
             assert "← 0," in reply  # each request followed by its reply
-        count = re.search(r"(\d+) of (\d+) frames", app.frame_log.title_text)
+        count = re.search(r"(\d+) of (\d+) frames", app.main_screen.panes.frame_log.title_text)
         assert count is not None
         assert int(count.group(1)) == len(lines) < int(count.group(2))
         await pilot.press("escape")
-        assert app.focused is app.frame_log
+        assert app.focused is app.main_screen.panes.frame_log
         await until(pilot, lambda: "GET:RC8:2:I:" in log_text(app), "every frame back")
-        assert "filter" not in app.frame_log.title_text
+        assert "filter" not in app.main_screen.panes.frame_log.title_text
         assert "GET:RC8:128:IO:" in log_text(app)
 
 
@@ -234,24 +246,26 @@ async def test_filter_by_text_and_poll_frames_stay_f3(tmp_path: Path) -> None:
         await until(pilot, lambda: "E_INVALIDCOMMAND" in log_text(app), "the error reply")
         await focus_log(pilot)
         await pilot.press("slash", *"invalidcommand", "enter")
-        assert app.focused is app.frame_log
+        assert app.focused is app.main_screen.panes.frame_log
         await until(pilot, lambda: len(frame_lines(app)) == 1, "the one line")
         assert "E_INVALIDCOMMAND" in frame_lines(app)[0]
-        assert re.search(r"1 of \d+ frames", app.frame_log.title_text)
-        app.frame_log.set_filter("GET:RC8:1:I:")
+        assert re.search(r"1 of \d+ frames", app.main_screen.panes.frame_log.title_text)
+        app.main_screen.panes.frame_log.set_filter("GET:RC8:1:I:")
         await until(pilot, lambda: len(frame_lines(app)) >= 3, "the polls")
         await pilot.press("f3")  # hides poll frames, the ones shown already too
         await until(pilot, lambda: frame_lines(app) == [], "the polls hidden")
-        assert "polls hidden" in app.frame_log.title_text
+        assert "polls hidden" in app.main_screen.panes.frame_log.title_text
         await pilot.press("f3")
         await until(pilot, lambda: len(frame_lines(app)) >= 3, "the polls back")
         await pilot.press("slash", "escape")
-        assert "filter" not in app.frame_log.title_text
+        assert "filter" not in app.main_screen.panes.frame_log.title_text
         await pilot.press("ctrl+l")
-        app.frame_log.set_filter("FOO")  # cleared means forgotten: nothing to show again
+        app.main_screen.panes.frame_log.set_filter(
+            "FOO"
+        )  # cleared means forgotten: nothing to show again
         await pilot.pause()
         assert frame_lines(app) == []
-        assert re.search(r"0 of \d+ frames", app.frame_log.title_text)
+        assert re.search(r"0 of \d+ frames", app.main_screen.panes.frame_log.title_text)
 
 
 def test_the_log_is_bounded_and_counts_what_it_keeps() -> None:

@@ -7,12 +7,12 @@ import contextlib
 from collections.abc import Iterator
 
 import pytest
-from servers import RecordingServer
-from test_engine import Front
 
 from rac_console.protocol import KINDS, RequestLine, parse_request
 from rac_console.protocol.request import raw_request
 from rac_console.session import BadReply, Frame, Session
+from tests.support.drivers import Front
+from tests.support.servers import RecordingServer
 
 
 def replies_with_their_requests(frames: list[Frame]) -> Iterator[tuple[Frame, Frame]]:

@@ -49,7 +49,7 @@ def served() -> tuple[set[str], set[str]]:
             text = page.read().decode("utf-8")
     finally:
         server.stop()
-    names, labels = set(), set()
+    names, labels = set[str](), set[str]()
     for family in text_string_to_metric_families(text):
         for sample in family.samples:
             names.add(sample.name)

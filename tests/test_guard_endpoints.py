@@ -12,16 +12,14 @@ from collections.abc import Callable, Iterator
 from pathlib import Path
 
 import pytest
-from servers import RecordingServer
-from test_cli import cli, env, recording  # noqa: F401  (fixtures)
-from test_engine import Front
-from test_profiles_cli import config, profile  # noqa: F401  (fixture)
 
 from rac_console.commands.policy import TargetProfile, WritePolicy, Writes, parse_allow
 from rac_console.commands.profiles import match_profile
 from rac_console.engine import Engine
 from rac_console.session.endpoints import addresses
 from rac_console.sim.thread import SimulatorThread
+from tests.support.drivers import Front, cli, profile
+from tests.support.servers import RecordingServer
 
 #: Every way of typing 127.0.0.1 that the resolver of this machine knows.
 FORMS = [
@@ -83,9 +81,9 @@ def test_a_profile_whose_host_cannot_be_resolved_is_said_and_matched_by_text() -
 @pytest.mark.parametrize("form", FORMS)
 def test_a_read_only_profile_holds_for_its_address_typed_another_way(
     form: str,
-    env: dict[str, str],  # noqa: F811
-    config: Callable[[str], Path],  # noqa: F811
-    recording: Callable[..., RecordingServer],  # noqa: F811
+    env: dict[str, str],
+    config: Callable[[str], Path],
+    recording: Callable[..., RecordingServer],
 ) -> None:
     server = recording()
     config(profile("ro", server.port, 'writes = "read-only"'))
@@ -97,9 +95,9 @@ def test_a_read_only_profile_holds_for_its_address_typed_another_way(
 
 @pytest.mark.slow
 def test_confirm_and_allow_hold_for_localhost_and_127_1(
-    env: dict[str, str],  # noqa: F811
-    config: Callable[[str], Path],  # noqa: F811
-    recording: Callable[..., RecordingServer],  # noqa: F811
+    env: dict[str, str],
+    config: Callable[[str], Path],
+    recording: Callable[..., RecordingServer],
 ) -> None:
     server = recording()
     config(profile("c", server.port, 'writes = "confirm"\nallow = ["I 100-199"]'))
@@ -113,9 +111,9 @@ def test_confirm_and_allow_hold_for_localhost_and_127_1(
 
 @pytest.mark.slow
 def test_a_profile_written_with_a_name_holds_for_the_ip_typed(
-    env: dict[str, str],  # noqa: F811
-    config: Callable[[str], Path],  # noqa: F811
-    recording: Callable[..., RecordingServer],  # noqa: F811
+    env: dict[str, str],
+    config: Callable[[str], Path],
+    recording: Callable[..., RecordingServer],
 ) -> None:
     server = recording()
     config(profile("ro", server.port, 'writes = "read-only"', host="localhost"))
@@ -126,9 +124,9 @@ def test_a_profile_written_with_a_name_holds_for_the_ip_typed(
 
 @pytest.mark.slow
 def test_read_only_flag_wins_over_an_open_profile_at_the_address(
-    env: dict[str, str],  # noqa: F811
-    config: Callable[[str], Path],  # noqa: F811
-    recording: Callable[..., RecordingServer],  # noqa: F811
+    env: dict[str, str],
+    config: Callable[[str], Path],
+    recording: Callable[..., RecordingServer],
 ) -> None:
     server = recording()
     config(profile("open", server.port, 'writes = "open"'))
@@ -139,8 +137,8 @@ def test_read_only_flag_wins_over_an_open_profile_at_the_address(
 
 @pytest.mark.slow
 def test_an_unresolvable_profile_host_is_said_once(
-    env: dict[str, str],  # noqa: F811
-    config: Callable[[str], Path],  # noqa: F811
+    env: dict[str, str],
+    config: Callable[[str], Path],
 ) -> None:
     with SimulatorThread() as sim:
         config(profile("far", sim.port, 'writes = "read-only"', host="robot9.invalid"))

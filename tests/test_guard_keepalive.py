@@ -15,10 +15,10 @@ from collections.abc import Iterator
 from dataclasses import dataclass
 
 import pytest
-from test_engine import Front
 
 from rac_console.commands.outcome import Outcome
 from rac_console.engine import Engine
+from tests.support.drivers import Front
 
 pytestmark = pytest.mark.slow
 

@@ -20,8 +20,6 @@ import time
 from collections.abc import Callable, Iterator
 
 import pytest
-from test_cli import cli, env  # noqa: F401  (fixture)
-from test_engine import Front
 
 from rac_console.commands.outcome import Outcome
 from rac_console.engine import Engine
@@ -30,6 +28,8 @@ from rac_console.present.status import status_text
 from rac_console.protocol.request import raw_request
 from rac_console.session import Frame, NotSent, Session
 from rac_console.sim.thread import SimulatorThread
+from tests.support.drivers import Front, cli
+from tests.support.servers import Recording, RecordingServer, reset_first
 
 DEADLINE = 20.0
 
@@ -130,7 +130,7 @@ def proxy(sim: SimulatorThread) -> Iterator[HoldingProxy]:
 
 @pytest.mark.slow
 def test_a_timed_out_put_is_unknown_and_lands_nowhere_after_the_result(
-    env: dict[str, str],  # noqa: F811
+    env: dict[str, str],
     sim: SimulatorThread,
     proxy: HoldingProxy,
 ) -> None:
@@ -151,7 +151,7 @@ def test_a_timed_out_put_is_unknown_and_lands_nowhere_after_the_result(
 
 @pytest.mark.slow
 def test_a_timed_out_put_is_unknown_in_plain_text_too(
-    env: dict[str, str],  # noqa: F811
+    env: dict[str, str],
     sim: SimulatorThread,
     proxy: HoldingProxy,
 ) -> None:
@@ -226,97 +226,52 @@ def test_a_cancelled_job_sends_nothing_even_on_a_fresh_session(sim: SimulatorThr
 # ------------------------------------------------------- dead connections
 
 
-class DroppingServer:
-    """Answers every line (a GET ``0,3,7``, anything else ``0``), except that a line
-    starting with one of ``drop`` ends its connection with a reset, unanswered, the
-    first time it comes. Records every line and the connection it came on."""
-
-    def __init__(self, *drop: bytes) -> None:
-        self._drop = list(drop)
-        self.lines: list[tuple[int, bytes]] = []
-        self._server = socket.create_server(("127.0.0.1", 0))
-        self.port: int = self._server.getsockname()[1]
-        self._count = 0
-        self._conns: list[socket.socket] = []
-        threading.Thread(target=self._accept, daemon=True).start()
-
-    def close(self) -> None:
-        self._server.close()
-
-    def hang_up(self) -> None:
-        """End every connection now (a FIN), unasked."""
-        for conn in self._conns:
-            with contextlib.suppress(OSError):
-                conn.shutdown(socket.SHUT_RDWR)
-
-    def _accept(self) -> None:
-        while True:
-            try:
-                conn, _ = self._server.accept()
-            except OSError:
-                return
-            self._count += 1
-            self._conns.append(conn)
-            threading.Thread(target=self._serve, args=(conn, self._count), daemon=True).start()
-
-    def _serve(self, conn: socket.socket, number: int) -> None:
-        buffer = b""
-        with contextlib.suppress(OSError), conn:
-            while data := conn.recv(4096):
-                buffer += data
-                while b"\r" in buffer:
-                    line, buffer = buffer.split(b"\r", 1)
-                    self.lines.append((number, line))
-                    hit = next((d for d in self._drop if line.startswith(d)), None)
-                    if hit is not None:
-                        self._drop.remove(hit)
-                        conn.setsockopt(socket.SOL_SOCKET, socket.SO_LINGER, b"\x01\0\0\0\0\0\0\0")
-                        return
-                    conn.sendall(b"0,3,7\r" if line.startswith(b"GET") else b"0\r")
+def get_7_else_0(line: bytes) -> bytes:
+    return b"0,3,7\r" if line.startswith(b"GET") else b"0\r"
 
 
 @pytest.fixture
-def dropping() -> Iterator[Callable[..., DroppingServer]]:
-    made: list[DroppingServer] = []
+def dropping(recording: Recording) -> Callable[..., RecordingServer]:
+    """A controller that answers every line (a GET ``0,3,7``, anything else ``0``), except
+    that a line starting with one of ``drop`` ends its connection with a reset,
+    unanswered, the first time it comes. It records every line and the connection it
+    came on (``numbered``)."""
 
-    def make(*drop: bytes) -> DroppingServer:
-        made.append(DroppingServer(*drop))
-        return made[-1]
+    def make(*drop: bytes) -> RecordingServer:
+        return recording(reset_first(*drop, then=get_7_else_0))
 
-    yield make
-    for server in made:
-        server.close()
+    return make
 
 
 @pytest.mark.slow
 def test_a_get_on_a_dead_connection_is_sent_once_more(
-    env: dict[str, str],  # noqa: F811
-    dropping: Callable[..., DroppingServer],
+    env: dict[str, str],
+    dropping: Callable[..., RecordingServer],
 ) -> None:
     server = dropping(b"GET:RC8:2:I:")
     script = "get I 1\nget I 2\n"
     result = cli(env, "-H", "127.0.0.1", "-p", str(server.port), "run", "-", stdin=script)
     assert result.returncode == 0, (result.stdout, result.stderr)
     assert result.stdout.count("7") >= 2
-    assert [line for _, line in server.lines].count(b"GET:RC8:2:I:") == 2
-    assert server.lines[-1][0] == 2  # the second time on a fresh connection
+    assert [line for _, line in server.numbered].count(b"GET:RC8:2:I:") == 2
+    assert server.numbered[-1][0] == 2  # the second time on a fresh connection
 
 
 @pytest.mark.slow
 def test_a_put_on_a_dead_connection_is_never_sent_twice(
-    env: dict[str, str],  # noqa: F811
-    dropping: Callable[..., DroppingServer],
+    env: dict[str, str],
+    dropping: Callable[..., RecordingServer],
 ) -> None:
     server = dropping(b"PUT:RC8:2:I:")
     script = "get I 1\nput I 2 5\n"
     result = cli(env, "-H", "127.0.0.1", "-p", str(server.port), "run", "-", stdin=script)
     assert result.returncode == 3, (result.stdout, result.stderr)
-    assert [line for _, line in server.lines].count(b"PUT:RC8:2:I:3,5") == 1
+    assert [line for _, line in server.numbered].count(b"PUT:RC8:2:I:3,5") == 1
 
 
 @pytest.mark.slow  # over half a second
 def test_an_idle_engine_notices_its_connection_died(
-    dropping: Callable[..., DroppingServer],
+    dropping: Callable[..., RecordingServer],
 ) -> None:
     """The controller ends the connection while nothing is watched or typed: the status
     and the log say so without waiting for the next command."""
@@ -343,7 +298,7 @@ def test_an_idle_engine_notices_its_connection_died(
 
 
 def test_a_get_sent_again_is_marked_in_the_log(
-    dropping: Callable[..., DroppingServer],
+    dropping: Callable[..., RecordingServer],
 ) -> None:
     server = dropping(b"GET:RC8:2:I:")
     engine = Engine("127.0.0.1", server.port, interval=0.05, timeout=1.0)

@@ -88,7 +88,7 @@ def test_which_results_are_refused() -> None:
 
 @pytest.mark.slow  # over half a second
 async def test_the_console_does_not_suggest_a_refused_line(tmp_path: Path) -> None:
-    from tui_helpers import make_app, results_text, type_line, until
+    from tests.support.drivers import make_app, results_text, type_line, until
 
     app = make_app(tmp_path)
     async with app.run_test(size=(120, 40)) as pilot:
@@ -96,8 +96,10 @@ async def test_the_console_does_not_suggest_a_refused_line(tmp_path: Path) -> No
         await type_line(pilot, "gte S 1")
         await until(pilot, lambda: "did you mean get?" in results_text(app), "the refusal")
         await type_line(pilot, "g", enter=False, keys=True)
-        await until(pilot, lambda: app.command_line._suggestion != "", "a suggestion")
-        assert app.command_line._suggestion == "get S 1"
+        await until(
+            pilot, lambda: app.main_screen.panes.command_line._suggestion != "", "a suggestion"
+        )
+        assert app.main_screen.panes.command_line._suggestion == "get S 1"
         await pilot.press("ctrl+u", "up")
-        assert app.command_line.value == "gte S 1"  # recalled, to be fixed
+        assert app.main_screen.panes.command_line.value == "gte S 1"  # recalled, to be fixed
     assert (tmp_path / "history").read_text().splitlines() == ["get S 1"]

@@ -8,20 +8,20 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
-from servers import Valve
-from tui_helpers import FrameTap, make_app, results_text, type_line, until
 
 from rac_console.present.iogrid import GridLine
 from rac_console.sim.thread import SimulatorThread
 from rac_console.tui.app import RacConsoleApp
 from rac_console.tui.io_panel import IoPanel
+from tests.support.drivers import FrameTap, make_app, results_text, type_line, until
+from tests.support.servers import Valve
 
 #: A console, a simulator and polls: a few seconds per test.
 pytestmark = pytest.mark.slow
 
 
 def line_at(app: RacConsoleApp, start: int) -> GridLine | None:
-    grid = app.io_panel.grid
+    grid = app.main_screen.panes.io_panel.grid
     if grid is None:
         return None
     return next((line for line in grid.lines if line.start == start), None)
@@ -33,11 +33,15 @@ def word_is(app: RacConsoleApp, start: int, value: int) -> bool:
 
 
 def grid_text(app: RacConsoleApp) -> str:
-    return app.io_panel.grid.text.plain if app.io_panel.grid is not None else ""
+    return (
+        app.main_screen.panes.io_panel.grid.text.plain
+        if app.main_screen.panes.io_panel.grid is not None
+        else ""
+    )
 
 
 def io_rows_in_table(app: RacConsoleApp) -> int:
-    return sum(1 for key in app.table.rows if str(key.value).startswith("IO"))
+    return sum(1 for key in app.main_screen.panes.table.rows if str(key.value).startswith("IO"))
 
 
 async def watch_all_ok(pilot, line: str, count: int) -> None:
@@ -45,7 +49,10 @@ async def watch_all_ok(pilot, line: str, count: int) -> None:
     await type_line(pilot, line)
     await until(
         pilot,
-        lambda: len(app.rows) == count and all(v.status == "OK" for v in app.rows.values()),
+        lambda: (
+            len(app.main_screen.members.rows) == count
+            and all(v.status == "OK" for v in app.main_screen.members.rows.values())
+        ),
         f"the first values of {line}",
     )
 
@@ -55,7 +62,7 @@ async def test_f5_shows_the_bits_and_the_word_then_gives_the_rows_back(tmp_path:
     async with app.run_test(size=(120, 40)) as pilot:
         await watch_all_ok(pilot, "watch IO 128-143", 16)
         await until(pilot, lambda: io_rows_in_table(app) == 16, "the IO rows in the table")
-        assert not app.io_panel.display
+        assert not app.main_screen.panes.io_panel.display
 
         await pilot.press("f5")
         await until(pilot, lambda: word_is(app, 128, 0b1101), "word 0x000D in the grid")
@@ -63,7 +70,10 @@ async def test_f5_shows_the_bits_and_the_word_then_gives_the_rows_back(tmp_path:
         assert line is not None
         assert [bit.index for bit in line.bits if bit.state.value == "on"] == [128, 130, 131]
         assert "0x000D" in grid_text(app) and " 13" in grid_text(app)
-        assert app.io_panel.display and app.io_panel.region.height >= 3
+        assert (
+            app.main_screen.panes.io_panel.display
+            and app.main_screen.panes.io_panel.region.height >= 3
+        )
         assert io_rows_in_table(app) == 0
 
         await type_line(pilot, "put IO 129 on")
@@ -72,7 +82,7 @@ async def test_f5_shows_the_bits_and_the_word_then_gives_the_rows_back(tmp_path:
 
         await pilot.press("f5")
         await until(pilot, lambda: io_rows_in_table(app) == 16, "the IO rows back in the table")
-        assert not app.io_panel.display
+        assert not app.main_screen.panes.io_panel.display
 
 
 async def test_80x24_shows_64_bits_and_the_rest_of_the_screen(tmp_path: Path) -> None:
@@ -82,12 +92,17 @@ async def test_80x24_shows_64_bits_and_the_rest_of_the_screen(tmp_path: Path) ->
         await pilot.press("f5")
         await until(pilot, lambda: len(grid_text(app).splitlines()) == 4, "4 lines of 16")
         await pilot.pause(0.1)
-        panel = app.io_panel
+        panel = app.main_screen.panes.io_panel
         assert panel.grid is not None and panel.grid.layout.per_line == 16
         assert panel.scrollable_content_region.height >= 4  # every line in view
-        for widget in (app.status_bar, app.frame_log, app.results, app.command_line):
+        for widget in (
+            app.main_screen.panes.status_bar,
+            app.main_screen.panes.frame_log,
+            app.main_screen.panes.results,
+            app.main_screen.panes.command_line,
+        ):
             assert widget.region.height >= 1, widget
-        assert app.frame_log.region.y > panel.region.bottom - 1
+        assert app.main_screen.panes.frame_log.region.y > panel.region.bottom - 1
         assert app.screen.query_one("Footer").region.y == 23
 
 
@@ -96,10 +111,10 @@ async def test_wide_terminal_puts_the_grid_beside_the_table(tmp_path: Path) -> N
     async with app.run_test(size=(200, 50)) as pilot:
         await watch_all_ok(pilot, "watch IO 0-15", 16)
         await pilot.press("f5")
-        await until(pilot, lambda: app.io_panel.grid is not None, "the grid")
+        await until(pilot, lambda: app.main_screen.panes.io_panel.grid is not None, "the grid")
         await pilot.pause(0.1)
-        assert app.io_panel.region.x > app.table.region.x
-        assert app.io_panel.region.y == app.table.region.y
+        assert app.main_screen.panes.io_panel.region.x > app.main_screen.panes.table.region.x
+        assert app.main_screen.panes.io_panel.region.y == app.main_screen.panes.table.region.y
 
 
 async def test_space_toggles_the_bit_under_the_cursor_once_per_flight(tmp_path: Path) -> None:
@@ -127,14 +142,20 @@ async def _one_write_per_flight(app: RacConsoleApp, valve: Valve, tmp_path: Path
         await until(pilot, lambda: word_is(app, 128, 0b1101), "the first word")
         # Paused, no poll can show the write: it stays in flight through the burst.
         await type_line(pilot, "pause")
-        await until(pilot, lambda: app.status is not None and app.status.paused, "the pause")
+        await until(
+            pilot,
+            lambda: app.main_screen.status is not None and app.main_screen.status.paused,
+            "the pause",
+        )
         valve.shut()  # the controller's answers held: the write and its read-back wait
-        app.io_panel.focus()
+        app.main_screen.panes.io_panel.focus()
         await pilot.pause()
-        assert app.io_panel.cursor == 128
+        assert app.main_screen.panes.io_panel.cursor == 128
         await pilot.press("right")  # IO 129, OFF
-        assert app.io_panel.cursor == 129
-        assert str(app.io_panel.border_subtitle).startswith("IO 129 OFF")  # its state too
+        assert app.main_screen.panes.io_panel.cursor == 129
+        assert str(app.main_screen.panes.io_panel.border_subtitle).startswith(
+            "IO 129 OFF"
+        )  # its state too
 
         await pilot.press("space", "space", "space")  # a burst: one write
         await until(
@@ -147,7 +168,8 @@ async def _one_write_per_flight(app: RacConsoleApp, valve: Valve, tmp_path: Path
         await until(
             pilot,
             lambda: (
-                app.io_panel.grid is not None and "underline" in str(app.io_panel.grid.text.spans)
+                app.main_screen.panes.io_panel.grid is not None
+                and "underline" in str(app.main_screen.panes.io_panel.grid.text.spans)
             ),
             "the bit drawn as in flight",
         )
@@ -158,10 +180,15 @@ async def _one_write_per_flight(app: RacConsoleApp, valve: Valve, tmp_path: Path
         await until(pilot, lambda: word_is(app, 128, 0b1111), "IO 129 ON")
         await until(
             pilot,
-            lambda: not any(app.toggles.busy(var) for var in app.rows),
+            lambda: (
+                not any(
+                    app.main_screen.members.toggles.busy(var)
+                    for var in app.main_screen.members.rows
+                )
+            ),
             "no toggle in flight",
         )
-        app.io_panel.focus()
+        app.main_screen.panes.io_panel.focus()
         await pilot.press("space")  # now ON: writes OFF
         await until(pilot, lambda: word_is(app, 128, 0b1101), "IO 129 OFF again")
         assert writes() == [b"PUT:RC8:129:IO:11,-1\r", b"PUT:RC8:129:IO:11,0\r"]
@@ -185,4 +212,4 @@ async def test_arrows_keep_to_the_lines(tmp_path: Path) -> None:
         await pilot.press("up", "left", "left")
         assert panel.cursor == 128
         await pilot.press("escape")
-        assert app.command_line.has_focus
+        assert app.main_screen.panes.command_line.has_focus

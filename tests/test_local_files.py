@@ -12,14 +12,12 @@ from collections.abc import Callable
 from pathlib import Path
 
 import pytest
-from test_cli import cli, env  # noqa: F401 (fixture)
-from test_repl import Driver
-from tui_helpers import log_text, make_app, results_text, type_line, until
 
 from rac_console.engine.watchlist import load
 from rac_console.present.history import History
 from rac_console.protocol import InputError
 from rac_console.tui.status_bar import StatusBar
+from tests.support.drivers import Driver, cli, log_text, make_app, results_text, type_line, until
 
 #: Over half a second each (a terminal app, a subprocess, a timed server):
 #: `pytest -m "not slow"` skips them.
@@ -51,7 +49,7 @@ def error_lines(stderr: str) -> list[str]:
 
 
 @needs_dev_full
-def test_record_on_a_full_device_is_one_line_and_exit_4(env: dict[str, str]) -> None:  # noqa: F811
+def test_record_on_a_full_device_is_one_line_and_exit_4(env: dict[str, str]) -> None:
     result = cli(env, "--record", "/dev/full", "run", "-", stdin=GETS)
     assert result.returncode == 4, result.stderr
     assert "Traceback" not in result.stderr
@@ -64,7 +62,7 @@ def test_record_on_a_full_device_is_one_line_and_exit_4(env: dict[str, str]) -> 
 
 @needs_dev_full
 def test_record_that_fails_midway_keeps_whole_lines_and_says_how_many(
-    env: dict[str, str],  # noqa: F811
+    env: dict[str, str],
     tmp_path: Path,
 ) -> None:
     record = tmp_path / "frames.jsonl"
@@ -89,7 +87,7 @@ def test_record_that_fails_midway_keeps_whole_lines_and_says_how_many(
 
 @needs_dev_full
 def test_get_with_record_on_a_full_device_still_prints_the_value(
-    env: dict[str, str],  # noqa: F811
+    env: dict[str, str],
 ) -> None:
     result = cli(env, "--record", "/dev/full", "get", "I", "1")
     assert result.returncode == 4
@@ -140,7 +138,7 @@ def deep_toml(path: Path) -> Path:
     ],
 )
 def test_hostile_watch_list_at_start_is_one_line_and_exit_2(
-    env: dict[str, str],  # noqa: F811
+    env: dict[str, str],
     tmp_path: Path,
     content: str,
     message: str,
@@ -275,7 +273,9 @@ async def test_save_and_load_keep_labels_and_every(tmp_path: Path) -> None:
     async with second.run_test(size=(120, 40)) as pilot:
         await type_line(pilot, f"load {path}")
         await until(pilot, lambda: "loaded 3 watched variables" in results_text(second), "load")
-        rows = {str(var): (row.label, row.every) for var, row in second.rows.items()}
+        rows = {
+            str(var): (row.label, row.every) for var, row in second.main_screen.members.rows.items()
+        }
         assert rows == {
             "P10": ("pick every time", 2.5),
             "IO128": ("gripper", None),

@@ -8,13 +8,11 @@ from collections.abc import Callable
 from pathlib import Path
 
 import pytest
-from servers import RecordingServer
-from test_cli import cli, env, one_error_line, recording, unused_port  # noqa: F401
-from test_engine import Front
-from test_profiles_cli import config, profile  # noqa: F401
 
 from rac_console.engine import Engine
 from rac_console.present.status import status_text
+from tests.support.drivers import Front, cli, one_error_line, profile
+from tests.support.servers import RecordingServer, unused_port
 
 
 def _line(front: Front) -> str:
@@ -81,9 +79,9 @@ def test_after_disconnect_the_hint_names_connect_sim(front: Front) -> None:
 
 @pytest.mark.slow
 def test_a_read_only_refusal_names_what_it_refused(
-    env: dict[str, str],  # noqa: F811
-    config: Callable[[str], Path],  # noqa: F811
-    recording: Callable[..., RecordingServer],  # noqa: F811
+    env: dict[str, str],
+    config: Callable[[str], Path],
+    recording: Callable[..., RecordingServer],
 ) -> None:
     server = recording()
     config(profile("ro", server.port, 'writes = "read-only"'))
@@ -103,7 +101,7 @@ def test_a_read_only_refusal_names_what_it_refused(
 
 
 @pytest.mark.slow
-def test_output_to_a_pipe_is_never_wrapped(env: dict[str, str]) -> None:  # noqa: F811
+def test_output_to_a_pipe_is_never_wrapped(env: dict[str, str]) -> None:
     env["COLUMNS"] = "80"
     latency = cli(env, "latency", "--count", "20")
     assert latency.returncode == 0, latency.stderr
@@ -121,7 +119,7 @@ def test_output_to_a_pipe_is_never_wrapped(env: dict[str, str]) -> None:  # noqa
 
 
 @pytest.mark.slow
-def test_strings_in_results_show_empty_and_spaces(env: dict[str, str]) -> None:  # noqa: F811
+def test_strings_in_results_show_empty_and_spaces(env: dict[str, str]) -> None:
     script = 'put S 10 ""\nget S 10\nput S 11 "  two  "\nget S 11\nput S 12 say "hi"\n'
     result = cli(env, "run", "-", stdin=script)
     assert result.returncode == 0, result.stderr
@@ -140,8 +138,8 @@ PROFILES_DOC = Path(__file__).resolve().parent.parent / "docs" / "targets.md"
 
 @pytest.mark.slow
 def test_the_readmes_simulator_profile_works_as_printed(
-    env: dict[str, str],  # noqa: F811
-    config: Callable[[str], Path],  # noqa: F811
+    env: dict[str, str],
+    config: Callable[[str], Path],
 ) -> None:
     import tomllib
 

@@ -10,7 +10,8 @@ from datetime import datetime
 from pathlib import Path
 
 import pytest
-from test_cli import cli, env, json_lines, one_error_line  # noqa: F401  (fixture)
+
+from tests.support.drivers import cli, json_lines, one_error_line
 
 pytestmark = pytest.mark.slow
 
@@ -22,7 +23,7 @@ def _times(stdout: str) -> list[datetime]:
 @pytest.mark.parametrize("where", ["before", "after"])
 def test_interval_spaces_get_repeats_in_either_position(
     where: str,
-    env: dict[str, str],  # noqa: F811
+    env: dict[str, str],
 ) -> None:
     words = ["get", "I", "0", "-r", "3", "--json"]
     args = ["--interval", "0.3", *words] if where == "before" else [*words, "--interval", "0.3"]
@@ -33,7 +34,7 @@ def test_interval_spaces_get_repeats_in_either_position(
     assert (last - first).total_seconds() >= 0.55, result.stdout
 
 
-def test_interval_before_latency_paces_it(env: dict[str, str]) -> None:  # noqa: F811
+def test_interval_before_latency_paces_it(env: dict[str, str]) -> None:
     result = cli(env, "--json", "--interval", "0.2", "latency", "--count", "3")
     assert result.returncode == 0, result.stderr
     summary = json.loads(result.stdout)
@@ -42,7 +43,7 @@ def test_interval_before_latency_paces_it(env: dict[str, str]) -> None:  # noqa:
     assert summary["requests_per_s"] <= 7.5, summary
 
 
-def test_interval_before_watch_is_its_period(env: dict[str, str]) -> None:  # noqa: F811
+def test_interval_before_watch_is_its_period(env: dict[str, str]) -> None:
     result = cli(env, "--interval", "0.3", "watch", "I", "0", "--count", "3", "--json")
     assert result.returncode == 0, result.stderr
     first, *_, last = _times(result.stdout)
@@ -63,7 +64,7 @@ def test_interval_before_watch_is_its_period(env: dict[str, str]) -> None:  # no
 def test_an_option_that_means_nothing_there_is_refused(
     words: list[str],
     takes: str,
-    env: dict[str, str],  # noqa: F811
+    env: dict[str, str],
     tmp_path: Path,
 ) -> None:
     result = cli(env, *words)
@@ -85,13 +86,13 @@ def test_json_and_yes_are_refused_for_the_console_at_a_terminal(
     assert refusal(parse_args(["--no-verify", "repl"])) is None  # the REPL's writes
 
 
-def test_write_options_on_a_read_keep_an_alias_working(env: dict[str, str]) -> None:  # noqa: F811
+def test_write_options_on_a_read_keep_an_alias_working(env: dict[str, str]) -> None:
     """``rac='rac-console --yes --no-verify'``: they change nothing for a get, as they say."""
     result = cli(env, "--yes", "--no-verify", "get", "I", "1")
     assert result.returncode == 0, result.stderr
 
 
-def test_latency_takes_the_consoles_words_and_the_options(env: dict[str, str]) -> None:  # noqa: F811
+def test_latency_takes_the_consoles_words_and_the_options(env: dict[str, str]) -> None:
     words = cli(env, "latency", "20", "I", "1", "--json")
     options = cli(env, "latency", "--count", "20", "--var", "I 1", "--json")
     for result in (words, options):

@@ -10,7 +10,6 @@ import sys
 from pathlib import Path
 
 import pytest
-from test_cli import env  # noqa: F401  (fixture)
 
 pytestmark = pytest.mark.slow
 
@@ -37,7 +36,7 @@ def _run(
 @pytest.mark.parametrize("encoding", CODE_PAGES)
 def test_a_put_to_a_code_page_pipe_says_what_happened(
     encoding: str,
-    env: dict[str, str],  # noqa: F811
+    env: dict[str, str],
 ) -> None:
     status, out, err = _run(env, encoding, "put", "I", "10", "15")
     assert status == 0, err
@@ -47,7 +46,7 @@ def test_a_put_to_a_code_page_pipe_says_what_happened(
 @pytest.mark.parametrize("encoding", CODE_PAGES)
 def test_run_get_watch_and_the_repl_write_to_a_code_page(
     encoding: str,
-    env: dict[str, str],  # noqa: F811
+    env: dict[str, str],
 ) -> None:
     script = b"put I 10 15\nget S 1\nput S 2 abc\n"
     for args in (["run", "-"], ["repl"]):  # the REPL with no terminal runs the script
@@ -60,14 +59,14 @@ def test_run_get_watch_and_the_repl_write_to_a_code_page(
     assert status == 0 and "I1=" in out, (out, err)
 
 
-def test_json_stays_ascii(env: dict[str, str]) -> None:  # noqa: F811
+def test_json_stays_ascii(env: dict[str, str]) -> None:
     status, out, err = _run(env, "cp1252", "put", "S", "3", "x", "--json")
     assert status == 0, err
     assert out.isascii()
     assert json.loads(out)["verified"] is True
 
 
-def test_a_utf8_script_from_a_pipe_is_read_as_utf8(env: dict[str, str]) -> None:  # noqa: F811
+def test_a_utf8_script_from_a_pipe_is_read_as_utf8(env: dict[str, str]) -> None:
     script = "\ufeffget I 1\nput S 1 café\n".encode()  # UTF-8 with a BOM, as Notepad saves
     status, out, err = _run(env, "cp1252", "run", "-", stdin=script)
     assert "I1 = " in out, (out, err)

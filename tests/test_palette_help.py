@@ -13,7 +13,6 @@ from pathlib import Path
 import pytest
 from textual.command import CommandList, CommandPalette
 from textual.widgets import Input
-from tui_helpers import make_app, results_text, type_line, until
 
 from rac_console.engine.commands import BUILTIN
 from rac_console.engine.registry import RAW_HELP
@@ -29,6 +28,7 @@ from rac_console.present.help_text import (
 from rac_console.tui.app import RacConsoleApp
 from rac_console.tui.help_screen import HelpScreen, console_key_groups
 from rac_console.tui.status_bar import StatusBar
+from tests.support.drivers import make_app, results_text, type_line, until
 
 # ------------------------------------------------------------------ the help text
 
@@ -136,7 +136,9 @@ def test_the_help_text_imports_no_terminal_toolkit() -> None:
 
 def app_with_profiles(tmp_path: Path, *names: str) -> RacConsoleApp:
     base = make_app(tmp_path)
-    return RacConsoleApp(base.engine, base.history, profile_names=names)
+    return RacConsoleApp(
+        base.main_screen.members.engine, base.main_screen.history, profile_names=names
+    )
 
 
 def palette_prompts(app: RacConsoleApp) -> list[str]:
@@ -156,12 +158,16 @@ async def open_palette(pilot, query: str = "") -> None:
 async def test_palette_pause_pauses_polling_and_the_status_line_says_so(tmp_path: Path) -> None:
     app = make_app(tmp_path)
     async with app.run_test(size=(100, 30)) as pilot:
-        await until(pilot, lambda: app.status is not None, "the first status")
+        await until(pilot, lambda: app.main_screen.status is not None, "the first status")
         await open_palette(pilot, "pause")
         assert palette_prompts(app)[0].startswith("Pause polling")
         assert "F2" in palette_prompts(app)[0]
         await pilot.press("enter")
-        await until(pilot, lambda: app.status is not None and app.status.paused, "the pause")
+        await until(
+            pilot,
+            lambda: app.main_screen.status is not None and app.main_screen.status.paused,
+            "the pause",
+        )
         await until(
             pilot,
             lambda: "POLLING PAUSED" in str(app.query_one(StatusBar).render()),
@@ -225,10 +231,14 @@ async def test_palette_load_puts_the_command_on_the_line_to_finish(tmp_path: Pat
     async with app.run_test(size=(100, 30)) as pilot:
         await open_palette(pilot, "load")
         await pilot.press("enter")
-        await until(pilot, lambda: app.command_line.value == "load ", "the line")
-        await until(pilot, lambda: app.focused is app.command_line, "the command line's focus")
-        assert app.command_line.cursor_position == len("load ")
-        assert not app.lines_pending  # nothing runs before the user's own Enter
+        await until(pilot, lambda: app.main_screen.panes.command_line.value == "load ", "the line")
+        await until(
+            pilot,
+            lambda: app.focused is app.main_screen.panes.command_line,
+            "the command line's focus",
+        )
+        assert app.main_screen.panes.command_line.cursor_position == len("load ")
+        assert not app.main_screen.lines.pending  # nothing runs before the user's own Enter
 
 
 @pytest.mark.slow
@@ -238,25 +248,33 @@ async def test_palette_record_starts_and_stops_recording(tmp_path: Path) -> None
     async with app.run_test(size=(100, 30)) as pilot:
         await type_line(pilot, "record stop")  # the tests' own recording first
         await until(
-            pilot, lambda: app.status is not None and app.status.recording is None, "stopped"
+            pilot,
+            lambda: app.main_screen.status is not None and app.main_screen.status.recording is None,
+            "stopped",
         )
         await open_palette(pilot, "record")
         assert palette_prompts(app)[0].startswith("record FILE")
         await pilot.press("enter")
-        await until(pilot, lambda: app.command_line.value == "record ", "the line")
+        await until(
+            pilot, lambda: app.main_screen.panes.command_line.value == "record ", "the line"
+        )
         for key in str(path):
             await pilot.press(key)
         await pilot.press("enter")
         await until(
             pilot,
-            lambda: app.status is not None and app.status.recording == str(path),
+            lambda: (
+                app.main_screen.status is not None and app.main_screen.status.recording == str(path)
+            ),
             "recording",
         )
         await open_palette(pilot, "record stop")
         assert palette_prompts(app)[0].startswith("record stop")
         await pilot.press("enter")
         await until(
-            pilot, lambda: app.status is not None and app.status.recording is None, "stopped"
+            pilot,
+            lambda: app.main_screen.status is not None and app.main_screen.status.recording is None,
+            "stopped",
         )
     assert path.exists()
 
@@ -294,7 +312,11 @@ async def test_f1_opens_help_search_narrows_it_and_esc_returns_to_the_command_li
         assert "nothing matches" in screen.shown_text
         await pilot.press("escape")
         await until(pilot, lambda: not isinstance(app.screen, HelpScreen), "the help to close")
-        await until(pilot, lambda: app.focused is app.command_line, "the command line's focus")
+        await until(
+            pilot,
+            lambda: app.focused is app.main_screen.panes.command_line,
+            "the command line's focus",
+        )
 
 
 @pytest.mark.slow
@@ -307,11 +329,15 @@ async def test_question_mark_on_an_empty_line_opens_help_and_in_a_line_is_a_char
         await until(pilot, lambda: isinstance(app.screen, HelpScreen), "the help screen")
         assert app.screen.query_one(Input).value == ""  # the ? opened it, it was not typed
         await pilot.press("escape")
-        await until(pilot, lambda: app.focused is app.command_line, "the command line's focus")
-        assert app.command_line.value == ""
+        await until(
+            pilot,
+            lambda: app.focused is app.main_screen.panes.command_line,
+            "the command line's focus",
+        )
+        assert app.main_screen.panes.command_line.value == ""
         await pilot.press(*"get ?")
         await pilot.pause()
-        assert app.command_line.value == "get ?"
+        assert app.main_screen.panes.command_line.value == "get ?"
         assert not isinstance(app.screen, HelpScreen)
 
 
@@ -354,7 +380,7 @@ async def test_screenshot_without_downloads_goes_to_the_current_directory_and_sa
     work = tmp_path / "work"
     work.mkdir()
     monkeypatch.chdir(work)
-    assert not (Path.home() / "Downloads").exists()  # conftest's private HOME
+    assert not (Path.home() / "Downloads").exists()  # the env fixture's private HOME
     app = make_app(tmp_path)
     async with app.run_test(size=(100, 30)) as pilot:
         await open_palette(pilot, "screenshot")

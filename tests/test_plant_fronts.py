@@ -11,23 +11,21 @@ import sys
 from pathlib import Path
 
 import pytest
-from cell_helpers import make_cell_app
-from mqtt_broker import Broker, Subscriber, broker, needs_mosquitto, subscriber
-from test_ascii_screen import Terminal, terminal  # noqa: F401 (a fixture)
-from test_repl import Driver
-from tui_helpers import make_app, results_text, type_line, until
 
 from rac_console.sim.cell import SimulatedCellThread
+from tests.support.brokers import Broker, Subscriber
+from tests.support.cells import make_cell_app
+from tests.support.drivers import Driver, Terminal, make_app, results_text, type_line, until
+from tests.support.fixtures import needs_mosquitto
 
 pytestmark = [needs_mosquitto, pytest.mark.slow]
 QUICK = {"cycle": 0.8, "hold": 0.4, "reaction": 0.1}
-broker, subscriber = broker, subscriber  # the fixtures
 
 
 # A subscriber's wait blocks: it runs on a thread, the console's loop goes on.
 
 
-def status_is(topic: str, state: bytes):  # type: ignore[no-untyped-def]
+def status_is(topic: str, state: bytes):
     return lambda s: s.last.get(topic) == state
 
 
@@ -112,28 +110,36 @@ async def test_the_status_line_says_where_the_values_go_and_when_the_broker_is_l
     app = make_app(tmp_path)
     async with app.run_test(size=(120, 40)) as pilot:
         await type_line(pilot, "watch I 1")
-        assert "MQTT" not in app.status_bar.line.plain
+        assert "MQTT" not in app.main_screen.panes.status_bar.line.plain
         await type_line(pilot, f"publish {broker.url}/plant")
-        await until(pilot, lambda: "MQTT" in app.status_bar.line.plain, "the MQTT badge")
+        await until(
+            pilot, lambda: "MQTT" in app.main_screen.panes.status_bar.line.plain, "the MQTT badge"
+        )
         await asyncio.to_thread(subscriber.wait_for, "I1", subscriber.has_value("plant/sim/I1", 1))
-        assert " MQTT " in app.status_bar.line.plain  # connected
+        assert " MQTT " in app.main_screen.panes.status_bar.line.plain  # connected
         broker.stop()  # the badge must not go on looking healthy
-        await until(pilot, lambda: "MQTT LOST" in app.status_bar.line.plain, "MQTT LOST")
+        await until(
+            pilot, lambda: "MQTT LOST" in app.main_screen.panes.status_bar.line.plain, "MQTT LOST"
+        )
         broker.start()
         await until(
             pilot,
             lambda: (
-                "MQTT LOST" not in app.status_bar.line.plain
-                and " MQTT " in app.status_bar.line.plain
+                "MQTT LOST" not in app.main_screen.panes.status_bar.line.plain
+                and " MQTT " in app.main_screen.panes.status_bar.line.plain
             ),
             "the broker back",
         )
         await type_line(pilot, "publish off")
-        await until(pilot, lambda: "MQTT" not in app.status_bar.line.plain, "the badge gone")
+        await until(
+            pilot,
+            lambda: "MQTT" not in app.main_screen.panes.status_bar.line.plain,
+            "the badge gone",
+        )
 
 
 def test_the_last_will_says_offline_when_the_console_is_killed(
-    terminal: Terminal,  # noqa: F811
+    terminal: Terminal,
     broker: Broker,
     subscriber: Subscriber,
 ) -> None:
@@ -181,7 +187,7 @@ def test_every_state_of_the_feed_has_a_badge_and_trouble_looks_like_trouble() ->
 
 
 async def test_a_broker_that_breaks_the_protocol_turns_the_badge_red(tmp_path: Path) -> None:
-    from hostile_broker import hostile_broker
+    from tests.support.brokers import hostile_broker
 
     hostile = hostile_broker("a 256 MB CONNACK")
     app = make_app(tmp_path)
@@ -190,7 +196,9 @@ async def test_a_broker_that_breaks_the_protocol_turns_the_badge_red(tmp_path: P
             await type_line(pilot, "watch I 1")
             await type_line(pilot, f"publish mqtt://127.0.0.1:{hostile.port}/plant")
             await until(
-                pilot, lambda: "MQTT BROKEN" in app.status_bar.line.plain, "the MQTT BROKEN badge"
+                pilot,
+                lambda: "MQTT BROKEN" in app.main_screen.panes.status_bar.line.plain,
+                "the MQTT BROKEN badge",
             )
             await until(pilot, lambda: "broke the protocol" in results_text(app), "the one line")
             await type_line(pilot, "publish off")

@@ -1,6 +1,6 @@
 """A broker that lies: what it sends cannot take the watch's memory or its polling.
 
-The brokers are the tests' own (``hostile_broker.py``, 127.0.0.1, port 0): each reads
+The brokers are the tests' own (``tests/support/brokers.py``, 127.0.0.1, port 0): each reads
 the CONNECT, then does one hostile thing until the client hangs up: a CONNACK announcing
 256 MB followed by an endless stream, a CONNACK followed by junk, a CONNACK followed by
 silence, a CONNACK followed by a storm of acknowledgements. The watch is the real CLI;
@@ -17,17 +17,14 @@ from collections.abc import Callable, Iterator
 from pathlib import Path
 
 import pytest
-from hostile_broker import CONNACK, HOSTILE, HUGE_CONNACK, HostileBroker, hostile_broker
-from mqtt_broker import Running, running
-from test_cli import env
 
 from rac_console.plant.mqtt_guard import (
     MOST_PACKET,
     BrokerMisbehaved,
     InboundGuard,
 )
-
-env, running = env, running  # the fixtures: a private HOME, commands stopped at the end
+from tests.support.brokers import CONNACK, HOSTILE, HUGE_CONNACK, HostileBroker, hostile_broker
+from tests.support.drivers import Running
 
 #: What the watch says of each, in its one line.
 SAYS = {
@@ -128,15 +125,16 @@ def test_the_private_parts_of_paho_the_hooks_override_are_still_there() -> None:
     """paho has no public hook for these: when an upgrade moves one, this fails (and
     pyproject's pin says which versions were checked)."""
     import paho.mqtt.client as mqtt
+    from paho.mqtt.enums import CallbackAPIVersion
 
     from rac_console.plant.paho_hooks import PRIVATE
 
-    client = mqtt.Client(callback_api_version=mqtt.CallbackAPIVersion.VERSION2)
+    client = mqtt.Client(callback_api_version=CallbackAPIVersion.VERSION2)
     for name in PRIVATE:
         assert hasattr(client, name), name
     assert list(inspect.signature(client._sock_recv).parameters) == ["bufsize"]
     assert list(inspect.signature(client._ssl_wrap_socket).parameters) == ["tcp_sock"]
-    assert hasattr(mqtt._ConnectionState, "MQTT_CS_DISCONNECTING")
+    assert hasattr(mqtt._ConnectionState, "MQTT_CS_DISCONNECTING")  # type: ignore[attr-defined]
     reads = inspect.getsource(mqtt.Client._packet_read)
     assert "self._sock_recv(" in reads and ".recv(" not in reads.replace("_sock_recv(", "")
 

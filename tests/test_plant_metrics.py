@@ -10,15 +10,14 @@ from collections.abc import Callable
 from pathlib import Path
 
 import pytest
-from mqtt_broker import Running, running
-from servers import CLOSE, RecordingServer
-from test_cli import cli, env, one_error_line, recording
 
 from rac_console.commands.plant import parse_metrics_address
 from rac_console.engine import Engine
 from rac_console.plant.metrics import MetricsBoard
 from rac_console.plant.metrics_server import MetricsServer
 from rac_console.protocol import InputError
+from tests.support.drivers import Running, cli, one_error_line
+from tests.support.servers import CLOSE, RecordingServer
 
 prometheus = pytest.importorskip("prometheus_client")
 from prometheus_client.openmetrics.parser import (  # noqa: E402
@@ -27,9 +26,6 @@ from prometheus_client.openmetrics.parser import (  # noqa: E402
 from prometheus_client.parser import text_string_to_metric_families  # noqa: E402
 
 pytestmark = pytest.mark.slow
-env = env  # the fixtures: a private HOME for the CLI, servers that stop with the test
-recording = recording
-running = running
 SERVING = re.compile(r"serving the watched values at (http://127\.0\.0\.1:\d+/metrics)")
 
 Samples = dict[tuple[str, tuple[tuple[str, str], ...]], float]

@@ -17,28 +17,17 @@ from pathlib import Path
 from typing import Any
 
 import pytest
-from mqtt_broker import (
-    Broker,
-    Cable,
-    Running,
-    Subscriber,
-    broker,
-    needs_mosquitto,
-    running,
-    subscriber,
-)
-from servers import RecordingServer, Valve
-from test_cli import cli, env, fixed_reply, one_error_line, recording
 
 from rac_console.commands.plant import parse_mqtt_address
 from rac_console.protocol import KINDS, VT, Variant
 from rac_console.session import Session
 from rac_console.sim.thread import SimulatorThread
+from tests.support.brokers import Broker, Cable, Subscriber
+from tests.support.drivers import Running, cli, one_error_line
+from tests.support.fixtures import needs_mosquitto
+from tests.support.servers import RecordingServer, Valve, fixed_reply
 
 pytestmark = [needs_mosquitto, pytest.mark.slow]
-env = env  # the fixtures: a private HOME for the CLI, servers that stop with the test
-recording = recording
-broker, subscriber, running = broker, subscriber, running
 
 #: ASCII, as RAC's wire is: JSON's quotes and braces, terminal escapes, MQTT's wildcards.
 HOSTILE = '"},"value":666,"x":"\x1b[2J\x1b]0;owned\x07{#}+/\\'
@@ -321,7 +310,7 @@ def test_a_denied_topic_is_one_line_and_polling_goes_on(
 def test_a_broker_that_is_not_there_is_one_line_and_polling_goes_on(
     env: dict[str, str],
 ) -> None:
-    from mqtt_broker import free_port
+    from tests.support.brokers import free_port
 
     result = cli(
         env, "watch", "I", "1", "--every", "0.2", "--count", "6",
@@ -501,9 +490,10 @@ def test_mqtts_with_the_ca_file_given_and_refused_without_it(
             env | {"RAC_MQTT_CA_FILE": str(ca)}, "watch", "I", "1", "--count", "2", "--mqtt", url
         )
         import paho.mqtt.client as mqtt
+        from paho.mqtt.enums import CallbackAPIVersion
 
-        got: list[bytes] = []
-        reader = mqtt.Client(callback_api_version=mqtt.CallbackAPIVersion.VERSION2)
+        got: list[bytes | bytearray] = []
+        reader = mqtt.Client(callback_api_version=CallbackAPIVersion.VERSION2)
         reader.tls_set(ca_certs=str(ca))
         reader.on_message = lambda c, u, m: got.append(m.payload)
         reader.on_connect = lambda c, u, f, r, p: c.subscribe("plant/sim/I1", 1)

@@ -28,8 +28,10 @@ from collections.abc import Callable, Iterator
 from pathlib import Path
 
 import pytest
-from mqtt_broker import RAC, Broker, Running, mosquitto_path, needs_mosquitto, running
-from test_cli import env
+
+from tests.support.brokers import Broker, mosquitto_path
+from tests.support.drivers import RAC, Running
+from tests.support.fixtures import needs_mosquitto
 
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT / "benchmarks"))  # the benchmark's namespaces and cable, reused
@@ -37,11 +39,9 @@ from network_paths import SIM_HOST, Net, failure, why_not  # noqa: E402
 
 #: Tens of seconds of real keepalives and reconnections: `pytest -m "not slow"` skips it.
 pytestmark = [needs_mosquitto, pytest.mark.slow]
-env = env  # the fixtures: a private HOME for the CLI, commands killed if left running
-running = running
 
 BROKER_HOST = SIM_HOST  # A's address on the veth
-LISTENER = (sys.executable, str(Path(__file__).resolve().parent / "mqtt_broker.py"))
+LISTENER = (sys.executable, str(Path(__file__).resolve().parent / "support" / "brokers.py"))
 STATUS, I1 = "plant/sim/status", "plant/sim/I1"
 LOST, BACK = "stopped answering (no reply to a ping in 15 s)", "the MQTT broker is back"
 SIMULATOR = re.compile(r"built-in RC8 simulator.*\(at 127\.0\.0\.1:(\d+)\)")

@@ -9,7 +9,8 @@ from pathlib import Path
 
 import pytest
 from packaging.requirements import Requirement
-from test_cli import cli, env  # noqa: F401  (fixture)
+
+from tests.support.drivers import cli
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -24,7 +25,7 @@ def test_the_fast_extra_installs_nothing_on_windows() -> None:
 
 
 @pytest.mark.slow
-def test_paths_says_where_the_config_is_as_the_readme_does(env: dict[str, str]) -> None:  # noqa: F811
+def test_paths_says_where_the_config_is_as_the_readme_does(env: dict[str, str]) -> None:
     env.pop("RAC_CONSOLE_CONFIG", None)
     result = cli(env, "paths")
     assert result.returncode == 0, result.stderr

@@ -30,7 +30,7 @@ CELL3 = {
 }
 
 
-def profiles(data: dict[str, object]):  # type: ignore[no-untyped-def]
+def profiles(data: dict[str, object]):
     return parse_config(data, SOURCE).profiles
 
 

@@ -12,10 +12,10 @@ from collections.abc import Callable, Iterator
 from pathlib import Path
 
 import pytest
-from servers import RecordingServer
-from test_cli import cli, env, one_error_line, recording, unused_port  # noqa: F401  (fixtures)
 
 from rac_console.sim.thread import SimulatorThread
+from tests.support.drivers import cli, one_error_line, profile
+from tests.support.servers import RecordingServer, unused_port
 
 #: Subprocesses: `pytest -m "not slow"` skips them.
 pytestmark = pytest.mark.slow
@@ -27,25 +27,8 @@ def sim() -> Iterator[SimulatorThread]:
         yield simulator
 
 
-@pytest.fixture
-def config(tmp_path: Path, env: dict[str, str]) -> Callable[[str], Path]:  # noqa: F811
-    """Write the config file the CLI reads (RAC_CONSOLE_CONFIG in ``env``)."""
-    path = tmp_path / "config.toml"
-    env["RAC_CONSOLE_CONFIG"] = str(path)
-
-    def write(text: str) -> Path:
-        path.write_text(text, encoding="utf-8")
-        return path
-
-    return write
-
-
-def profile(name: str, port: int, extra: str = "", host: str = "127.0.0.1") -> str:
-    return f'[target.{name}]\nhost = "{host}"\nport = {port}\n{extra}\n'
-
-
 def test_h_name_uses_the_profile(
-    env: dict[str, str],  # noqa: F811
+    env: dict[str, str],
     config: Callable[[str], Path],
     sim: SimulatorThread,
 ) -> None:
@@ -57,7 +40,7 @@ def test_h_name_uses_the_profile(
 
 
 def test_an_explicit_port_overrides_the_profiles(
-    env: dict[str, str],  # noqa: F811
+    env: dict[str, str],
     config: Callable[[str], Path],
     sim: SimulatorThread,
 ) -> None:
@@ -68,9 +51,9 @@ def test_an_explicit_port_overrides_the_profiles(
 
 
 def test_a_read_only_profile_refuses_writes_before_the_wire(
-    env: dict[str, str],  # noqa: F811
+    env: dict[str, str],
     config: Callable[[str], Path],
-    recording: Callable[..., RecordingServer],  # noqa: F811
+    recording: Callable[..., RecordingServer],
 ) -> None:
     server = recording()
     config(profile("cell3", server.port, 'writes = "read-only"'))
@@ -84,9 +67,9 @@ def test_a_read_only_profile_refuses_writes_before_the_wire(
 
 
 def test_read_only_on_top_of_an_open_profile(
-    env: dict[str, str],  # noqa: F811
+    env: dict[str, str],
     config: Callable[[str], Path],
-    recording: Callable[..., RecordingServer],  # noqa: F811
+    recording: Callable[..., RecordingServer],
 ) -> None:
     server = recording()
     config(profile("cell3", server.port))
@@ -120,7 +103,7 @@ def test_read_only_on_top_of_an_open_profile(
     ids=lambda words: " ".join(words) or "console",
 )
 def test_a_broken_config_is_one_line_and_exit_2(
-    env: dict[str, str],  # noqa: F811
+    env: dict[str, str],
     config: Callable[[str], Path],
     text: str,
     says: str,
@@ -136,7 +119,7 @@ def test_a_broken_config_is_one_line_and_exit_2(
 
 
 def test_the_simulator_server_does_not_need_the_config(
-    env: dict[str, str],  # noqa: F811
+    env: dict[str, str],
     config: Callable[[str], Path],
 ) -> None:
     config("not toml at all [")
@@ -144,14 +127,14 @@ def test_the_simulator_server_does_not_need_the_config(
     assert result.returncode == 0, result.stderr
 
 
-def test_a_missing_config_is_fine(env: dict[str, str], tmp_path: Path) -> None:  # noqa: F811
+def test_a_missing_config_is_fine(env: dict[str, str], tmp_path: Path) -> None:
     env["XDG_CONFIG_HOME"] = str(tmp_path / "nowhere")  # no config.toml at the default path
     result = cli(env, "get", "I", "1", "--json")
     assert result.returncode == 0, result.stderr
 
 
 def test_a_bare_name_that_is_no_profile_says_so_when_it_cannot_connect(
-    env: dict[str, str],  # noqa: F811
+    env: dict[str, str],
     config: Callable[[str], Path],
 ) -> None:
     path = config(profile("cell3", unused_port()))

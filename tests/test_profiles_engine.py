@@ -10,13 +10,13 @@ from collections.abc import Iterator
 from contextlib import contextmanager
 
 import pytest
-from test_engine import Front
 
 from rac_console.commands.language import Connect
 from rac_console.commands.policy import TargetProfile, WritePolicy, Writes, parse_allow
 from rac_console.engine import Engine
 from rac_console.engine.commands import parse_command
 from rac_console.sim.thread import SimulatorThread
+from tests.support.drivers import Front
 
 
 @pytest.fixture

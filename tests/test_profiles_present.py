@@ -9,44 +9,11 @@ from dataclasses import replace
 import pytest
 from rich.color import Color
 
-from rac_console.engine import Status
 from rac_console.present.status import label_style, profile_colour, status_text, target_label
-
-SIM = Status(
-    target="SIMULATOR (built-in)",
-    is_simulator=True,
-    has_session=True,
-    host="127.0.0.1",
-    port=40000,
-    timeout=2.0,
-    read_only=False,
-    connection="connected",
-    retry_at=None,
-    rtt=0.00025,
-    paused=False,
-    watched=0,
-    interval=0.5,
-    period=0.5,
-    cycle_seconds=None,
-    polls_per_second=None,
-    interval_met=True,
-    record_failure=None,
-    seen=frozenset(),
-)
-CELL3 = replace(
-    SIM,
-    target="LIVE 192.168.0.1:5006",
-    is_simulator=False,
-    host="192.168.0.1",
-    port=5006,
-    profile="cell3",
-    label="Cell 3 — welding",
-    colour="red",
-    writes="confirm",
-)
+from tests.support.samples import CELL3, SIM
 
 
-def span_styles(line, text: str) -> list[str]:  # type: ignore[no-untyped-def]
+def span_styles(line, text: str) -> list[str]:
     """The styles of the spans that cover ``text`` in a rich Text."""
     start = line.plain.index(text)
     return [str(span.style) for span in line.spans if span.start <= start and span.end > start]

@@ -14,19 +14,19 @@ from pathlib import Path
 import pytest
 from prompt_toolkit.completion import CompleteEvent
 from prompt_toolkit.document import Document
-from test_profiles_present import CELL3, SIM
-from test_repl import Driver
 
 from rac_console.commands.policy import WritePolicy, Writes
 from rac_console.engine import CONFIRM_GUARD_SECONDS, ConfirmWrite
 from rac_console.engine.config import CONFIG_ENV, load_config
-from rac_console.present.status import LABEL_WIDTH
+from rac_console.engine.status import LABEL_WIDTH
 from rac_console.repl import repl as repl_module
 from rac_console.repl.prompt_parts import confirm_message, prompt_fragments, toolbar_fragments
 from rac_console.sim.thread import SimulatorThread
+from tests.support.drivers import Driver
+from tests.support.samples import CELL3, SIM
 
 
-def plain(fragments) -> str:  # type: ignore[no-untyped-def]
+def plain(fragments) -> str:
     return "".join(text for _, text, *_ in fragments)
 
 
@@ -76,7 +76,7 @@ async def test_a_confirm_question_is_asked_and_answered(tmp_path: Path) -> None:
             d.engine.outbox.put_many([QUESTION])
             await d.until(lambda _: d.repl.asking is not None, "the question")
             ready = time.monotonic() + 0.5  # a yes within the guard time is asked again
-            await d.until(lambda _, at=ready: time.monotonic() > at, "the guard time to pass")
+            await d.until(lambda _, at=ready: time.monotonic() > at, "the guard time to pass")  # type: ignore[misc]
             d.type(typed)
             await d.until(lambda _: len(answers) == len(seen) + 1, "the answer")
             seen.append(expected)

@@ -15,17 +15,23 @@ from pathlib import Path
 import pytest
 from textual import events
 from textual.widgets import Static
-from tui_helpers import WIRE_RECORD, FrameTap, results_text, type_line, until
 
 from rac_console.commands.policy import TargetProfile, WritePolicy, Writes
-from rac_console.engine import ConfirmWrite, Engine
+from rac_console.engine import ConfirmWrite
 from rac_console.engine.config import CONFIG_ENV, load_config
-from rac_console.present.history import History
-from rac_console.present.status import LABEL_WIDTH
+from rac_console.engine.status import LABEL_WIDTH
 from rac_console.sim.thread import SimulatorThread
 from rac_console.tui import confirm_screen
 from rac_console.tui.app import RacConsoleApp
 from rac_console.tui.confirm_screen import ConfirmWriteScreen
+from tests.support.drivers import (
+    FrameTap,
+    console,
+    modal,
+    results_text,
+    type_line,
+    until,
+)
 
 #: Terminal apps: `pytest -m "not slow"` skips them.
 pytestmark = pytest.mark.slow
@@ -43,29 +49,9 @@ def cell3(cell: SimulatorThread, colour: str | None = "red", writes: Writes = Wr
     )
 
 
-def console(
-    tmp_path: Path, profile: TargetProfile | None = None, **options: object
-) -> RacConsoleApp:
-    """The console on the built-in simulator, or on ``profile`` (as ``-H cell3``)."""
-    profiles = options.pop("profiles", {profile.name: profile} if profile else {})
-    engine = Engine(
-        profile.host if profile else None,
-        profile.port if profile else 5006,
-        timeout=1.0,
-        interval=0.05,
-        record=str(tmp_path / WIRE_RECORD),
-        cycles=True,
-        policy=profile.policy if profile else None,
-        profile=profile,
-        profiles=profiles,  # type: ignore[arg-type]
-        **options,  # type: ignore[arg-type]
-    )
-    return RacConsoleApp(engine, History(tmp_path / "history"))
-
-
 def status_line(app: RacConsoleApp) -> str:
-    app.refresh_table()
-    return str(app._status_line.plain)
+    app.main_screen.refresh_table()
+    return str(app.main_screen.panes.status_bar.line.plain)
 
 
 class Answers:
@@ -73,23 +59,19 @@ class Answers:
 
     def __init__(self, app: RacConsoleApp) -> None:
         self.given: list[tuple[int, bool]] = []
-        answer = app.engine.answer_confirm
+        answer = app.main_screen.members.engine.answer_confirm
 
         def spy(seq: int, yes: bool) -> None:
             self.given.append((seq, yes))
             answer(seq, yes)
 
-        app.engine.answer_confirm = spy  # type: ignore[method-assign]
+        app.main_screen.members.engine.answer_confirm = spy  # type: ignore[method-assign]
 
 
 QUESTION = ConfirmWrite(7, "I10", "14", "15", "PUT:RC8:10:I:3,15", "LIVE 10.0.0.1:5006", "Cell 3")
 
 
-def modal(app: RacConsoleApp) -> ConfirmWriteScreen | None:
-    return app.screen if isinstance(app.screen, ConfirmWriteScreen) else None
-
-
-async def question_up(pilot, app: RacConsoleApp, accepting: bool = False) -> ConfirmWriteScreen:  # type: ignore[no-untyped-def]
+async def question_up(pilot, app: RacConsoleApp, accepting: bool = False) -> ConfirmWriteScreen:
     await until(pilot, lambda: modal(app) is not None, "the confirm question")
     screen = modal(app)
     assert screen is not None
@@ -109,12 +91,15 @@ async def test_a_profile_frames_the_console_in_its_colour_with_its_label(
     async with app.run_test(size=(100, 30)) as pilot:
         await until(
             pilot,
-            lambda: app.status is not None and app.status.connection == "connected",
+            lambda: (
+                app.main_screen.status is not None
+                and app.main_screen.status.connection == "connected"
+            ),
             "connected",
         )
         screen = app.screen_stack[0]
         assert screen.has_class("-profile")
-        assert str(screen.styles.border.top[1]) == str(confirm_screen.border_colour("red"))
+        assert str(screen.styles.border.top[1]) == str(confirm_screen.border_colour("red"))  # type: ignore[attr-defined]
         assert screen.border_title == " Cell 3 — welding "
         line = status_line(app)
         assert line.startswith(" Cell 3 — welding   LIVE 127.0.0.1:")
@@ -127,16 +112,20 @@ async def test_connect_sim_and_connect_name_in_the_console(
     profile = cell3(cell, colour="#00875f", writes=Writes.READ_ONLY)
     app = console(tmp_path, profiles={"cell3": profile})
     async with app.run_test(size=(100, 30)) as pilot:
-        await until(pilot, lambda: app.status is not None, "the first status")
+        await until(pilot, lambda: app.main_screen.status is not None, "the first status")
         screen = app.screen_stack[0]
         assert not screen.has_class("-profile") and screen.border_title is None
         assert "writes open" in status_line(app)
         await type_line(pilot, "connect cell3")
         await until(
-            pilot, lambda: app.status is not None and app.status.profile == "cell3", "cell3"
+            pilot,
+            lambda: (
+                app.main_screen.status is not None and app.main_screen.status.profile == "cell3"
+            ),
+            "cell3",
         )
         assert screen.has_class("-profile") and screen.border_title == " Cell 3 — welding "
-        assert str(screen.styles.border.top[1]) == str(confirm_screen.border_colour("#00875f"))
+        assert str(screen.styles.border.top[1]) == str(confirm_screen.border_colour("#00875f"))  # type: ignore[attr-defined]
         line = status_line(app)
         assert line.startswith(" Cell 3 — welding   LIVE") and " READ-ONLY " in line
         await until(
@@ -146,7 +135,9 @@ async def test_connect_sim_and_connect_name_in_the_console(
         )
         await type_line(pilot, "connect sim")
         await until(
-            pilot, lambda: app.status is not None and app.status.is_simulator, "the simulator"
+            pilot,
+            lambda: app.main_screen.status is not None and app.main_screen.status.is_simulator,
+            "the simulator",
         )
         assert not screen.has_class("-profile") and screen.border_title is None
         assert screen.styles.border.top[0] in ("", "none")
@@ -159,7 +150,9 @@ async def test_an_unknown_colour_keeps_the_default_frame(
     app = console(tmp_path, cell3(cell, colour="no_such_colour"))
     async with app.run_test(size=(100, 30)) as pilot:
         await until(
-            pilot, lambda: app.status is not None and app.status.label is not None, "status"
+            pilot,
+            lambda: app.main_screen.status is not None and app.main_screen.status.label is not None,
+            "status",
         )
         await pilot.pause()
         screen = app.screen_stack[0]
@@ -175,9 +168,9 @@ async def test_the_question_shows_target_values_request_and_default_no(tmp_path:
     app = console(tmp_path)
     answers = Answers(app)
     async with app.run_test(size=(100, 30)) as pilot:
-        app.confirm_write(QUESTION)
+        app.main_screen.confirm_write(QUESTION)
         screen = await question_up(pilot, app)
-        shown = "\n".join(str(w.content) for w in screen.query("Static"))
+        shown = "\n".join(str(w.content) for w in screen.query(Static))
         for part in ("LIVE 10.0.0.1:5006", "I10: 14 → 15", "PUT:RC8:10:I:3,15", "[y/N]", "0.4 s"):
             assert part in shown
         assert "Cell 3" in str(screen.query_one("#confirm-box").border_title)
@@ -186,13 +179,15 @@ async def test_the_question_shows_target_values_request_and_default_no(tmp_path:
         await pilot.press("enter")
         await until(pilot, lambda: answers.given == [(7, False)], "the answer")
         assert modal(app) is None
-        assert app.focused is app.command_line
+        assert app.focused is app.main_screen.panes.command_line
 
 
 async def test_an_unknown_value_before_is_said(tmp_path: Path) -> None:
     app = console(tmp_path)
     async with app.run_test(size=(100, 30)) as pilot:
-        app.confirm_write(ConfirmWrite(3, "I10", None, "15", "PUT:RC8:10:I:3,15", "x", None))
+        app.main_screen.confirm_write(
+            ConfirmWrite(3, "I10", None, "15", "PUT:RC8:10:I:3,15", "x", None)
+        )
         screen = await question_up(pilot, app)
         assert "I10: value now unknown → 15" in str(
             screen.query_one("#confirm-question", Static).content
@@ -207,7 +202,7 @@ async def test_keys_typed_before_the_question_or_in_its_guard_time_answer_nothin
     answers = Answers(app)
     async with app.run_test(size=(100, 30)) as pilot:
         early = [events.Key("enter", "\r"), events.Key("y", "y")]  # typed before it showed
-        app.confirm_write(QUESTION)
+        app.main_screen.confirm_write(QUESTION)
         screen = await question_up(pilot, app)
         for key in early:
             app.post_message(key)
@@ -224,7 +219,7 @@ async def test_esc_and_n_answer_no(tmp_path: Path, key: str) -> None:
     app = console(tmp_path)
     answers = Answers(app)
     async with app.run_test(size=(100, 30)) as pilot:
-        app.confirm_write(QUESTION)
+        app.main_screen.confirm_write(QUESTION)
         await question_up(pilot, app, accepting=True)
         await pilot.press("x", key)  # a key that means nothing is ignored
         await until(pilot, lambda: answers.given == [(7, False)], "the answer")
@@ -234,11 +229,11 @@ async def test_y_after_the_guard_time_and_the_yes_button_answer_yes(tmp_path: Pa
     app = console(tmp_path)
     answers = Answers(app)
     async with app.run_test(size=(100, 30)) as pilot:
-        app.confirm_write(QUESTION)
+        app.main_screen.confirm_write(QUESTION)
         await question_up(pilot, app, accepting=True)
         await pilot.press("y")
         await until(pilot, lambda: answers.given == [(7, True)], "the answer")
-        app.confirm_write(QUESTION)
+        app.main_screen.confirm_write(QUESTION)
         await question_up(pilot, app, accepting=True)
         await pilot.click("#confirm-yes")
         await until(pilot, lambda: answers.given == [(7, True), (7, True)], "the click")
@@ -257,7 +252,10 @@ async def test_a_confirm_target_declines_by_default_and_typed_ahead_keys_do_not_
     async with app.run_test(size=(100, 30)) as pilot:
         await until(
             pilot,
-            lambda: app.status is not None and app.status.connection == "connected",
+            lambda: (
+                app.main_screen.status is not None
+                and app.main_screen.status.connection == "connected"
+            ),
             "connected",
         )
         await type_line(pilot, "put I 10 15", enter=False)
@@ -265,19 +263,19 @@ async def test_a_confirm_target_declines_by_default_and_typed_ahead_keys_do_not_
         # Pilot paces keys by the app's idle time: the burst may end before the question
         # shows (the keys went to the command line), inside its guard time (ignored), or,
         # on a slow run, reach it after (Enter first: No). Whichever: nothing is accepted.
-        await until(pilot, lambda: modal(app) is not None or answers.given, "the question")
+        await until(pilot, lambda: modal(app) is not None or bool(answers.given), "the question")
         screen = modal(app)
         if screen is not None:
-            await until(pilot, lambda: screen.shown, "the question on screen")
+            await until(pilot, lambda: screen.shown, "the question on screen")  # type: ignore[union-attr]
             assert "I10: 14 → 15" in str(screen.query_one("#confirm-question", Static).content)
-            await until(pilot, lambda: screen.accepting, "the end of the guard time")
+            await until(pilot, lambda: screen.accepting, "the end of the guard time")  # type: ignore[union-attr]
             assert modal(app) is screen, answers.given  # the burst answered nothing
             await pilot.press("enter")  # the default: No
         await until(pilot, lambda: len(answers.given) == 1, "the answer")
         assert answers.given[0][1] is False
         await until(pilot, lambda: "nothing was sent" in results_text(app), "the refusal")
         assert b"PUT:RC8:10:I:3,15\r" not in tap.sent
-        app.command_line.clear()
+        app.main_screen.panes.command_line.clear()
         await type_line(pilot, "get I 10")
         await until(pilot, lambda: "I10 = 14" in results_text(app), "the value kept")
 
@@ -296,7 +294,7 @@ async def test_tab_completes_profile_names_after_connect(
     async with app.run_test(size=(100, 30)) as pilot:
         await type_line(pilot, "connect c", enter=False)
         await pilot.press("tab")
-        assert app.command_line.value == "connect cell3 "
+        assert app.main_screen.panes.command_line.value == "connect cell3 "
 
 
 # ------------------------------------------------------------- a long label
@@ -334,8 +332,10 @@ async def test_a_long_label_is_cut_wherever_the_console_shows_it(
         assert "…" in results_text(app)
         await type_line(pilot, "connect ", enter=False)
         await pilot.press("tab")  # two candidates: listed, each with its help
-        await until(pilot, lambda: app.completions.has_class("-visible"), "the candidates")
-        listed = str(app.completions.content)
+        await until(
+            pilot, lambda: app.main_screen.panes.completions.has_class("-visible"), "the candidates"
+        )
+        listed = str(app.main_screen.panes.completions.content)
         assert "cell3" in listed and 0 < listed.count(MARK) <= LABEL_WIDTH
         await pilot.press("c", "e", "l", "l", "3")
         await pilot.press("enter")
@@ -343,9 +343,9 @@ async def test_a_long_label_is_cut_wherever_the_console_shows_it(
         assert 0 < results_text(app).count(MARK) - shown <= LABEL_WIDTH
         assert str(app.screen_stack[0].border_title).count(MARK) <= LABEL_WIDTH
         assert status_line(app).count(MARK) <= LABEL_WIDTH
-        app.confirm_write(replace(QUESTION, label=profile.label))
+        app.main_screen.confirm_write(replace(QUESTION, label=profile.label))
         screen = await question_up(pilot, app)
         title = str(screen.query_one("#confirm-box").border_title)
         assert 0 < title.count(MARK) <= LABEL_WIDTH
-        shown_in_modal = "\n".join(str(w.content) for w in screen.query("Static"))
+        shown_in_modal = "\n".join(str(w.content) for w in screen.query(Static))
         assert shown_in_modal.count(MARK) <= LABEL_WIDTH

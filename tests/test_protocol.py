@@ -5,7 +5,6 @@ from __future__ import annotations
 from decimal import Decimal
 
 import pytest
-from conftest import VECTORS
 
 from rac_console.protocol import (
     MAX_FRAME,
@@ -27,6 +26,7 @@ from rac_console.protocol import (
 from rac_console.protocol.errors import FrameTooLong
 from rac_console.protocol.text import describe_response, wire_text
 from rac_console.protocol.variant import canonical_r4
+from tests.support.samples import SAMPLES as VECTORS
 
 
 @pytest.mark.parametrize("sample", VECTORS["variants"], ids=lambda s: s["text"])

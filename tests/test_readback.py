@@ -11,9 +11,6 @@ from collections.abc import Callable, Iterator
 from pathlib import Path
 
 import pytest
-from servers import RecordingServer
-from test_cli import cli, env, one_error_line  # noqa: F401  (env is a fixture)
-from test_engine import Front
 
 from rac_console.commands.language import Put, VarRef
 from rac_console.commands.outcome import ExitStatus, Outcome
@@ -22,8 +19,10 @@ from rac_console.commands.readback import same_value
 from rac_console.engine import ConfirmWrite, Engine, Result
 from rac_console.present.render import outcome_text
 from rac_console.protocol import Variant, kind_of
-from rac_console.protocol.variant import VT
+from rac_console.protocol.vartypes import VT
 from rac_console.session import Frame
+from tests.support.drivers import Front, cli, one_error_line
+from tests.support.servers import RecordingServer
 
 
 def ignoring_put(held: bytes = b"0,3,14\r") -> Callable[[bytes], bytes]:
@@ -204,7 +203,7 @@ def test_a_confirm_target_writes_nothing_unless_the_answer_is_yes(answer: bool |
 
 
 @pytest.mark.slow
-def test_cli_put_reads_back_and_says_so(env: dict[str, str]) -> None:  # noqa: F811
+def test_cli_put_reads_back_and_says_so(env: dict[str, str]) -> None:
     result = cli(env, "run", "-", stdin="put I 10 14\nput I 10 15\n")
     assert result.returncode == 0, result.stderr
     assert "I10: 14 → 15  S_OK  read back 15 ✓" in result.stdout
@@ -212,7 +211,7 @@ def test_cli_put_reads_back_and_says_so(env: dict[str, str]) -> None:  # noqa: F
 
 @pytest.mark.slow
 def test_cli_put_ignored_by_the_controller_exits_1_with_a_cross(
-    env: dict[str, str],  # noqa: F811
+    env: dict[str, str],
     server: Callable[..., RecordingServer],
 ) -> None:
     controller = server(ignoring_put())
@@ -226,7 +225,7 @@ def test_cli_put_ignored_by_the_controller_exits_1_with_a_cross(
 
 @pytest.mark.slow
 def test_cli_no_verify_sends_only_the_put(
-    env: dict[str, str],  # noqa: F811
+    env: dict[str, str],
     server: Callable[..., RecordingServer],
     tmp_path: Path,
 ) -> None:
@@ -242,7 +241,7 @@ def test_cli_no_verify_sends_only_the_put(
 
 @pytest.mark.slow
 def test_a_timed_out_put_is_unknown_and_the_read_back_says_what_is_held(
-    env: dict[str, str],  # noqa: F811
+    env: dict[str, str],
     server: Callable[..., RecordingServer],
 ) -> None:
     controller = server(silent_put())
@@ -270,7 +269,7 @@ def failing_read_back(held: bytes = b"0,3,14\r") -> Callable[[bytes], bytes]:
 
 @pytest.mark.slow
 def test_a_read_back_that_fails_is_said_once(
-    env: dict[str, str],  # noqa: F811
+    env: dict[str, str],
     server: Callable[..., RecordingServer],
 ) -> None:
     controller = server(failing_read_back())
@@ -305,7 +304,7 @@ def profile_env(base: dict[str, str], tmp_path: Path, port: int, rules: str) -> 
 
 @pytest.mark.slow
 def test_cli_allow_refuses_outside_its_ranges_with_the_rule_and_nothing_sent(
-    env: dict[str, str],  # noqa: F811
+    env: dict[str, str],
     server: Callable[..., RecordingServer],
     tmp_path: Path,
 ) -> None:
@@ -326,7 +325,7 @@ def test_cli_allow_refuses_outside_its_ranges_with_the_rule_and_nothing_sent(
 
 @pytest.mark.slow
 def test_cli_writes_to_a_confirm_target_only_with_yes(
-    env: dict[str, str],  # noqa: F811
+    env: dict[str, str],
     server: Callable[..., RecordingServer],
     tmp_path: Path,
 ) -> None:
@@ -431,7 +430,7 @@ def test_a_raw_put_is_asked_about_by_its_value_and_an_unreadable_one_is_refused(
 
 @pytest.mark.slow
 def test_yes_with_no_verify_sends_the_put_alone_to_a_confirm_target(
-    env: dict[str, str],  # noqa: F811
+    env: dict[str, str],
     server: Callable[..., RecordingServer],
     tmp_path: Path,
 ) -> None:
@@ -443,7 +442,7 @@ def test_yes_with_no_verify_sends_the_put_alone_to_a_confirm_target(
 
 
 @pytest.mark.slow
-def test_a_config_file_named_but_missing_is_refused(env: dict[str, str], tmp_path: Path) -> None:  # noqa: F811
+def test_a_config_file_named_but_missing_is_refused(env: dict[str, str], tmp_path: Path) -> None:
     missing = tmp_path / "nonexist.toml"
     result = cli(env | {"RAC_CONSOLE_CONFIG": str(missing)}, "-H", "cell3", "get", "I", "10")
     assert result.returncode == 2
@@ -479,7 +478,7 @@ def test_a_raw_line_that_is_no_checkable_put_is_refused_on_a_confirm_target() ->
 
 @pytest.mark.slow
 def test_a_raw_put_written_as_another_type_is_not_called_a_mismatch(
-    env: dict[str, str],  # noqa: F811
+    env: dict[str, str],
     server: Callable[..., RecordingServer],
 ) -> None:
     controller = server(ignoring_put(b"0,3,15\r"))  # it converted the string "15"
@@ -500,7 +499,7 @@ def test_a_raw_put_written_as_another_type_is_not_called_a_mismatch(
     ids=["huge-port", "huge-allow", "huge-setting"],
 )
 def test_a_hostile_config_is_one_line_not_a_traceback(
-    env: dict[str, str],  # noqa: F811
+    env: dict[str, str],
     tmp_path: Path,
     text: str,
 ) -> None:
@@ -512,7 +511,7 @@ def test_a_hostile_config_is_one_line_not_a_traceback(
 
 
 @pytest.mark.slow
-def test_a_config_path_that_cannot_be_expanded_is_one_line(env: dict[str, str]) -> None:  # noqa: F811
+def test_a_config_path_that_cannot_be_expanded_is_one_line(env: dict[str, str]) -> None:
     result = cli(env | {"RAC_CONSOLE_CONFIG": "~nosuchuser4242/c.toml"}, "get", "I", "1")
     assert result.returncode == 2
     assert "nosuchuser4242" in one_error_line(result)
@@ -520,7 +519,7 @@ def test_a_config_path_that_cannot_be_expanded_is_one_line(env: dict[str, str]) 
 
 @pytest.mark.slow
 def test_a_profile_applies_when_its_address_or_its_name_in_another_case_is_typed(
-    env: dict[str, str],  # noqa: F811
+    env: dict[str, str],
     server: Callable[..., RecordingServer],
     tmp_path: Path,
 ) -> None:
@@ -535,7 +534,7 @@ def test_a_profile_applies_when_its_address_or_its_name_in_another_case_is_typed
 
 @pytest.mark.slow
 def test_a_config_saved_with_a_bom_is_read(
-    env: dict[str, str],  # noqa: F811
+    env: dict[str, str],
     server: Callable[..., RecordingServer],
     tmp_path: Path,
 ) -> None:

@@ -2,12 +2,10 @@
 
 from __future__ import annotations
 
-import socket
+from collections.abc import Callable
 from pathlib import Path
 
 import pytest
-from servers import CLOSE, RecordingServer
-from tui_helpers import log_text, make_app, type_line, until
 
 from rac_console.engine.backoff import (
     EARLY_EXCHANGES,
@@ -17,28 +15,24 @@ from rac_console.engine.backoff import (
     Backoff,
 )
 from rac_console.tui.status_bar import StatusBar
+from tests.support.drivers import log_text, make_app, type_line, until
+from tests.support.servers import CLOSE, Answering, RecordingServer, fixed_reply
 
 #: Over half a second each (a terminal app, a subprocess, a timed server):
 #: `pytest -m "not slow"` skips them.
 pytestmark = pytest.mark.slow
 
 
-class DropAfterOneRequest(RecordingServer):
-    """Accepts, reads one request, and closes without answering. With ``answer`` set it
-    answers every request instead (a controller come back)."""
+def come_back(line: bytes) -> bytes:
+    """A controller come back: it answers every request."""
+    return b"0,3,1\r" if b":I:" in line else b"-2147024809\r"
 
-    def __init__(self) -> None:
-        self.answer = False
-        super().__init__(self._reply)
 
-    def _reply(self, line: bytes) -> bytes | object:
-        if not self.answer:
-            return CLOSE
-        return b"0,3,1\r" if b":I:" in line else b"-2147024809\r"
-
-    @property
-    def accepted(self) -> int:
-        return len(self.peers)
+def drop_after_one_request() -> tuple[RecordingServer, Answering]:
+    """Accepts, reads one request, and closes without answering; with its reply's
+    ``answer`` set to :func:`come_back`, it answers every request instead."""
+    reply = Answering(CLOSE)
+    return RecordingServer(reply), reply
 
 
 def test_backoff_doubles_on_early_drops_and_resets_after_good_exchanges() -> None:
@@ -59,7 +53,7 @@ def test_backoff_doubles_on_early_drops_and_resets_after_good_exchanges() -> Non
 
 
 async def test_a_controller_that_drops_every_connection_is_not_hammered(tmp_path: Path) -> None:
-    server = DropAfterOneRequest()
+    server, reply = drop_after_one_request()
     try:
         app = make_app(tmp_path, "127.0.0.1", server.port, interval=0.05, timeout=1)
         async with app.run_test(size=(160, 40)) as pilot:
@@ -77,11 +71,11 @@ async def test_a_controller_that_drops_every_connection_is_not_hammered(tmp_path
             await until(
                 pilot, lambda: "dropped early, retrying in" in str(status.render()), "countdown"
             )
-            server.answer = True  # the controller comes back: polling resumes
+            reply.answer = come_back  # the controller comes back: polling resumes
             await until(pilot, lambda: "polls/s" in str(status.render()), "polling again", 10)
             # A stretch of good exchanges resets the backoff: the next drop waits 0.5 s.
             first_waits = log_text(app).count(f"waiting {FIRST_DELAY:g} s before")
-            server.answer = False
+            reply.answer = CLOSE
             await until(
                 pilot,
                 lambda: log_text(app).count(f"waiting {FIRST_DELAY:g} s before") > first_waits,
@@ -92,24 +86,13 @@ async def test_a_controller_that_drops_every_connection_is_not_hammered(tmp_path
         server.close()
 
 
-class AnswerOnceThenClose(RecordingServer):
+def answer_once_then_close() -> RecordingServer:
     """Answers the first request of each connection, then closes it."""
-
-    def __init__(self) -> None:
-        super().__init__(lambda line: b"0,3,1\r")
-
-    def _serve(self, conn: socket.socket) -> None:  # one answer, then the connection ends
-        with conn:
-            conn.settimeout(5)
-            try:
-                if conn.recv(4096):
-                    conn.sendall(b"0,3,1\r")
-            except OSError:
-                return
+    return RecordingServer(fixed_reply(b"0,3,1\r"), answers=1)
 
 
 async def test_a_pause_during_a_backoff_leaves_no_countdown(tmp_path: Path) -> None:
-    server = DropAfterOneRequest()
+    server, _ = drop_after_one_request()
     try:
         app = make_app(tmp_path, "127.0.0.1", server.port, interval=0.05, timeout=1)
         async with app.run_test(size=(160, 40)) as pilot:
@@ -123,19 +106,14 @@ async def test_a_pause_during_a_backoff_leaves_no_countdown(tmp_path: Path) -> N
         server.close()
 
 
-class CloseAtOnce(RecordingServer):
+def close_at_once() -> RecordingServer:
     """Accepts and closes at once, before reading anything."""
-
-    def __init__(self) -> None:
-        super().__init__(lambda line: CLOSE)
-
-    def _serve(self, conn: socket.socket) -> None:
-        conn.close()
+    return RecordingServer(fixed_reply(None), answers=0)
 
 
-@pytest.mark.parametrize("server_kind", [AnswerOnceThenClose, CloseAtOnce])
+@pytest.mark.parametrize("server_kind", [answer_once_then_close, close_at_once])
 async def test_other_controllers_that_keep_dropping_are_not_hammered(
-    tmp_path: Path, server_kind: type[RecordingServer]
+    tmp_path: Path, server_kind: Callable[[], RecordingServer]
 ) -> None:
     server = server_kind()
     try:

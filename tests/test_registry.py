@@ -11,8 +11,6 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import pytest
-from test_engine import Front
-from test_repl import Driver
 
 from rac_console.cli.main import main
 from rac_console.commands.language import Get, VarRef, parse_var
@@ -25,6 +23,7 @@ from rac_console.present.completion import complete, hint
 from rac_console.present.tokens import tokenize
 from rac_console.protocol import InputError
 from rac_console.sim.thread import SimulatorThread
+from tests.support.drivers import Driver, Front
 
 pytestmark = pytest.mark.slow
 
@@ -141,7 +140,7 @@ def test_two_engines_poll_two_controllers_side_by_side() -> None:
                 front.run("watch I 20")
             for front, value in zip(fronts, (111, 222), strict=True):
                 front.until(
-                    lambda front=front, value=value: _shown(front, "I20") == value,
+                    lambda front=front, value=value: _shown(front, "I20") == value,  # type: ignore[misc]
                     f"I20 = {value}",
                 )
             fronts[0].run("connect sim")  # one changes target: the other goes on

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
-import io
 import json
 import re
 import subprocess
@@ -18,17 +17,14 @@ import pytest
 from prompt_toolkit.buffer import Buffer
 from prompt_toolkit.data_structures import Size
 from prompt_toolkit.document import Document
-from prompt_toolkit.input import create_pipe_input
-from prompt_toolkit.output import DummyOutput
 from prompt_toolkit.output.vt100 import Vt100_Output
-from terminal_screen import Screen
-from tui_helpers import WIRE_RECORD, FrameTap
 
 from rac_console.engine import Engine
 from rac_console.present.history import History
 from rac_console.present.render import make_console
 from rac_console.repl.prompt_parts import RacCompleter
 from rac_console.repl.repl import Repl
+from tests.support.drivers import Driver, Screen
 
 UP = "\x1b[A"
 
@@ -37,7 +33,7 @@ def completions(text: str, seen: set[tuple[str, int]] | None = None) -> list[tup
     completer = RacCompleter(lambda: seen or set())
     return [
         (c.text, c.display_meta_text)
-        for c in completer.get_completions(Document(text, len(text)), None)
+        for c in completer.get_completions(Document(text, len(text)), None)  # type: ignore[arg-type]
     ]
 
 
@@ -58,75 +54,6 @@ CONTROL_SEQUENCE = re.compile(r"\x1b\[[0-9;?]*[A-Za-z]")
 def visible(text: str) -> str:
     """What a screen shows of ``text``, roughly: the control sequences taken out."""
     return CONTROL_SEQUENCE.sub("", text)
-
-
-class Driver:
-    """A REPL on a pipe: type lines, read what it printed, wait on conditions.
-
-    With ``screen``, prompt-toolkit draws its prompt, menus and toolbar into the same
-    stream the results are printed to (a 40 x 140 terminal), as on a real terminal."""
-
-    def __init__(
-        self,
-        tmp_path: Path,
-        host: str | None = None,
-        *,
-        screen: bool = False,
-        **engine_options: object,
-    ) -> None:
-        self.out = io.StringIO()
-        self.screen = screen
-        self.console = make_console(
-            file=self.out, force_terminal=True, width=140, color_system=None
-        )
-        self.tmp_path = tmp_path
-        self.engine = self.make_engine(host, **engine_options)
-        self.history = History(tmp_path / "history")
-        self.tap = FrameTap(tmp_path)  # what really went on the wire (--record)
-        #: Live watches (a table until Enter) that have ended: their key reader gone, so
-        #: what is typed next goes to the prompt, not to a watch that reads every key.
-        self.watches_begun = self.watches_ended = 0
-
-    def make_engine(self, host: str | None, **options: object) -> Engine:
-        options.setdefault("record", str(self.tmp_path / WIRE_RECORD))
-        return Engine(host, **options)  # type: ignore[arg-type]
-
-    async def run(self, steps: Callable[[Driver], object]) -> str:
-        with create_pipe_input() as pipe:
-            self.pipe = pipe
-            output = (
-                Vt100_Output(
-                    self.out, lambda: Size(rows=40, columns=140), term="xterm", enable_cpr=False
-                )
-                if self.screen
-                else DummyOutput()
-            )
-            self.repl = Repl(self.engine, self.history, self.console, input=pipe, output=output)
-            live_watch = self.repl.live_watch
-
-            async def counted(*args: object) -> None:
-                self.watches_begun += 1
-                try:
-                    await live_watch(*args)  # type: ignore[arg-type]
-                finally:
-                    self.watches_ended += 1
-
-            self.repl.live_watch = counted  # type: ignore[method-assign]
-            task = asyncio.create_task(self.repl.run())
-            await steps(self)  # type: ignore[misc]
-            pipe.send_text("quit\r")
-            await asyncio.wait_for(task, 5)
-        return self.out.getvalue()
-
-    def type(self, text: str) -> None:
-        self.pipe.send_text(text)
-
-    async def until(self, predicate: Callable[[str], bool], what: str, timeout: float = 30) -> None:
-        deadline = time.monotonic() + timeout
-        while not predicate(self.out.getvalue()):
-            if time.monotonic() > deadline:
-                raise AssertionError(f"timed out waiting for {what}:\n{self.out.getvalue()}")
-            await asyncio.sleep(0.02)
 
 
 async def test_get_put_and_raw_exchanges_against_the_simulator(tmp_path: Path) -> None:
@@ -256,12 +183,12 @@ async def test_a_lost_connection_is_one_line_and_the_next_command_reconnects(
         d.type("get I 1\r")
         await d.until(lambda out: "the next command reconnects" in out, "the lost line")
         repl_prompt = d.repl.prompt_message()
-        prompts.append("".join(text for _, text in repl_prompt))
+        prompts.append("".join(text for _, text, *_ in repl_prompt))
         restarted = await SimulatorServer(port=port).start()
         try:
             d.type("get I 2\r")
             await d.until(lambda out: "I2 = 250" in out, "the reconnected get")
-            prompts.append("".join(text for _, text in d.repl.prompt_message()))
+            prompts.append("".join(text for _, text, *_ in d.repl.prompt_message()))
         finally:
             await restarted.stop()
 
@@ -475,7 +402,8 @@ async def test_keys_typed_ahead_while_a_command_waits_stay_out_of_its_result(
     import termios
 
     from prompt_toolkit.input.vt100 import Vt100Input
-    from servers import RecordingServer
+
+    from tests.support.servers import RecordingServer
 
     reply = HeldReply()
     server = RecordingServer(reply)

@@ -9,7 +9,6 @@ deadline; nothing sleeps and hopes.
 from __future__ import annotations
 
 import json
-import os
 import queue
 import subprocess
 import sys
@@ -17,10 +16,12 @@ import threading
 import time
 from collections.abc import Callable, Iterator
 from pathlib import Path
+from typing import cast
 
 import pytest
 
 from rac_console.sim.replay import MAX_FILE_BYTES, MAX_LINE_BYTES
+from tests.support.drivers import cli
 
 pytestmark = pytest.mark.slow
 
@@ -29,36 +30,6 @@ SIM = [sys.executable, "-m", "rac_console", "sim"]
 LISTENING = "RC8 simulator listening on 127.0.0.1:"
 #: Recorded at the "cell" (the built-in simulator): I10 moves 1, 2, 3; S1 and an error.
 SESSION = "put I 10 1\nget I 10\nput I 10 2\nget I 10\nput I 10 3\nget I 10\nget S 1\nget I 500\n"
-
-
-@pytest.fixture
-def env(tmp_path: Path) -> dict[str, str]:
-    home = tmp_path / "cli-home"
-    home.mkdir()
-    environment = dict(os.environ)
-    environment.update(
-        HOME=str(home),
-        XDG_CONFIG_HOME=str(home / ".config"),
-        XDG_DATA_HOME=str(home / ".local" / "share"),
-        XDG_STATE_HOME=str(home / ".local" / "state"),
-        XDG_CACHE_HOME=str(home / ".cache"),
-        PYTHONIOENCODING="utf-8",
-        COLUMNS="200",
-    )
-    return environment
-
-
-def cli(env: dict[str, str], *args: str, stdin: str = "") -> subprocess.CompletedProcess[str]:
-    return subprocess.run(
-        [sys.executable, "-m", "rac_console", *args],
-        env=env,
-        input=stdin,
-        capture_output=True,
-        text=True,
-        encoding="utf-8",
-        errors="backslashreplace",
-        timeout=DEADLINE,
-    )
 
 
 class Replay:
@@ -144,7 +115,7 @@ def get(env: dict[str, str], port: int, *variable: str) -> dict[str, object]:
     result = cli(env, "-H", "127.0.0.1", "-p", str(port), "--json", "get", *variable)
     assert "Traceback" not in result.stderr
     (data,) = [json.loads(line) for line in result.stdout.splitlines() if line.strip()]
-    return data
+    return cast(dict[str, object], data)
 
 
 # ------------------------------------------------------------------ replaying

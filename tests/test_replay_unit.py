@@ -12,6 +12,7 @@ import json
 import os
 import sys
 import threading
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 
 import pytest
@@ -52,12 +53,12 @@ def frames(*pairs: tuple[str, str], **flags: bool) -> list[dict[str, object]]:
     return out
 
 
-def write(path: Path, records: list[dict[str, object]]) -> Path:
+def write(path: Path, records: Sequence[Mapping[str, object]]) -> Path:
     path.write_text("".join(json.dumps(r) + "\n" for r in records), encoding="utf-8")
     return path
 
 
-def recorded(records: list[dict[str, object]]):
+def recorded(records: Sequence[Mapping[str, object]]):
     lines = [json.dumps(r).encode() + b"\n" for r in records]
     return read_records(lines, "test.jsonl")
 
@@ -107,7 +108,7 @@ def test_requests_are_keyed_as_the_controller_reads_them() -> None:
 
 
 def test_only_answered_gets_are_used() -> None:
-    records = [
+    records: list[Mapping[str, object]] = [
         {"dir": "tx", "text": "GET:RC8:1:I:"},  # timed out: the next request came
         *frames(("GET:RC8:2:I:", "0,3,2")),
         {"dir": "rx", "text": "stray"},  # nobody asked

@@ -16,15 +16,13 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import pytest
-from servers import RecordingServer
-from test_cli import cli, env, recording  # noqa: F401  (fixtures)
-from test_repl import Driver
-from tui_helpers import type_line, until
 
 from rac_console.cli.main import make_cell, parse_args, settle_targets
 from rac_console.engine.cell import Cell
 from rac_console.present.history import History
 from rac_console.tui.app import RacConsoleApp
+from tests.support.drivers import Driver, cli, type_line, until
+from tests.support.servers import RecordingServer
 
 pytestmark = pytest.mark.slow
 
@@ -101,8 +99,8 @@ def config_text(bench: int, ro: int) -> str:
 @pytest.fixture
 def plant(
     tmp_path: Path,
-    env: dict[str, str],  # noqa: F811
-    recording: Callable[..., RecordingServer],  # noqa: F811
+    env: dict[str, str],
+    recording: Callable[..., RecordingServer],
     monkeypatch: pytest.MonkeyPatch,
 ) -> Iterator[Plant]:
     bench, ro = recording(reply), recording(reply)
@@ -117,7 +115,7 @@ def plant(
 
 
 @pytest.mark.parametrize("name", CASES)
-def test_one_shot(name: str, plant: Plant, env: dict[str, str]) -> None:  # noqa: F811
+def test_one_shot(name: str, plant: Plant, env: dict[str, str]) -> None:
     case = CASES[name]
     several = "," in "".join(case.hosts)
     tried = set()
@@ -137,7 +135,7 @@ def test_one_shot(name: str, plant: Plant, env: dict[str, str]) -> None:  # noqa
 
 
 @pytest.mark.parametrize("name", CASES)
-def test_run(name: str, plant: Plant, env: dict[str, str]) -> None:  # noqa: F811
+def test_run(name: str, plant: Plant, env: dict[str, str]) -> None:
     case = CASES[name]
     script = "".join(f"{line}\n" for line, _ in case.lines)
     result = cli(env, *plant.words(case), "run", "--keep-going", "-", stdin=script)
@@ -156,7 +154,8 @@ def cell_of(plant: Plant, case: Case, repl: bool) -> Cell:
 
 
 class CellDriver(Driver):
-    """The REPL of :mod:`test_repl` on a pipe, over a cell made from a command line."""
+    """The REPL (:class:`~tests.support.drivers.Driver`) on a pipe, over a cell made from a
+    command line."""
 
     def __init__(self, tmp_path: Path, cell: Cell) -> None:
         self.cell = cell
@@ -186,8 +185,12 @@ async def test_console(name: str, plant: Plant, tmp_path: Path) -> None:
     case = CASES[name]
     app = RacConsoleApp(cell_of(plant, case, repl=False), History(tmp_path / "history"))
     async with app.run_test(size=(120, 40)) as pilot:
-        await until(pilot, lambda: all(s.status for s in app.states.values()), "the status")
+        await until(
+            pilot,
+            lambda: all(s.status for s in app.main_screen.members.states.values()),
+            "the status",
+        )
         for line, _ in case.lines:
             await type_line(pilot, line)
-        await until(pilot, lambda: not app.lines_pending, "every line answered")
+        await until(pilot, lambda: not app.main_screen.lines.pending, "every line answered")
     plant.check(case)

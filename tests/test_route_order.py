@@ -13,9 +13,6 @@ from collections.abc import Callable
 from pathlib import Path
 
 import pytest
-from servers import RecordingServer
-from test_cli import cli, env, recording  # noqa: F401  (fixtures)
-from tui_helpers import results_text, type_line, until
 
 from rac_console.commands.cells import MOST_WATCHED
 from rac_console.commands.conditions import parse_wait
@@ -27,6 +24,8 @@ from rac_console.engine.where import Where
 from rac_console.present.history import History
 from rac_console.sim.replay import read_targets
 from rac_console.tui.app import RacConsoleApp
+from tests.support.drivers import cli, results_text, type_line, until
+from tests.support.servers import RecordingServer
 
 Servers = Callable[..., RecordingServer]
 
@@ -54,14 +53,18 @@ def cell_config(a: int, b: int) -> str:
 @pytest.mark.slow
 async def test_a_line_for_another_target_waits_for_the_line_typed_before_it(
     tmp_path: Path,
-    recording: Servers,  # noqa: F811
+    recording: Servers,
 ) -> None:
     a, b = recording(answers), recording(answers)
     targets = [("A", Target("127.0.0.1", a.port)), ("B", Target("127.0.0.1", b.port))]
     cell = Cell(targets, options=EngineOptions(timeout=2.0, interval=0.05), where=Where.CONSOLE)
     app = RacConsoleApp(cell, History(tmp_path / "history"))
     async with app.run_test(size=(120, 40)) as pilot:
-        await until(pilot, lambda: all(s.status for s in app.states.values()), "the status")
+        await until(
+            pilot,
+            lambda: all(s.status for s in app.main_screen.members.states.values()),
+            "the status",
+        )
         await type_line(pilot, "wait I 10 == 999 within 60")
         await type_line(pilot, "@B put I 11 77")
 
@@ -73,9 +76,9 @@ async def test_a_line_for_another_target_waits_for_the_line_typed_before_it(
         # While A's wait reads on, B's put waits its turn: B receives nothing.
         await until(pilot, lambda: reads_of_i10() >= started + 20, "twenty more reads")
         assert puts(b) == [] and b.lines == []
-        assert len(app.lines_pending) == 2
+        assert len(app.main_screen.lines.pending) == 2
         await pilot.press("escape")  # the wait and the put behind it end, on every target
-        await until(pilot, lambda: not app.lines_pending, "both lines answered")
+        await until(pilot, lambda: not app.main_screen.lines.pending, "both lines answered")
         text = results_text(app)
         assert "not run" in text and text.index("wait") < text.index("not run")
     assert puts(b) == []
@@ -87,8 +90,8 @@ async def test_a_line_for_another_target_waits_for_the_line_typed_before_it(
 @pytest.fixture
 def ab(
     tmp_path: Path,
-    env: dict[str, str],  # noqa: F811
-    recording: Servers,  # noqa: F811
+    env: dict[str, str],
+    recording: Servers,
 ) -> tuple[RecordingServer, RecordingServer]:
     a, b = recording(answers), recording(answers)
     path = tmp_path / "config.toml"
@@ -100,7 +103,7 @@ def ab(
 @pytest.mark.slow
 def test_run_stops_at_a_line_that_names_no_target(
     ab: tuple[RecordingServer, RecordingServer],
-    env: dict[str, str],  # noqa: F811
+    env: dict[str, str],
 ) -> None:
     a, b = ab
     result = cli(env, "--cell", "ab", "run", "-", stdin="use c\nput I 65 5\n")
@@ -117,7 +120,7 @@ def test_run_stops_at_a_line_that_names_no_target(
 @pytest.mark.slow
 def test_run_stops_after_a_wait_not_met_unless_told_to_keep_going(
     ab: tuple[RecordingServer, RecordingServer],
-    env: dict[str, str],  # noqa: F811
+    env: dict[str, str],
 ) -> None:
     a, _ = ab
     script = "wait I 10 == 999 within 0.3\nput I 65 5\n"
@@ -132,8 +135,8 @@ def test_run_stops_after_a_wait_not_met_unless_told_to_keep_going(
 
 @pytest.mark.slow
 def test_run_on_one_target_stops_at_a_refused_line(
-    env: dict[str, str],  # noqa: F811
-    recording: Servers,  # noqa: F811
+    env: dict[str, str],
+    recording: Servers,
 ) -> None:
     server = recording(answers)
     script = "put I 10 nope\nput I 11 5\n"
@@ -173,7 +176,7 @@ def test_a_replayed_cell_serves_its_targets_in_the_cells_order() -> None:
 def test_a_recorded_cell_records_each_targets_place(
     tmp_path: Path,
     ab: tuple[RecordingServer, RecordingServer],
-    env: dict[str, str],  # noqa: F811
+    env: dict[str, str],
 ) -> None:
     record = tmp_path / "cell.jsonl"
     result = cli(
@@ -190,7 +193,7 @@ def test_a_recorded_cell_records_each_targets_place(
 @pytest.mark.slow
 def test_a_cells_watch_list_is_capped_like_a_watch_file(
     tmp_path: Path,
-    env: dict[str, str],  # noqa: F811
+    env: dict[str, str],
 ) -> None:
     assert MOST_WATCHED == MAX_ROWS
     lines = ", ".join(f'"A I {n}"' for n in range(MOST_WATCHED + 1))

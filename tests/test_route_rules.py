@@ -12,14 +12,13 @@ from dataclasses import replace
 from pathlib import Path
 
 import pytest
-from servers import RecordingServer
-from test_cli import cli, env, recording  # noqa: F401  (fixtures)
-from test_profiles_cli import config, profile  # noqa: F401  (fixture)
 
 from rac_console.commands.policy import AllowRange, TargetProfile, WritePolicy, Writes
 from rac_console.commands.profiles import parse_config
 from rac_console.commands.target import resolve_target
 from rac_console.protocol import InputError, kind_of
+from tests.support.drivers import cli, profile
+from tests.support.servers import RecordingServer
 
 pytestmark = pytest.mark.slow
 
@@ -47,9 +46,9 @@ Config = Callable[[str], Path]
 )
 def test_a_profiles_name_with_another_port_gets_the_rules_of_that_port(
     how: list[str],
-    env: dict[str, str],  # noqa: F811
-    config: Config,  # noqa: F811
-    recording: Servers,  # noqa: F811
+    env: dict[str, str],
+    config: Config,
+    recording: Servers,
 ) -> None:
     bench, ro = recording(), recording()
     config(profile("bench", bench.port) + profile("ro", ro.port, 'writes = "read-only"'))
@@ -61,9 +60,9 @@ def test_a_profiles_name_with_another_port_gets_the_rules_of_that_port(
 
 
 def test_a_name_with_another_port_in_run_and_a_cell(
-    env: dict[str, str],  # noqa: F811
-    config: Config,  # noqa: F811
-    recording: Servers,  # noqa: F811
+    env: dict[str, str],
+    config: Config,
+    recording: Servers,
 ) -> None:
     bench, ro, other = recording(), recording(), recording()
     config(profile("bench", bench.port) + profile("ro", ro.port, 'writes = "read-only"'))
@@ -80,9 +79,9 @@ def test_a_name_with_another_port_in_run_and_a_cell(
 
 
 def test_naming_the_lax_of_two_profiles_at_one_endpoint_gets_the_strict_rules(
-    env: dict[str, str],  # noqa: F811
-    config: Config,  # noqa: F811
-    recording: Servers,  # noqa: F811
+    env: dict[str, str],
+    config: Config,
+    recording: Servers,
 ) -> None:
     ro, other = recording(), recording()
     config(
@@ -123,9 +122,9 @@ def test_the_strictest_of_two_profiles_merges_their_allow_lists() -> None:
 
 
 def test_profile_names_that_differ_only_in_case_are_refused_at_load(
-    env: dict[str, str],  # noqa: F811
-    config: Config,  # noqa: F811
-    recording: Servers,  # noqa: F811
+    env: dict[str, str],
+    config: Config,
+    recording: Servers,
 ) -> None:
     one, two = recording(), recording()
     config(profile("Cell3", one.port) + profile("cell3", two.port))
@@ -165,9 +164,9 @@ def test_a_cells_targets_named_in_another_case_are_one_profile() -> None:
 
 
 def test_two_members_at_one_endpoint_are_refused(
-    env: dict[str, str],  # noqa: F811
-    config: Config,  # noqa: F811
-    recording: Servers,  # noqa: F811
+    env: dict[str, str],
+    config: Config,
+    recording: Servers,
     tmp_path: Path,
 ) -> None:
     a = recording()
@@ -203,11 +202,10 @@ def test_a_profile_with_another_port_is_shown_by_the_profile_it_reaches() -> Non
 
 
 def test_connect_a_name_with_another_port_takes_the_rules_of_that_port(
-    recording: Servers,  # noqa: F811
+    recording: Servers,
 ) -> None:
-    from test_engine import Front
-
     from rac_console.engine import Engine
+    from tests.support.drivers import Front
 
     bench, ro = recording(), recording()
     profiles = {

@@ -20,7 +20,7 @@ def test_a_variable_never_read_is_an_error_not_a_stale_value() -> None:
     assert status_cell(row.view()).plain == "TIMEOUT (stale)"
 
 
-def test_the_history_keeps_each_line_once_at_its_last_use(tmp_path) -> None:  # type: ignore[no-untyped-def]
+def test_the_history_keeps_each_line_once_at_its_last_use(tmp_path) -> None:
     """The docs say the last 1,000 distinct commands: Up walks each line once."""
     from rac_console.present.history import History
 

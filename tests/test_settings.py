@@ -17,15 +17,14 @@ import time
 import tomllib
 from dataclasses import replace
 from pathlib import Path
+from typing import Any, cast
 
 import pytest
 from rich.style import Style
-from test_snapshots import stage, utc, watch_then_pause  # noqa: F401 (utc: a fixture)
 from textual.color import Color
 from textual.command import CommandList, CommandPalette
 from textual.filter import ANSIToTruecolor
 from textual.widget import Widget
-from tui_helpers import make_app, results_text, type_line, until
 
 from rac_console.commands.settings import (
     SETTINGS_KEYS,
@@ -36,9 +35,10 @@ from rac_console.commands.settings import (
 from rac_console.engine import Feedback, Message
 from rac_console.engine.config import CONFIG_ENV, config_path
 from rac_console.engine.settings import SettingsFile
-from rac_console.protocol import InputError
+from rac_console.protocol import InputError, Variant
 from rac_console.tui import app as app_module
 from rac_console.tui.app import RacConsoleApp
+from tests.support.drivers import make_app, results_text, stage, type_line, until, watch_then_pause
 
 SOURCE = "/home/op/.config/rac-console/config.toml"
 
@@ -339,21 +339,33 @@ def config(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Path:
 
 
 class Console(RacConsoleApp):
-    """The console, noting each message it shows in the results."""
+    """The console, noting each message its screen shows in the results."""
 
-    CSS_PATH = Path(app_module.__file__).with_name("app.tcss")  # beside the app, not here
+    CSS_PATH = Path(app_module.__file__).with_name("app.tcss")  # type: ignore[assignment]  # beside the app, not here
     said: list[str]
 
-    def show(self, feedback: Feedback) -> None:
-        if isinstance(feedback, Message):
-            self.said.append(feedback.text)
-        super().show(feedback)
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        super().__init__(*args, **kwargs)
+        screen = self.main_screen
+        shown = screen.show
+
+        def noting(feedback: Feedback) -> None:
+            if isinstance(feedback, Message):
+                self.said.append(feedback.text)
+            shown(feedback)
+
+        screen.show = noting
+        screen.feed.show = noting  # type: ignore[method-assign]
 
 
 def console(tmp_path: Path) -> Console:
     """The console on the built-in simulator, keeping its settings where the config is."""
     base = make_app(tmp_path)
-    app = Console(base.engine, base.history, settings=SettingsFile(config_path()))
+    app = Console(
+        base.main_screen.members.engine,
+        base.main_screen.history,
+        settings=SettingsFile(config_path()),
+    )
     app.said = []
     return app
 
@@ -373,11 +385,13 @@ def palette_prompts(app: RacConsoleApp) -> list[str]:
     return [str(option.prompt) for option in app.screen.query_one(CommandList).options]
 
 
-async def started(pilot) -> None:  # type: ignore[no-untyped-def]
+async def started(pilot) -> None:
     app = pilot.app
     await until(
         pilot,
-        lambda: app.status is not None and app.status.connection == "connected",
+        lambda: (
+            app.main_screen.status is not None and app.main_screen.status.connection == "connected"
+        ),
         "the connection",
     )
 
@@ -428,12 +442,12 @@ async def test_a_restarted_console_comes_back_as_it_was_left(tmp_path: Path, con
     app = console(tmp_path)
     async with app.run_test(size=WIDE) as pilot:
         await started(pilot)
-        assert (app.theme, app.io_panel.display) == ("textual-dark", False)
-        log = app.frame_log
+        assert (app.theme, app.main_screen.panes.io_panel.display) == ("textual-dark", False)
+        log = app.main_screen.panes.frame_log
         assert (log.show_polls, log.hex_view, log.show_gaps) == (True, False, True)
         app.theme = "textual-light"
         await pilot.press("f5", "f7", "f3")
-        await app.run_action("toggle_frame_times")
+        await app.run_action("screen.toggle_frame_times")
         # Saved while the console runs, not only at the end.
         await until(pilot, lambda: "frame_gaps = false" in config.read_text(), "the save")
     text = config.read_text()
@@ -450,10 +464,12 @@ async def test_a_restarted_console_comes_back_as_it_was_left(tmp_path: Path, con
     async with again.run_test(size=WIDE) as pilot:
         await started(pilot)
         assert again.theme == "textual-light"
-        assert again.io_panel.display
-        log = again.frame_log
+        assert again.main_screen.panes.io_panel.display
+        log = again.main_screen.panes.frame_log
         assert (log.show_polls, log.hex_view, log.show_gaps) == (False, True, False)
-        assert "(IO hidden)" in str(again.table.border_title)  # the rows went to the grid
+        assert "(IO hidden)" in str(
+            again.main_screen.panes.table.border_title
+        )  # the rows went to the grid
         assert settings_lines(again) == []
         await pilot.press("f7")  # and back: hex off is saved at exit at the latest
     assert tomllib.loads(config.read_text())["settings"]["hex_view"] is False
@@ -465,8 +481,8 @@ async def test_a_change_undone_before_the_save_writes_nothing(tmp_path: Path, co
     app = console(tmp_path)
     async with app.run_test(size=WIDE) as pilot:
         await started(pilot)
-        app.action_toggle_hex()  # both in one go: no save can fall between them
-        app.action_toggle_hex()
+        app.main_screen.action_toggle_hex()  # both in one go: no save can fall between them
+        app.main_screen.action_toggle_hex()
         await pilot.pause()
     assert config.read_text() == PROFILES
 
@@ -484,7 +500,7 @@ async def test_a_directory_where_the_config_should_be_is_said_once(
         await pilot.press("f7")
         await until(pilot, lambda: bool(settings_lines(app)), "the settings line")
         await pilot.press("f7", "f3")
-        await app.run_action("toggle_frame_times")
+        await app.run_action("screen.toggle_frame_times")
         # The console goes on: a typed line still runs.
         await type_line(pilot, "get I 1")
         await until(pilot, lambda: "› get I 1" in results_text(app), "the line's result")
@@ -508,10 +524,10 @@ async def test_an_unwritable_config_is_said_once_and_the_console_goes_on(
         await pilot.press("f7")
         await until(pilot, lambda: bool(settings_lines(app)), "the settings line")
         await pilot.press("f5")
-        await until(pilot, lambda: app.io_panel.display, "the I/O grid")
+        await until(pilot, lambda: app.main_screen.panes.io_panel.display, "the I/O grid")
         await type_line(pilot, "get I 1")
         await until(pilot, lambda: "› get I 1" in results_text(app), "the line's result")
-        assert app.frame_log.hex_view  # nothing on screen lost
+        assert app.main_screen.panes.frame_log.hex_view  # nothing on screen lost
         lines = settings_lines(app)
         assert len(lines) == 1, lines
         assert "settings not saved" in lines[0] and str(where) in lines[0]
@@ -528,7 +544,9 @@ async def test_a_config_broken_while_the_console_runs_is_left_as_it_is(
         await pilot.press("f7")
         await until(pilot, lambda: bool(settings_lines(app)), "the settings line")
         await pilot.press("f3")
-        await until(pilot, lambda: not app.frame_log.show_polls, "poll frames hidden")
+        await until(
+            pilot, lambda: not app.main_screen.panes.frame_log.show_polls, "poll frames hidden"
+        )
         await type_line(pilot, "get I 1")
         await until(pilot, lambda: "› get I 1" in results_text(app), "the line's result")
         lines = settings_lines(app)
@@ -549,8 +567,8 @@ async def test_bad_settings_are_ignored_with_a_line_each_and_kept_in_the_file(
         lines = settings_lines(app)
         assert "no-such-theme" in lines[0] and "ignored" in lines[0]
         assert "io_grid" in lines[1] and "ignored" in lines[1]
-        assert app.theme == "textual-dark" and not app.io_panel.display
-        assert app.frame_log.hex_view  # the good one applied
+        assert app.theme == "textual-dark" and not app.main_screen.panes.io_panel.display
+        assert app.main_screen.panes.frame_log.hex_view  # the good one applied
         await pilot.press("f3")
         await until(pilot, lambda: "poll_frames" in config.read_text(), "the save")
     # What the user wrote is kept, even the bad values: only the changed key is written.
@@ -592,33 +610,40 @@ def colours_on_screen(
             style = to_truecolor.truecolor_style(segment.style or Style(), background)
             assert style.color is not None and style.bgcolor is not None, segment
             fg, bg = style.color.get_truecolor(), style.bgcolor.get_truecolor()
-            found.setdefault(text, []).append(contrast(tuple(fg), tuple(bg)))
+            found.setdefault(text, []).append(contrast(fg, bg))
     return found
 
 
-async def changed_just_now(pilot, rows: int) -> None:  # type: ignore[no-untyped-def]
+async def changed_just_now(pilot, rows: int) -> None:
     """Polling paused, every row stamped as changed (a minute ahead: highlighted for as
     long as the test needs, whatever the machine's speed)."""
     app = pilot.app
     await until(
         pilot,
-        lambda: len(app.rows) == rows and all(v.status == "OK" for v in app.rows.values()),
+        lambda: (
+            len(app.main_screen.members.rows) == rows
+            and all(v.status == "OK" for v in app.main_screen.members.rows.values())
+        ),
         "every row's first value",
     )
     await type_line(pilot, "pause")
-    await until(pilot, lambda: app.status is not None and app.status.paused, "the pause")
+    await until(
+        pilot,
+        lambda: app.main_screen.status is not None and app.main_screen.status.paused,
+        "the pause",
+    )
     ahead = time.monotonic() + 60
-    for var, view in list(app.rows.items()):
-        app.rows[var] = replace(view, changed_at=ahead)
+    for var, view in list(app.main_screen.members.rows.items()):
+        app.main_screen.members.rows[var] = replace(view, changed_at=ahead)
 
 
-async def each_theme(pilot):  # type: ignore[no-untyped-def]
+async def each_theme(pilot):
     """Every theme the console offers, each in turn, the table and grid redrawn in it."""
     app = pilot.app
     for name in app.available_themes:
         app.theme = name
         await pilot.pause()  # the theme's CSS applied
-        app.refresh_table()
+        app.main_screen.refresh_table()
         await pilot.pause()  # the cells redrawn
         yield name
 
@@ -635,29 +660,34 @@ async def test_the_change_highlight_is_legible_in_every_theme(tmp_path: Path) ->
     async with app.run_test(size=(170, 30)) as pilot:
         await type_line(pilot, "watch I 4")
         await type_line(pilot, "watch IO 128-131")
-        await until(pilot, lambda: len(app.rows) == 5, "the rows")
+        await until(pilot, lambda: len(app.main_screen.members.rows) == 5, "the rows")
         await type_line(pilot, "put IO 130 off")  # OFF and ON both
         await until(
             pilot,
             lambda: any(
-                str(v) == "IO130" and r.variant and not r.variant.value for v, r in app.rows.items()
+                str(v) == "IO130" and r.variant and not r.variant.value
+                for v, r in app.main_screen.members.rows.items()
             ),
             "IO 130 off",
         )
         await changed_just_now(pilot, rows=5)
         assert not app.available_themes["textual-light"].dark
         await pilot.press("f5")
-        await until(pilot, lambda: app.io_panel.grid is not None, "the I/O grid")
-        app.table.set_hide_io(False)  # the IO rows in the table too: both in one pass
-        i4 = next(row for var, row in app.rows.items() if str(var) == "I4")
-        in_table = {str(i4.variant.value), "ON", "OFF"}
+        await until(pilot, lambda: app.main_screen.panes.io_panel.grid is not None, "the I/O grid")
+        app.main_screen.panes.table.set_hide_io(
+            False
+        )  # the IO rows in the table too: both in one pass
+        i4 = next(row for var, row in app.main_screen.members.rows.items() if str(var) == "I4")
+        in_table = {str(cast(Variant, i4.variant).value), "ON", "OFF"}
         async for name in each_theme(pilot):
-            assert_legible(name, colours_on_screen(app, app.table, in_table), in_table)
-            grid = app.io_panel.grid
+            assert_legible(
+                name, colours_on_screen(app, app.main_screen.panes.table, in_table), in_table
+            )
+            grid = app.main_screen.panes.io_panel.grid
             assert grid is not None
             word = grid.lines[0].word
             in_grid = {"128", "129", "130", "131", word.hex_text(), word.dec_text()}
-            body = app.io_panel.query_one("#io-grid")
+            body = app.main_screen.panes.io_panel.query_one("#io-grid")
             assert_legible(name, colours_on_screen(app, body, in_grid), in_grid)
 
 
@@ -666,24 +696,28 @@ async def test_the_change_highlight_is_legible_in_every_theme(tmp_path: Path) ->
 def test_snapshot_a_just_changed_row_in_the_light_theme(snap_compare, tmp_path: Path) -> None:
     app = make_app(tmp_path)
 
-    async def run_before(pilot) -> None:  # type: ignore[no-untyped-def]
+    async def run_before(pilot) -> None:
         app.theme = "textual-light"
         await type_line(pilot, "put IO 130 off")
         lines = ("watch P 1 pick", "watch I 4 parts", "watch IO 128-131")
         await watch_then_pause(pilot, lines, rows=6)
-        await until(pilot, lambda: app.frames_per_second() == 0, "no frames flowing")
+        await until(pilot, lambda: app.main_screen.frames_per_second() == 0, "no frames flowing")
         stage(app)  # IO 128 timed out (stale)
-        app.flush_log()
-        await until(pilot, lambda: app.frames_per_second() == 0, "the staged frames' rate")
+        app.main_screen.flush_log()
+        await until(
+            pilot, lambda: app.main_screen.frames_per_second() == 0, "the staged frames' rate"
+        )
         await pilot.press("f5")
-        app.table.set_hide_io(False)  # the IO rows in the table and in the grid
+        app.main_screen.panes.table.set_hide_io(False)  # the IO rows in the table and in the grid
         # I4, IO 130 (OFF) and IO 131 (ON) changed just now (stamped a minute ahead: for
         # as long as it takes); the others 5 s ago, as stage() had them.
         now = time.monotonic()
-        for var, view in list(app.rows.items()):
+        for var, view in list(app.main_screen.members.rows.items()):
             changed = str(var) in ("I4", "IO130", "IO131")
-            app.rows[var] = replace(view, changed_at=now + 60 if changed else now - 5.5)
-        app.refresh_table()
+            app.main_screen.members.rows[var] = replace(
+                view, changed_at=now + 60 if changed else now - 5.5
+            )
+        app.main_screen.refresh_table()
         await pilot.pause(0.1)
 
     assert snap_compare(app, terminal_size=(120, 34), run_before=run_before)

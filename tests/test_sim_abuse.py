@@ -307,7 +307,7 @@ def test_out_of_file_descriptors_it_keeps_serving(tmp_path: Path) -> None:
 
 def test_idle_sessions_are_closed_after_idle_timeout() -> None:
     async def scenario() -> tuple[bytes, list[float], int]:
-        async with SimulatorServer(idle_timeout=0.5) as sim:  # type: ignore[call-arg]
+        async with SimulatorServer(idle_timeout=0.5) as sim:
             idle_reader, _ = await asyncio.open_connection(sim.host, sim.port)
             busy_reader, busy = await asyncio.open_connection(sim.host, sim.port)
             rtts = []
@@ -402,7 +402,7 @@ def test_command_line_refuses_values_that_are_not_finite(option: list[str]) -> N
 @pytest.mark.parametrize("faults", [{}, {"delay_ms": 0.01}], ids=["fast-path", "fault-path"])
 def test_no_control_answers_sim_lines_as_unknown_commands(faults: dict[str, Any]) -> None:
     async def scenario() -> list[bytes]:
-        server = SimulatorServer(faults=FaultSettings(**faults), control=False)  # type: ignore[call-arg]
+        server = SimulatorServer(faults=FaultSettings(**faults), control=False)
         async with server as sim:
             reader, writer = await asyncio.open_connection(sim.host, sim.port)
             replies = []

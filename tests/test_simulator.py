@@ -211,7 +211,7 @@ def test_some_variables_move_by_themselves() -> None:
 class _Reference(SimulatedController):
     """Computes every reply afresh: a value() of its own means nothing is kept."""
 
-    def value(self, kind, index):  # type: ignore[no-untyped-def]
+    def value(self, kind, index):
         return super().value(kind, index)
 
 

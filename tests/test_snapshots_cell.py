@@ -11,14 +11,13 @@ from dataclasses import replace
 from pathlib import Path
 
 import pytest
-from cell_helpers import make_cell_app
-from test_snapshots import hold_still, utc  # noqa: F401 (a fixture)
-from tui_helpers import type_line, until
 
 from rac_console.engine import Cycle
 from rac_console.session import Frame
 from rac_console.sim.cell import SimulatedCellThread
 from rac_console.tui.app import RacConsoleApp
+from tests.support.cells import make_cell_app
+from tests.support.drivers import hold_still, type_line, until
 
 pytestmark = [pytest.mark.slow, pytest.mark.usefixtures("utc")]
 
@@ -43,7 +42,7 @@ def two() -> Iterator[SimulatedCellThread]:
 
 def stage(app: RacConsoleApp) -> float:
     now = time.monotonic()
-    for state in app.states.values():
+    for state in app.main_screen.members.states.values():
         for var, view in list(state.rows.items()):
             state.rows[var] = replace(view, changed_at=now - 5.5)
         assert state.status is not None
@@ -52,12 +51,12 @@ def stage(app: RacConsoleApp) -> float:
         samples = tuple((var, view.variant) for var, view in state.rows.items())
         for n in range(20):
             cycle = Cycle(1_700_000_000 + n / 2, 1000 + n / 2, samples, state.status.target_id)
-            app.take_cycle(cycle, state.name)
-    app.frame_log.clear()
+            app.main_screen.feed.take_cycle(state.name, cycle)
+    app.main_screen.panes.frame_log.clear()
     for n, (name, direction, data, rtt) in enumerate(STAGED):
         frame = Frame(1_700_000_000.125 + n * 0.001, direction, data, rtt)  # type: ignore[arg-type]
-        app.frame_log.add(frame, name)
-    app.command_line.cursor_blink = False
+        app.main_screen.panes.frame_log.add(frame, name)
+    app.main_screen.panes.command_line.cursor_blink = False
     return now
 
 
@@ -71,7 +70,7 @@ def test_cell_view_120x40(
             pilot,
             lambda: all(
                 s.status is not None and s.status.connection == "connected"
-                for s in app.states.values()
+                for s in app.main_screen.members.states.values()
             ),
             "both connected",
         )
@@ -85,21 +84,28 @@ def test_cell_view_120x40(
         await until(
             pilot,
             lambda: (
-                sum(len(s.rows) for s in app.states.values()) == 4
-                and all(v.status == "OK" for s in app.states.values() for v in s.rows.values())
+                sum(len(s.rows) for s in app.main_screen.members.states.values()) == 4
+                and all(
+                    v.status == "OK"
+                    for s in app.main_screen.members.states.values()
+                    for v in s.rows.values()
+                )
             ),
             "every row's first value",
         )
         await pilot.press("f2")  # every target's polls paused
         await until(
             pilot,
-            lambda: all(s.status is not None and s.status.paused for s in app.states.values()),
+            lambda: all(
+                s.status is not None and s.status.paused
+                for s in app.main_screen.members.states.values()
+            ),
             "the pause",
         )
-        await until(pilot, lambda: app.frames_per_second() == 0, "no frames flowing")
+        await until(pilot, lambda: app.main_screen.frames_per_second() == 0, "no frames flowing")
         hold_still(app, monkeypatch, stage(app), frames_per_second=0)
-        app.flush_log()
-        app.refresh_table()
+        app.main_screen.flush_log()
+        app.main_screen.refresh_table()
         await pilot.pause()
 
     assert snap_compare(app, terminal_size=(120, 40), run_before=run_before)

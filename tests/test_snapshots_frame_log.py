@@ -5,14 +5,13 @@ Staged as in test_snapshots.py: nothing polled, frames with fixed times (UTC).
 
 from __future__ import annotations
 
-import time
 from pathlib import Path
 
 import pytest
-from tui_helpers import make_app, until
 
 from rac_console.protocol import parse_response
 from rac_console.session import Frame
+from tests.support.drivers import make_app, until
 
 pytestmark = pytest.mark.slow
 
@@ -32,20 +31,14 @@ STAGED = [
 ]
 
 
-@pytest.fixture
-def utc(monkeypatch: pytest.MonkeyPatch) -> None:
-    monkeypatch.setenv("TZ", "UTC")
-    time.tzset()
-
-
 def test_hex_view_with_gaps(snap_compare, tmp_path: Path, utc: None) -> None:
     app = make_app(tmp_path, timeout=1.0)  # the picture's timeouts say 1 s
 
     async def run_before(pilot) -> None:
-        await until(pilot, lambda: app.status is not None, "the first status")
-        app.command_line.cursor_blink = False
+        await until(pilot, lambda: app.main_screen.status is not None, "the first status")
+        app.main_screen.panes.command_line.cursor_blink = False
         await pilot.press("f7")
-        log = app.frame_log
+        log = app.main_screen.panes.frame_log
         log.clear()
         sent_at = 0.0
         for offset, direction, data in STAGED:
@@ -57,9 +50,9 @@ def test_hex_view_with_gaps(snap_compare, tmp_path: Path, utc: None) -> None:
                 if data.isascii():
                     reply = parse_response(data[:-1].decode("ascii"))
             log.add(Frame(T0 + offset, direction, data, rtt, response=reply))  # type: ignore[arg-type]
-        app.flush_log()
-        await until(pilot, lambda: app.frames_per_second() == 0, "the rate back to 0")
-        app.refresh_table()
+        app.main_screen.flush_log()
+        await until(pilot, lambda: app.main_screen.frames_per_second() == 0, "the rate back to 0")
+        app.main_screen.refresh_table()
         await pilot.pause(0.2)
 
     assert snap_compare(app, terminal_size=(110, 44), run_before=run_before)

@@ -10,10 +10,10 @@ from dataclasses import replace
 from pathlib import Path
 
 import pytest
-from tui_helpers import make_app, type_line, until
 
 from rac_console.protocol import Variant, kind_of
 from rac_console.session import Frame
+from tests.support.drivers import make_app, type_line, until
 
 pytestmark = pytest.mark.slow
 
@@ -23,12 +23,6 @@ LABELS = {128: "gripper closed", 130: "vacuum on", 131: "part present", 176: "do
 STALE = 185
 
 
-@pytest.fixture
-def utc(monkeypatch: pytest.MonkeyPatch) -> None:
-    monkeypatch.setenv("TZ", "UTC")
-    time.tzset()
-
-
 def test_io_grid_80x24(snap_compare, tmp_path: Path, utc: None) -> None:
     app = make_app(tmp_path)
 
@@ -36,29 +30,38 @@ def test_io_grid_80x24(snap_compare, tmp_path: Path, utc: None) -> None:
         await type_line(pilot, "watch IO 128-191")
         await until(
             pilot,
-            lambda: len(app.rows) == 64 and all(v.status == "OK" for v in app.rows.values()),
+            lambda: (
+                len(app.main_screen.members.rows) == 64
+                and all(v.status == "OK" for v in app.main_screen.members.rows.values())
+            ),
             "every bit's first value",
         )
         await type_line(pilot, "pause")
-        await until(pilot, lambda: app.status is not None and app.status.paused, "the pause")
-        await until(pilot, lambda: app.frames_per_second() == 0, "no frames flowing")
-        assert app.status is not None
-        app.status = replace(app.status, rtt=0.00025)
-        app.frame_log.clear()
+        await until(
+            pilot,
+            lambda: app.main_screen.status is not None and app.main_screen.status.paused,
+            "the pause",
+        )
+        await until(pilot, lambda: app.main_screen.frames_per_second() == 0, "no frames flowing")
+        assert app.main_screen.status is not None
+        app.main_screen.members.status = replace(app.main_screen.status, rtt=0.00025)
+        app.main_screen.panes.frame_log.clear()
         for n, data in enumerate((b"GET:RC8:128:IO:\r", b"0,11,-1\r")):
             direction = "tx" if n == 0 else "rx"
-            app.frame_log.add(Frame(1_700_000_000.125 + n * 0.001, direction, data, 0.0002))  # type: ignore[arg-type]
-        app.command_line.cursor_blink = False
+            app.main_screen.panes.frame_log.add(
+                Frame(1_700_000_000.125 + n * 0.001, direction, data, 0.0002)  # type: ignore[arg-type]
+            )
+        app.main_screen.panes.command_line.cursor_blink = False
         await pilot.press("f5")
-        app.io_panel.focus()
+        app.main_screen.panes.io_panel.focus()
         await pilot.press("right", "right")  # the cursor on IO 130: its label below the grid
-        app.flush_log()
+        app.main_screen.flush_log()
         # No frames/s figure (it depends on timing): wait for the staged frames' rate to fall.
-        await until(pilot, lambda: app.frames_per_second() == 0, "the rate back to 0")
+        await until(pilot, lambda: app.main_screen.frames_per_second() == 0, "the rate back to 0")
         # The rows last: their ages count from now, however long the rate took to fall.
         now = time.monotonic()
-        for var, view in list(app.rows.items()):
-            app.rows[var] = replace(
+        for var, view in list(app.main_screen.members.rows.items()):
+            app.main_screen.members.rows[var] = replace(
                 view,
                 label=LABELS.get(var.index, ""),
                 variant=Variant(IO.vt, var.index in ON_BITS),
@@ -66,7 +69,7 @@ def test_io_grid_80x24(snap_compare, tmp_path: Path, utc: None) -> None:
                 status="TIMEOUT" if var.index == STALE else "OK",
                 stale=var.index == STALE,
             )
-        app.refresh_table()
+        app.main_screen.refresh_table()
         await pilot.pause(0.2)
 
     assert snap_compare(app, terminal_size=(80, 24), run_before=run_before)

@@ -11,11 +11,10 @@ from dataclasses import replace
 from pathlib import Path
 
 import pytest
-from test_profiles_tui import console
-from tui_helpers import type_line, until
 
 from rac_console.commands.policy import TargetProfile, WritePolicy, Writes, parse_allow
 from rac_console.sim.thread import SimulatorThread
+from tests.support.drivers import console, type_line, until
 
 #: A terminal app and a simulator: `pytest -m "not slow"` skips it.
 pytestmark = pytest.mark.slow
@@ -36,24 +35,33 @@ def test_live_profile_colours(snap_compare, tmp_path: Path) -> None:
         async def run_before(pilot) -> None:
             await until(
                 pilot,
-                lambda: app.status is not None and app.status.connection == "connected",
+                lambda: (
+                    app.main_screen.status is not None
+                    and app.main_screen.status.connection == "connected"
+                ),
                 "the connection",
             )
             await type_line(pilot, "pause")
-            await until(pilot, lambda: app.status is not None and app.status.paused, "the pause")
-            await until(pilot, lambda: app.frames_per_second() == 0, "no frames flowing")
-            assert app.status is not None
-            app.status = replace(
-                app.status,
+            await until(
+                pilot,
+                lambda: app.main_screen.status is not None and app.main_screen.status.paused,
+                "the pause",
+            )
+            await until(
+                pilot, lambda: app.main_screen.frames_per_second() == 0, "no frames flowing"
+            )
+            assert app.main_screen.status is not None
+            app.main_screen.members.status = replace(
+                app.main_screen.status,
                 target="LIVE 192.168.0.1:5006",
                 host="192.168.0.1",
                 port=5006,
                 rtt=0.00025,
             )
-            app.results.clear()
-            app.frame_log.clear()
-            app.command_line.cursor_blink = False
-            app.refresh_table()
+            app.main_screen.panes.results.clear()
+            app.main_screen.panes.frame_log.clear()
+            app.main_screen.panes.command_line.cursor_blink = False
+            app.main_screen.refresh_table()
             await pilot.pause(0.1)
 
         assert snap_compare(app, terminal_size=(100, 24), run_before=run_before)

@@ -12,13 +12,12 @@ from dataclasses import replace
 from pathlib import Path
 
 import pytest
-from test_snapshots import stage, utc, watch_then_pause  # noqa: F401 (utc: a fixture)
-from tui_helpers import make_app, until
 
 from rac_console.engine import Cycle
 from rac_console.protocol import Variant
 from rac_console.protocol.vartypes import VT, VT_ARRAY
 from rac_console.tui.app import RacConsoleApp
+from tests.support.drivers import make_app, stage, until, watch_then_pause
 
 pytestmark = pytest.mark.slow
 
@@ -27,10 +26,10 @@ LINES = ("watch P 1 pick", "watch IO 128-131", "watch I 4 parts", "watch S 1")
 
 def feed_trends(app: RacConsoleApp, cycles: int = 40) -> None:
     """Replace what polling gathered by a fixed sequence of cycles, 0.5 s apart."""
-    app.trends.clear()
-    rows = {str(var): var for var in app.rows}
-    assert app.status is not None
-    target = app.status.target_id  # the cycles of the target on screen
+    app.main_screen.members.trends.clear()
+    rows = {str(var): var for var in app.main_screen.members.rows}
+    assert app.main_screen.status is not None
+    target = app.main_screen.status.target_id  # the cycles of the target on screen
     for n in range(cycles):
         z = 450 + 20 * math.sin(n / 4)
         samples = [
@@ -41,26 +40,30 @@ def feed_trends(app: RacConsoleApp, cycles: int = 40) -> None:
             (rows["I4"], Variant(VT.I4, n * 3 % 50)),
             (rows["S1"], Variant(VT.BSTR, "")),
         ]
-        app.take_cycle(Cycle(1_700_000_000 + n / 2, 1000 + n / 2, tuple(samples), target))
+        app.main_screen.feed.take_cycle(
+            None, Cycle(1_700_000_000 + n / 2, 1000 + n / 2, tuple(samples), target)
+        )
 
 
 async def staged(pilot) -> None:
     app = pilot.app
     await watch_then_pause(pilot, LINES, rows=7)
-    await until(pilot, lambda: app.frames_per_second() == 0, "no frames flowing")
+    await until(pilot, lambda: app.main_screen.frames_per_second() == 0, "no frames flowing")
     stage(app)
     feed_trends(app)
-    app.flush_log()
+    app.main_screen.flush_log()
     # No frames/s figure (it depends on timing): let the staged frames' rate fall to 0.
-    await until(pilot, lambda: app.frames_per_second() == 0, "the staged frames' rate to pass")
+    await until(
+        pilot, lambda: app.main_screen.frames_per_second() == 0, "the staged frames' rate to pass"
+    )
 
 
 def hold_ages(app: RacConsoleApp) -> None:
     """The ages as stage() set them, just before the screenshot (the waits moved them)."""
     now = time.monotonic()
-    for var, view in list(app.rows.items()):
-        app.rows[var] = replace(view, changed_at=now - 5.5)
-    app.refresh_table()
+    for var, view in list(app.main_screen.members.rows.items()):
+        app.main_screen.members.rows[var] = replace(view, changed_at=now - 5.5)
+    app.main_screen.refresh_table()
 
 
 @pytest.mark.usefixtures("utc")
@@ -97,7 +100,9 @@ def test_row_detail_small_terminal(snap_compare, tmp_path: Path) -> None:
     async def run_before(pilot) -> None:
         await staged(pilot)
         await pilot.press("f6", "d")
-        await until(pilot, lambda: "Fig" in app.row_detail.shown_text, "the detail")
+        await until(
+            pilot, lambda: "Fig" in app.main_screen.panes.row_detail.shown_text, "the detail"
+        )
         hold_ages(app)
         await pilot.pause()  # the held ages drawn (messages processed, no time waited)
 

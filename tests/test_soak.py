@@ -15,6 +15,7 @@ import os
 import time
 import tracemalloc
 from pathlib import Path
+from typing import cast
 
 import pytest
 
@@ -22,6 +23,7 @@ from rac_console.engine import Alert, Engine, Note, Result, RowView
 from rac_console.engine.backoff import MAX_DELAY
 from rac_console.protocol import RacError, Response, Variant, escape_bytes, parse_response
 from rac_console.session import Frame
+from rac_console.sim.controller import SimulatedController
 from rac_console.sim.faults import FaultSettings
 from rac_console.sim.server import SimulatorServer
 
@@ -63,7 +65,7 @@ def own_memory(snapshot: tracemalloc.Snapshot) -> int:
 
 async def soak(record: Path) -> dict:
     simulator = SimulatorServer(faults=FAULTS, transcript=True)
-    controller = simulator.controller
+    controller = cast(SimulatedController, simulator.controller)  # not a replay
     # Every reply is unique: the variable's index and the request count at that moment.
     controller.value = lambda kind, index: index * 100_000 + controller.requests  # type: ignore[method-assign]
     await simulator.start()

@@ -16,9 +16,7 @@ import pytest
 from rich.cells import cell_len
 from rich.color import Color
 from rich.text import Text
-from servers import RecordingServer
 from textual.geometry import Region
-from tui_helpers import WIRE_RECORD, until
 
 from rac_console.commands.policy import TargetProfile, WritePolicy, Writes
 from rac_console.engine import Engine, Status
@@ -29,6 +27,8 @@ from rac_console.session import Frame
 from rac_console.session.blocking import Session
 from rac_console.sim.thread import SimulatorThread
 from rac_console.tui.app import RacConsoleApp
+from tests.support.drivers import WIRE_RECORD, until
+from tests.support.servers import RecordingServer
 
 LONG_LABEL = "Cell 5 — a rather long label for the welding cell by the door"
 
@@ -173,12 +173,15 @@ async def test_the_console_draws_whole_fields_at_80_columns(
     async with app.run_test(size=(80, 24)) as pilot:
         await until(
             pilot,
-            lambda: app.status is not None and app.status.connection == "connected",
+            lambda: (
+                app.main_screen.status is not None
+                and app.main_screen.status.connection == "connected"
+            ),
             "connected",
         )
-        app.refresh_table()
+        app.main_screen.refresh_table()
         await pilot.pause()
-        bar = app.status_bar
+        bar = app.main_screen.panes.status_bar
         drawn = "".join(
             strip.text for strip in bar.render_lines(Region(0, 0, bar.size.width, 1))
         ).strip()
@@ -295,7 +298,7 @@ def test_a_frame_is_stamped_when_it_crossed(held: bool) -> None:
             session.add_frame_observer(observe)
             session.connect()
             if held:
-                session._sock = HeldAfterSend(session._sock)  # type: ignore[assignment]
+                session._sock = HeldAfterSend(session._sock)  # type: ignore[arg-type, assignment]
             reply = session.send_raw("GET:RC8:10:I:")
     finally:
         server.close()

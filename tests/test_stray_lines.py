@@ -19,7 +19,7 @@ import socket
 import struct
 import threading
 from collections.abc import Awaitable
-from typing import Any
+from typing import Any, cast
 
 import pytest
 
@@ -162,7 +162,7 @@ def frames_of(session: Session) -> list[Frame]:
 
 
 def run(coro: Awaitable[Any]) -> Any:
-    return asyncio.run(asyncio.wait_for(coro, 60))  # type: ignore[arg-type]
+    return asyncio.run(asyncio.wait_for(coro, 60))
 
 
 # ------------------------------------------------ the client: stray waiting
@@ -368,8 +368,8 @@ async def connect_logged(sim: SimulatorServer) -> tuple[RawClient, WriteLog, Any
     client_ = RawClient(*await asyncio.open_connection(sim.host, sim.port))
     await until(lambda: len(sim.sessions) == 1)
     session = next(iter(sim.sessions))
-    log = WriteLog(session._transport)
-    session._transport = log
+    log = WriteLog(cast(asyncio.Transport, session._transport))
+    session._transport = log  # type: ignore[assignment]
     return client_, log, session
 
 

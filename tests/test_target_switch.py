@@ -6,11 +6,10 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
-from test_engine import Front
-from tui_helpers import make_app, results_text, type_line, until
 
 from rac_console.commands.language import VarRef
 from rac_console.protocol import VT, Variant, kind_of
+from tests.support.drivers import Front, make_app, results_text, type_line, until
 
 I10 = VarRef(kind_of("I"), 10)
 
@@ -33,13 +32,19 @@ async def test_the_trends_of_the_old_target_go(tmp_path: Path) -> None:
     async with app.run_test(size=(120, 40)) as pilot:
         await type_line(pilot, "put I 10 22")
         await type_line(pilot, "watch I 10")
-        await until(pilot, lambda: 22 in app.trends.last(I10, 0, 16), "a trend of 22")
+        await until(
+            pilot, lambda: 22 in app.main_screen.members.trends.last(I10, 0, 16), "a trend of 22"
+        )
         await type_line(pilot, "connect sim")
         await until(
             pilot, lambda: "connected to the built-in simulator" in results_text(app), "the new one"
         )
-        await until(pilot, lambda: 0 in app.trends.last(I10, 0, 16), "a sample of the new one")
-        assert 22 not in app.trends.last(I10, 0, 16)
+        await until(
+            pilot,
+            lambda: 0 in app.main_screen.members.trends.last(I10, 0, 16),
+            "a sample of the new one",
+        )
+        assert 22 not in app.main_screen.members.trends.last(I10, 0, 16)
 
 
 def test_a_csv_log_ends_at_the_change_of_target(front: Front, tmp_path: Path) -> None:

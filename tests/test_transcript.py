@@ -15,9 +15,6 @@ from datetime import datetime
 from pathlib import Path
 
 import pytest
-from servers import RecordingServer
-from test_cli import cli, env  # noqa: F401 (fixture)
-from tui_helpers import results_text, type_line, until
 
 from rac_console.engine import Engine
 from rac_console.engine.transcript import FrameTranscript
@@ -25,6 +22,8 @@ from rac_console.present.history import History
 from rac_console.protocol import InputError
 from rac_console.session import Frame
 from rac_console.tui.app import RacConsoleApp
+from tests.support.drivers import cli, results_text, type_line, until
+from tests.support.servers import RecordingServer
 
 #: ``[2026-11-22 03:45:55.123] `` then TX, RX or -- (a note).
 LINE = re.compile(r"^\[(\d{4}-\d\d-\d\d \d\d:\d\d:\d\d\.\d{3})\] (TX|RX|--) (.*)$")
@@ -125,7 +124,7 @@ def hostile() -> Iterator[RecordingServer]:
 
 
 @pytest.mark.slow
-def test_cli_get_writes_a_tx_and_an_rx_line(env: dict[str, str], tmp_path: Path) -> None:  # noqa: F811
+def test_cli_get_writes_a_tx_and_an_rx_line(env: dict[str, str], tmp_path: Path) -> None:
     path = tmp_path / "wire.log"
     before = datetime.now()
     result = cli(env, "--log", str(path), "get", "I", "1")
@@ -138,7 +137,7 @@ def test_cli_get_writes_a_tx_and_an_rx_line(env: dict[str, str], tmp_path: Path)
 
 
 @pytest.mark.slow
-def test_cli_run_appends_a_line_per_frame(env: dict[str, str], tmp_path: Path) -> None:  # noqa: F811
+def test_cli_run_appends_a_line_per_frame(env: dict[str, str], tmp_path: Path) -> None:
     path = tmp_path / "wire.log"
     path.write_text("[2020-01-01 00:00:00.000] -- kept\n")
     script = "get I 1\nput I 2 7\nsend FOO\nget I 2\n"
@@ -161,7 +160,7 @@ def test_cli_run_appends_a_line_per_frame(env: dict[str, str], tmp_path: Path) -
 
 @pytest.mark.slow
 def test_cli_escapes_what_a_hostile_server_sent(
-    env: dict[str, str],  # noqa: F811
+    env: dict[str, str],
     tmp_path: Path,
     hostile: RecordingServer,
 ) -> None:
@@ -177,7 +176,7 @@ def test_cli_escapes_what_a_hostile_server_sent(
 
 @needs_dev_full
 @pytest.mark.slow
-def test_cli_log_on_a_full_device_is_one_line_and_exit_4(env: dict[str, str]) -> None:  # noqa: F811
+def test_cli_log_on_a_full_device_is_one_line_and_exit_4(env: dict[str, str]) -> None:
     result = cli(env, "--log", "/dev/full", "run", "-", stdin="get I 1\nget I 2\n")
     assert result.returncode == 4, result.stderr
     errors = [line for line in result.stderr.splitlines() if "simulator" not in line]
@@ -189,7 +188,7 @@ def test_cli_log_on_a_full_device_is_one_line_and_exit_4(env: dict[str, str]) ->
 
 
 @pytest.mark.slow
-def test_cli_log_in_a_missing_directory_is_refused(env: dict[str, str], tmp_path: Path) -> None:  # noqa: F811
+def test_cli_log_in_a_missing_directory_is_refused(env: dict[str, str], tmp_path: Path) -> None:
     result = cli(env, "--log", str(tmp_path / "no" / "x.log"), "get", "I", "1")
     assert result.returncode == 2
     assert "cannot write the log file" in result.stderr

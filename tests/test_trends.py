@@ -197,7 +197,7 @@ def test_a_bit_toggling_faster_than_a_slice_shows_both_levels() -> None:
     window = toggling.window(IO130, 0, 10.0)
     bins = bin_window(window, 20)
     assert all(b is not None and (b.low, b.high) == (0.0, 1.0) for b in bins)
-    assert all(b is not None and 0.3 < b.mean < 0.7 for b in bins)
+    assert all(b is not None and 0.3 < b.mean < 0.7 for b in bins)  # type: ignore[operator]
     assert bar_lines(bins, 3, 0.0, 1.0) == ["█" * 20] * 3
     steady_on = bin_window(fed(10.0, 0.1, lambda t: True, var=IO130).window(IO130, 0, 10.0), 20)
     assert bar_lines(steady_on, 3, 0.0, 1.0) == ["█" * 20, " " * 20, " " * 20]

@@ -6,13 +6,12 @@ assertions are on the bytes the server received and the bytes the CLI printed.
 
 from __future__ import annotations
 
-import contextlib
-import socket
-import threading
 from collections.abc import Callable
 
 import pytest
-from test_cli import RecordingServer, cli, env, recording  # noqa: F401 (fixtures)
+
+from tests.support.drivers import cli
+from tests.support.servers import RecordingServer
 
 #: Over half a second each (a terminal app, a subprocess, a timed server):
 #: `pytest -m "not slow"` skips them.
@@ -55,8 +54,8 @@ def assert_no_terminal_controls(*texts: str) -> None:
     ],
 )
 def test_read_only_sends_nothing_but_well_formed_gets(
-    env: dict[str, str],  # noqa: F811
-    recording: Callable[..., RecordingServer],  # noqa: F811
+    env: dict[str, str],
+    recording: Callable[..., RecordingServer],
     request_text: str,
 ) -> None:
     server = recording()
@@ -68,8 +67,8 @@ def test_read_only_sends_nothing_but_well_formed_gets(
 
 
 def test_read_only_lets_well_formed_gets_through(
-    env: dict[str, str],  # noqa: F811
-    recording: Callable[..., RecordingServer],  # noqa: F811
+    env: dict[str, str],
+    recording: Callable[..., RecordingServer],
 ) -> None:
     server = recording()
     script = "get I 1\nGET:RC8:2:P:\nsend GET:RC8:3:IO:\nput I 1 5\nsend SIM:GET:\n"
@@ -96,8 +95,8 @@ def test_read_only_lets_well_formed_gets_through(
     ],
 )
 def test_controller_text_is_printed_escaped(
-    env: dict[str, str],  # noqa: F811
-    recording: Callable[..., RecordingServer],  # noqa: F811
+    env: dict[str, str],
+    recording: Callable[..., RecordingServer],
     args: tuple[str, ...],
 ) -> None:
     server = recording(hostile_reply)
@@ -111,8 +110,8 @@ def test_controller_text_is_printed_escaped(
 
 
 def test_bel_and_backspace_are_shown_escaped_not_dropped(
-    env: dict[str, str],  # noqa: F811
-    recording: Callable[..., RecordingServer],  # noqa: F811
+    env: dict[str, str],
+    recording: Callable[..., RecordingServer],
 ) -> None:
     server = recording(lambda line: b"0,8,bell\x07 bs\x08\r")
     result = cli(env, *server.args, "get", "S", "1")
@@ -121,8 +120,8 @@ def test_bel_and_backspace_are_shown_escaped_not_dropped(
 
 
 def test_run_text_mode_escapes_replies_and_script_text(
-    env: dict[str, str],  # noqa: F811
-    recording: Callable[..., RecordingServer],  # noqa: F811
+    env: dict[str, str],
+    recording: Callable[..., RecordingServer],
 ) -> None:
     server = recording(hostile_reply)
     script = "get S 1\nsend GET:RC8:2:S:\n\x1b]0;from-file\x07frob\nget I 3\nput S 1 a\n"
@@ -134,8 +133,8 @@ def test_run_text_mode_escapes_replies_and_script_text(
 
 
 def test_json_error_line_keeps_colons_as_typed(
-    env: dict[str, str],  # noqa: F811
-    recording: Callable[..., RecordingServer],  # noqa: F811
+    env: dict[str, str],
+    recording: Callable[..., RecordingServer],
 ) -> None:
     server = recording(lambda line: b"-2147024809\r")
     result = cli(env, *server.args, "--json", "send", "GET:RC8:11:V:")
@@ -145,52 +144,38 @@ def test_json_error_line_keeps_colons_as_typed(
 
 
 def test_a_controller_that_closes_at_once_is_not_a_timeout(
-    env: dict[str, str],  # noqa: F811
-    recording: Callable[..., RecordingServer],  # noqa: F811
+    env: dict[str, str],
+    recording: Callable[..., RecordingServer],
 ) -> None:
-    closer = socket.create_server(("127.0.0.1", 0))
-    port = closer.getsockname()[1]
-    stop = threading.Event()
-
-    def close_every_connection() -> None:
-        closer.settimeout(0.05)
-        while not stop.is_set():
-            with contextlib.suppress(TimeoutError, OSError):
-                conn, _ = closer.accept()
-                conn.close()
-
-    threading.Thread(target=close_every_connection, daemon=True).start()
-    try:
-        for _ in range(5):  # the race has two sides: try it a few times
-            result = cli(
-                env,
-                "-H",
-                "127.0.0.1",
-                "-p",
-                str(port),
-                "--timeout",
-                "60",
-                "run",
-                "-",
-                stdin="put I 1 5\n",
-                timeout=30,
-            )
-            assert result.returncode == 3
-            assert "closed the connection" in result.stderr
-            assert "may have been applied" not in result.stderr
-    finally:
-        stop.set()
-        closer.close()
+    closer = recording(answers=0)  # closes every connection as soon as it accepts it
+    port = closer.port
+    for _ in range(5):  # the race has two sides: try it a few times
+        result = cli(
+            env,
+            "-H",
+            "127.0.0.1",
+            "-p",
+            str(port),
+            "--timeout",
+            "60",
+            "run",
+            "-",
+            stdin="put I 1 5\n",
+            timeout=30,
+        )
+        assert result.returncode == 3
+        assert "closed the connection" in result.stderr
+        assert "may have been applied" not in result.stderr
 
 
-def test_a_port_without_a_host_is_refused(env: dict[str, str]) -> None:  # noqa: F811
+def test_a_port_without_a_host_is_refused(env: dict[str, str]) -> None:
     result = cli(env, "-p", "40653", "get", "I", "50")
     assert result.returncode == 2
     assert "-p 40653 needs -H HOST" in result.stderr
     assert result.stdout == ""
 
 
-def test_the_console_without_a_terminal_says_so_and_exits(env: dict[str, str]) -> None:  # noqa: F811
+def test_the_console_without_a_terminal_says_so_and_exits(env: dict[str, str]) -> None:
     result = cli(env, "--json", timeout=30)  # stdin and stdout are pipes here
     assert result.returncode == 2
     assert "the console needs a terminal" in result.stderr
@@ -198,8 +183,8 @@ def test_the_console_without_a_terminal_says_so_and_exits(env: dict[str, str]) -
 
 
 def test_a_huge_garbage_reply_is_quoted_short(
-    env: dict[str, str],  # noqa: F811
-    recording: Callable[..., RecordingServer],  # noqa: F811
+    env: dict[str, str],
+    recording: Callable[..., RecordingServer],
 ) -> None:
     server = recording(lambda line: b"Z" * 60_000 + b"\r")
     result = cli(env, *server.args, "get", "I", "1")

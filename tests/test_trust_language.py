@@ -5,11 +5,11 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
-from tui_helpers import FrameTap, make_app, results_text, type_line, until
 
 from rac_console.commands.language import Put, Unwatch, Watch
 from rac_console.engine.commands import parse_command
 from rac_console.protocol import InputError
+from tests.support.drivers import FrameTap, make_app, results_text, type_line, until
 
 
 def put_value(line: str) -> str:
@@ -82,7 +82,7 @@ async def test_watch_every_polls_those_rows_only_and_leaves_the_interval(tmp_pat
         await type_line(pilot, "watch I 5")
         await type_line(pilot, "watch IO 3 every 60")
         await until(pilot, lambda: "polled every 60 s" in results_text(app), "the answer")
-        assert app.status is not None and app.status.interval == 0.05
+        assert app.main_screen.status is not None and app.main_screen.status.interval == 0.05
         await until(pilot, lambda: tap.sent.count(b"GET:RC8:5:I:\r") >= 10, "ten polls of I5")
         assert tap.sent.count(b"GET:RC8:3:IO:\r") == 1  # once, then not for a minute
 
@@ -99,7 +99,7 @@ async def test_unwatch_of_an_unwatched_variable_says_so(tmp_path: Path) -> None:
         assert "IO6..IO7 (2 variables) were not watched" in results_text(app)
         await type_line(pilot, "watch P 0 J 0")
         await until(pilot, lambda: "watching P0, J0" in results_text(app), "both watched")
-        assert {str(v) for v in app.rows} == {"P0", "J0"}
+        assert {str(v) for v in app.main_screen.members.rows} == {"P0", "J0"}
 
 
 @pytest.mark.parametrize("line", ["put S 10 a\tb", "put S 10 bell\x07", "put S 10 \x1b[2J"])

@@ -11,8 +11,9 @@ from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
-from servers import RecordingServer
-from test_repl import Driver
+
+from tests.support.drivers import Driver
+from tests.support.servers import RecordingServer
 
 TERMINAL_CONTROLS = ("\x1b", "\x07", "\x08", "\x9b")
 

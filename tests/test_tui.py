@@ -7,12 +7,12 @@ from pathlib import Path
 
 import pytest
 from textual.widgets import Static
-from tui_helpers import FrameTap, log_text, make_app, results_text, type_line, until
 
 from rac_console.sim.server import SimulatorServer
 from rac_console.tui.command_line import CommandLine
 from rac_console.tui.status_bar import StatusBar
 from rac_console.tui.watch_table import WatchTable
+from tests.support.drivers import FrameTap, log_text, make_app, results_text, type_line, until
 
 #: Over half a second each (a terminal app, a subprocess, a timed server):
 #: `pytest -m "not slow"` skips them.
@@ -162,7 +162,7 @@ async def test_lost_connection_marks_rows_stale_and_recovers(tmp_path: Path) -> 
         await type_line(pilot, "watch I 3")
 
         def status() -> str:
-            return table.get_cell("I3", "status").plain if table.row_count else ""
+            return table.get_cell("I3", "status").plain if table.row_count else ""  # type: ignore[attr-defined]
 
         await until(pilot, lambda: status() == "OK", "the first poll")
         assert "LIVE 127.0.0.1" in str(app.query_one(StatusBar).render())
@@ -173,7 +173,7 @@ async def test_lost_connection_marks_rows_stale_and_recovers(tmp_path: Path) -> 
             lambda: "lost, retrying" in str(app.query_one(StatusBar).render()),
             "the status line to say lost",
         )
-        assert table.get_cell("I3", "value").plain.strip() == "3"  # last good value kept
+        assert table.get_cell("I3", "value").plain.strip() == "3"  # type: ignore[attr-defined]  # last good value kept
         assert "connection lost" in log_text(app)
         restarted = await SimulatorServer(port=port).start()
         try:
@@ -190,5 +190,5 @@ async def test_a_label_is_shown_as_typed_never_as_markup(tmp_path: Path) -> None
         await type_line(pilot, "watch I 1 [/x] [red]tool")
         table = app.query_one(WatchTable)
         await until(pilot, lambda: table.row_count == 1, "the row")
-        assert table.get_cell("I1", "label").plain == "[/x] [red]tool"
+        assert table.get_cell("I1", "label").plain == "[/x] [red]tool"  # type: ignore[attr-defined]
         assert app.is_running and "watching I1" in results_text(app)

@@ -12,15 +12,15 @@ from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
-from cell_helpers import make_cell_app, row
 from textual.pilot import Pilot
-from tui_helpers import log_text, results_text, type_line, until
 
 from rac_console.protocol import kind_of
 from rac_console.sim.cell import SimulatedCellThread
 from rac_console.sim.controller import SimulatedController
 from rac_console.tui.app import RacConsoleApp
 from rac_console.tui.confirm_screen import ConfirmWriteScreen
+from tests.support.cells import make_cell_app, row
+from tests.support.drivers import log_text, results_text, type_line, until
 
 #: A console on two or three simulators: a second or more each, seconds on a busy machine.
 pytestmark = pytest.mark.slow
@@ -55,7 +55,8 @@ async def connected(pilot: Pilot, app: RacConsoleApp) -> None:
     await until(
         pilot,
         lambda: all(
-            s.status is not None and s.status.connection == "connected" for s in app.states.values()
+            s.status is not None and s.status.connection == "connected"
+            for s in app.main_screen.members.states.values()
         ),
         "every target connected",
     )
@@ -80,7 +81,7 @@ def seen_values(app: RacConsoleApp, name: str, var: str, into: set[object]) -> b
 
 def table_cells(app: RacConsoleApp) -> list[tuple[str, str]]:
     """(target, variable) of each row of the table, top to bottom."""
-    table = app.table
+    table = app.main_screen.panes.table
     return [
         (str(table.get_row_at(n)[0]).strip(), str(table.get_row_at(n)[1]))
         for n in range(table.row_count)
@@ -95,7 +96,7 @@ async def test_two_targets_rows_of_each_in_one_table(tmp_path: Path, two) -> Non
         # The same variable on both targets is two rows.
         await type_line(pilot, "watch I 10")
         await type_line(pilot, "@robotB watch I 10")
-        await until(pilot, lambda: app.table.row_count == 4, "four rows")
+        await until(pilot, lambda: app.main_screen.panes.table.row_count == 4, "four rows")
         assert table_cells(app) == [
             ("robotA", "IO128"),
             ("robotA", "I10"),
@@ -106,9 +107,9 @@ async def test_two_targets_rows_of_each_in_one_table(tmp_path: Path, two) -> Non
         b_values: set[object] = set()
         await until(pilot, lambda: seen_values(app, "robotA", "IO128", a_values), "IO128 moves")
         await until(pilot, lambda: seen_values(app, "robotB", "IO64", b_values), "IO64 moves")
-        line = app.status_bar.line.plain
+        line = app.main_screen.panes.status_bar.line.plain
         assert "robotA" in line and "robotB" in line and line.count("connected") == 2
-        assert "robotA ›" in app.prompt.render().plain  # type: ignore[union-attr]
+        assert "robotA ›" in app.main_screen.panes.prompt.render().plain  # type: ignore[union-attr]
         results = results_text(app)
         assert "robotB › watch I 10" in results  # the result names its target
 
@@ -129,7 +130,9 @@ async def test_a_write_goes_to_the_current_target_or_to_at_name(tmp_path: Path, 
         await type_line(pilot, "put I 11 9")
         await until(pilot, lambda: value(two, 1, "I", 11) == 9, "robotB's I11 written")
         assert value(two, 0, "I", 11) != 9
-        await until(pilot, lambda: "robotB ›" in str(app.prompt.render()), "the prompt")
+        await until(
+            pilot, lambda: "robotB ›" in str(app.main_screen.panes.prompt.render()), "the prompt"
+        )
 
 
 async def test_space_and_del_on_a_row_go_to_its_target(tmp_path: Path, two) -> None:
@@ -138,17 +141,24 @@ async def test_space_and_del_on_a_row_go_to_its_target(tmp_path: Path, two) -> N
         await connected(pilot, app)
         await type_line(pilot, "watch IO 20")
         await type_line(pilot, "@robotB watch IO 20")
-        await until(pilot, lambda: app.table.row_count == 2, "IO20 on each")
+        await until(pilot, lambda: app.main_screen.panes.table.row_count == 2, "IO20 on each")
         await until(
             pilot,
-            lambda: all(row(app, n, "IO20") and row(app, n, "IO20").variant for n in app.states),  # type: ignore[union-attr]
+            lambda: all(
+                row(app, n, "IO20") and row(app, n, "IO20").variant  # type: ignore[union-attr]
+                for n in app.main_screen.members.states
+            ),
             "IO20 read on each",
         )
         before_a = value(two, 0, "IO", 20)
         before_b = value(two, 1, "IO", 20)
-        app.table.focus()
+        app.main_screen.panes.table.focus()
         await pilot.press("down")  # robotB's row
-        await until(pilot, lambda: app.table.cursor_target() == "robotB", "the cursor on robotB")
+        await until(
+            pilot,
+            lambda: app.main_screen.panes.table.cursor_target() == "robotB",
+            "the cursor on robotB",
+        )
         await pilot.press("space")
         await until(pilot, lambda: value(two, 1, "IO", 20) != before_b, "robotB's IO20 toggled")
         assert value(two, 0, "IO", 20) == before_a
@@ -157,7 +167,7 @@ async def test_space_and_del_on_a_row_go_to_its_target(tmp_path: Path, two) -> N
         await pilot.press("delete")
         await until(pilot, lambda: row(app, "robotB", "IO20") is None, "robotB's row gone")
         assert row(app, "robotA", "IO20") is not None
-        await until(pilot, lambda: app.table.row_count == 1, "one row left")
+        await until(pilot, lambda: app.main_screen.panes.table.row_count == 1, "one row left")
 
 
 async def test_the_confirm_dialog_names_the_target(tmp_path: Path, two) -> None:
@@ -194,12 +204,12 @@ async def test_the_frame_log_names_and_filters_targets(tmp_path: Path, two) -> N
             ),
             "frames of both targets, each named",
         )
-        app.frame_log.set_filter("@robotB")
-        app.frame_log.flush()
+        app.main_screen.panes.frame_log.set_filter("@robotB")
+        app.main_screen.panes.frame_log.flush()
         await until(pilot, lambda: "GET:RC8:64:IO:" in log_text(app), "robotB's frames")
         frames = [line for line in log_text(app).splitlines() if "→" in line or "←" in line]
         assert frames and all(" robotB " in line for line in frames)
-        app.frame_log.set_filter("@robotA IO128")
+        app.main_screen.panes.frame_log.set_filter("@robotA IO128")
         await until(pilot, lambda: "GET:RC8:128:IO:" in log_text(app), "robotA's IO128")
         frames = [line for line in log_text(app).splitlines() if "→" in line or "←" in line]
         strays = [line for line in frames if " robotA " not in line]
@@ -211,18 +221,19 @@ async def test_trends_of_two_targets_on_one_time_axis(tmp_path: Path, two) -> No
     async with app.run_test(size=(120, 40)) as pilot:
         await connected(pilot, app)
         await watch_handshake(pilot, app)
-        app.table.focus()
+        app.main_screen.panes.table.focus()
         await pilot.press("t")  # robotA's IO128
-        await until(pilot, lambda: app.trend_view.has_class("-open"), "the trend")
-        app.table.focus()
+        await until(pilot, lambda: app.main_screen.panes.trend_view.has_class("-open"), "the trend")
+        app.main_screen.panes.table.focus()
         await pilot.press("down", "T")  # robotB's IO64 over it
-        view = app.trend_view
+        view = app.main_screen.panes.trend_view
         await until(pilot, lambda: len(view.series) == 2, "two series")
         assert [(t, str(v)) for t, v, _ in view.series] == [("robotA", "IO128"), ("robotB", "IO64")]
         await until(
             pilot,
             lambda: all(
-                app.trend_store(t).window(v, 0, view.window).count >= 4 for t, v, _ in view.series
+                app.main_screen.members.trend_store(t).window(v, 0, view.window).count >= 4
+                for t, v, _ in view.series
             ),
             "samples of both",
         )
@@ -240,7 +251,7 @@ async def test_one_target_down_leaves_the_others_polling(tmp_path: Path, three) 
         await type_line(pilot, "@robotA watch IO 128")
         await type_line(pilot, "@robotB watch I 10")
         await type_line(pilot, "@robotC watch I 0")
-        await until(pilot, lambda: app.table.row_count == 3, "a row on each")
+        await until(pilot, lambda: app.main_screen.panes.table.row_count == 3, "a row on each")
         await until(
             pilot,
             lambda: (shown := row(app, "robotB", "I10")) is not None and shown.variant is not None,
@@ -254,13 +265,15 @@ async def test_one_target_down_leaves_the_others_polling(tmp_path: Path, three) 
         )
 
         def badge_b() -> str:
-            return app.status_bar.line.plain.split("│")[1]
+            return app.main_screen.panes.status_bar.line.plain.split("│")[1]
 
         await until(pilot, lambda: "connected" not in badge_b(), "robotB's badge not connected")
         assert "robotB" in badge_b()
-        b = app.states["robotB"]
+        b = app.main_screen.members.states["robotB"]
         assert b.status is not None and b.status.connection != "connected"
-        assert app.status_bar.line.plain.count("connected") == 2  # robotA and robotC are
+        assert (
+            app.main_screen.panes.status_bar.line.plain.count("connected") == 2
+        )  # robotA and robotC are
         a_values: set[object] = set()
         c_values: set[object] = set()
         await until(pilot, lambda: seen_values(app, "robotA", "IO128", a_values), "robotA polls")
@@ -274,14 +287,16 @@ async def test_completion_offers_the_cell_targets(tmp_path: Path, two) -> None:
     async with app.run_test(size=(120, 40)) as pilot:
         await connected(pilot, app)
         await type_line(pilot, "use robotB", enter=False)
-        app.command_line.value = "use rob"
-        app.command_line.cursor_position = len("use rob")
+        app.main_screen.panes.command_line.value = "use rob"
+        app.main_screen.panes.command_line.cursor_position = len("use rob")
         await pilot.press("tab")
-        assert app.command_line.value == "use robot"
-        app.command_line.value = "@robotB wat"
-        app.command_line.cursor_position = len(app.command_line.value)
+        assert app.main_screen.panes.command_line.value == "use robot"
+        app.main_screen.panes.command_line.value = "@robotB wat"
+        app.main_screen.panes.command_line.cursor_position = len(
+            app.main_screen.panes.command_line.value
+        )
         await pilot.press("tab")
-        assert app.command_line.value == "@robotB watch "
+        assert app.main_screen.panes.command_line.value == "@robotB watch "
 
 
 async def test_the_io_grid_takes_the_current_targets_io_rows_only(tmp_path: Path, two) -> None:
@@ -309,14 +324,21 @@ async def test_a_cell_of_one_is_the_console_as_before(tmp_path: Path) -> None:
         async with app.run_test(size=(120, 40)) as pilot:
             await connected(pilot, app)
             await type_line(pilot, "watch I 10")
-            await until(pilot, lambda: app.table.row_count == 1, "the row")
-            assert next(str(c.label) for c in app.table.columns.values()) == "Variable"
-            assert str(app.table.get_row_at(0)[0]) == "I10"
-            assert not app.prompt.is_mounted  # no prompt: the command line as it was
-            assert not app.check_action("next_target", ())
+            await until(pilot, lambda: app.main_screen.panes.table.row_count == 1, "the row")
+            assert (
+                next(str(c.label) for c in app.main_screen.panes.table.columns.values())
+                == "Variable"
+            )
+            assert str(app.main_screen.panes.table.get_row_at(0)[0]) == "I10"
+            assert (
+                not app.main_screen.panes.prompt.is_mounted
+            )  # no prompt: the command line as it was
+            assert not app.main_screen.check_action("next_target", ())
             await until(pilot, lambda: "› watch I 10" in results_text(app), "the echo")
             assert "sim ›" not in results_text(app)
-            assert "LIVE" in app.status_bar.line.plain  # the status line as it was
+            assert (
+                "LIVE" in app.main_screen.panes.status_bar.line.plain
+            )  # the status line as it was
 
 
 async def test_T_keeps_the_table_so_the_next_rows_T_joins_the_trend(tmp_path: Path, two) -> None:
@@ -326,9 +348,9 @@ async def test_T_keeps_the_table_so_the_next_rows_T_joins_the_trend(tmp_path: Pa
     async with app.run_test(size=(120, 40)) as pilot:
         await connected(pilot, app)
         await watch_handshake(pilot, app)
-        app.table.focus()
+        app.main_screen.panes.table.focus()
         await pilot.press("T")
-        await until(pilot, lambda: app.trend_view.has_class("-open"), "the trend")
+        await until(pilot, lambda: app.main_screen.panes.trend_view.has_class("-open"), "the trend")
         await pilot.press("down", "T")
-        await until(pilot, lambda: len(app.trend_view.series) == 2, "two series")
-        assert app.focused is app.table
+        await until(pilot, lambda: len(app.main_screen.panes.trend_view.series) == 2, "two series")
+        assert app.focused is app.main_screen.panes.table

@@ -8,13 +8,14 @@ import sys
 from pathlib import Path
 
 import pytest
-from test_ascii_screen import Terminal, terminal  # noqa: F401 (a fixture)
+
+from tests.support.drivers import Terminal
 
 SCRIPT = Path(__file__).resolve().parent.parent / "scripts" / "cell_console.py"
 
 
 @pytest.mark.slow
-def test_a_cell_of_two_in_a_terminal(terminal: Terminal) -> None:  # noqa: F811
+def test_a_cell_of_two_in_a_terminal(terminal: Terminal) -> None:
     command = f"{sys.executable} {SCRIPT} 2"
     terminal.tmux("new-session", "-d", "-s", "t", "-x", "120", "-y", "40", command)
     terminal.until("type help")  # the welcome: the engines have started

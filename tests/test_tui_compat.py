@@ -117,7 +117,7 @@ async def test_forgetting_drawn_lines_styles_them_again() -> None:
 class Early(RichLog):
     written: ClassVar[list[bool]] = []
 
-    def write(self, content: object, *args: object, **kwargs: object) -> Early:  # type: ignore[override]
+    def write(self, content: object, *args: object, **kwargs: object) -> Early:
         self.written.append(compat.rich_log_sized(self))
         return super().write(content, *args, **kwargs)  # type: ignore[arg-type]
 

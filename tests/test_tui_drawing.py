@@ -9,12 +9,13 @@ from pathlib import Path
 
 import pytest
 from textual.pilot import Pilot
-from tui_helpers import make_app, results_text, type_line, until
 
 from rac_console.protocol import parse_request, parse_response
 from rac_console.session import Frame
 from rac_console.tui.app import RacConsoleApp
-from rac_console.tui.frame_log import HEX_SEPARATOR, KEPT, FrameLog
+from rac_console.tui.frame_lines import HEX_SEPARATOR
+from rac_console.tui.frame_log import KEPT, FrameLog
+from tests.support.drivers import make_app, results_text, type_line, until
 
 REPLY = parse_response("0,3,1")
 I1 = parse_request(b"GET:RC8:1:I:\r")
@@ -78,7 +79,7 @@ def test_a_filter_counts_what_it_shows_and_forgets_the_oldest() -> None:
 async def hex_lines_fit(pilot: Pilot, app: RacConsoleApp) -> list[str]:
     """The log's lines once laid out for its width (waited for, with a deadline); every
     hex line checked against the width."""
-    log = app.frame_log
+    log = app.main_screen.panes.frame_log
 
     await until(pilot, lambda: log.hex_laid_out, "the hex lines laid out for the log's width")
     width = log.scrollable_content_region.width
@@ -96,7 +97,7 @@ async def test_after_a_resize_the_hex_view_is_laid_out_for_the_new_width(
     async with app.run_test(size=(150, 40)) as pilot:
         for line in ("get I 1", "get P 1", "send hello there, a long raw line"):
             await type_line(pilot, line)
-        await until(pilot, lambda: app.frame_log.frames_kept == 6, "six frames")
+        await until(pilot, lambda: app.main_screen.panes.frame_log.frames_kept == 6, "six frames")
         await pilot.press("f7")
         for size in ((80, 30), (120, 30), (95, 24), (160, 50)):
             await pilot.resize_terminal(*size)
@@ -114,14 +115,14 @@ async def test_a_request_and_its_reply_put_their_hex_the_same_way(tmp_path: Path
     async with app.run_test(size=(150, 30)) as pilot:
         for _ in range(3):
             await type_line(pilot, "get I 1")
-        await until(pilot, lambda: app.frame_log.frames_kept == 6, "six frames")
+        await until(pilot, lambda: app.main_screen.panes.frame_log.frames_kept == 6, "six frames")
         await pilot.press("f7")
         await pilot.resize_terminal(85, 30)
         lines = await hex_lines_fit(pilot, app)
-        assert app.frame_log.hex_placement in ("beside", "under"), lines
+        assert app.main_screen.panes.frame_log.hex_placement in ("beside", "under"), lines
         await pilot.resize_terminal(150, 30)
         await hex_lines_fit(pilot, app)
-        assert app.frame_log.hex_placement == "beside"
+        assert app.main_screen.panes.frame_log.hex_placement == "beside"
 
 
 # ------------------------------------------------------------- the I/O grid
@@ -134,14 +135,17 @@ async def watch_rows(pilot: Pilot, lines: tuple[str, ...], rows: int) -> None:
         await type_line(pilot, line)
     await until(
         pilot,
-        lambda: len(app.rows) == rows and all(v.status == "OK" for v in app.rows.values()),
+        lambda: (
+            len(app.main_screen.members.rows) == rows
+            and all(v.status == "OK" for v in app.main_screen.members.rows.values())
+        ),
         "every row's first value",
     )
 
 
 def table_cut(app: RacConsoleApp) -> bool:
     """True when the table's columns are wider than the room it has."""
-    table = app.table
+    table = app.main_screen.panes.table
     return table.virtual_size.width > table.scrollable_content_region.width
 
 
@@ -151,12 +155,15 @@ async def test_at_160_columns_the_grid_leaves_a_position_row_its_width(tmp_path:
     async with app.run_test(size=(160, 50)) as pilot:
         await watch_rows(pilot, ("watch P 1 pick", "watch IO 128-143"), 17)
         await pilot.press("f5")
-        await until(pilot, lambda: app.io_panel.grid is not None, "the grid")
+        await until(pilot, lambda: app.main_screen.panes.io_panel.grid is not None, "the grid")
         await until(pilot, lambda: not table_cut(app), "the table's columns laid out to fit")
-        assert not table_cut(app), (app.table.virtual_size, app.table.size)
-        grid = app.io_panel.grid
+        assert not table_cut(app), (
+            app.main_screen.panes.table.virtual_size,
+            app.main_screen.panes.table.size,
+        )
+        grid = app.main_screen.panes.io_panel.grid
         assert grid is not None and grid.layout.per_line == 16
-        assert grid.layout.width <= app.io_panel.scrollable_content_region.width
+        assert grid.layout.width <= app.main_screen.panes.io_panel.scrollable_content_region.width
 
 
 @pytest.mark.slow
@@ -165,24 +172,29 @@ async def test_a_narrow_table_keeps_the_grid_beside_it_sized_to_the_grid(tmp_pat
     async with app.run_test(size=(160, 50)) as pilot:
         await watch_rows(pilot, ("watch I 1", "watch IO 128-143"), 17)
         await pilot.press("f5")
-        await until(pilot, lambda: app.io_panel.grid is not None, "the grid")
+        await until(pilot, lambda: app.main_screen.panes.io_panel.grid is not None, "the grid")
         await pilot.pause(0.3)
         area = app.query_one("#watch-area")
         assert area.has_class("-wide")  # beside the table: there is room for both
         assert not table_cut(app)
-        grid = app.io_panel.grid
+        grid = app.main_screen.panes.io_panel.grid
         assert grid is not None and grid.layout.per_line == 16
-        assert grid.layout.width <= app.io_panel.scrollable_content_region.width
+        assert grid.layout.width <= app.main_screen.panes.io_panel.scrollable_content_region.width
         await pilot.resize_terminal(200, 50)  # room for the ●/○ symbols, and no more
         await until(
             pilot,
-            lambda: app.io_panel.grid is not None and app.io_panel.grid.layout.glyph,
+            lambda: (
+                app.main_screen.panes.io_panel.grid is not None
+                and app.main_screen.panes.io_panel.grid.layout.glyph
+            ),
             "the symbols",
         )
         await pilot.pause(0.3)
-        grid = app.io_panel.grid
+        grid = app.main_screen.panes.io_panel.grid
         assert grid is not None
-        assert app.io_panel.scrollable_content_region.width <= grid.layout.width + 1
+        assert (
+            app.main_screen.panes.io_panel.scrollable_content_region.width <= grid.layout.width + 1
+        )
         assert not table_cut(app)
 
 

@@ -13,7 +13,6 @@ from textual import events
 from textual.pilot import Pilot
 from textual.widgets import Footer
 from textual.widgets._footer import FooterKey
-from tui_helpers import REQUEST_TIMEOUT, make_app, results_text, type_line, until
 
 from rac_console.commands.policy import TargetProfile, WritePolicy, Writes
 from rac_console.engine import Engine
@@ -22,6 +21,7 @@ from rac_console.sim.thread import SimulatorThread
 from rac_console.tui.app import RacConsoleApp
 from rac_console.tui.confirm_screen import ConfirmWriteScreen
 from rac_console.tui.help_screen import HelpScreen
+from tests.support.drivers import REQUEST_TIMEOUT, make_app, results_text, type_line, until
 
 #: Terminal apps: `pytest -m "not slow"` skips them.
 pytestmark = pytest.mark.slow
@@ -57,7 +57,10 @@ async def watch_rows(pilot: Pilot, line: str, rows: int) -> None:
     await type_line(pilot, line)
     await until(
         pilot,
-        lambda: len(app.rows) == rows and all(v.variant is not None for v in app.rows.values()),
+        lambda: (
+            len(app.main_screen.members.rows) == rows
+            and all(v.variant is not None for v in app.main_screen.members.rows.values())
+        ),
         f"{rows} rows with values",
     )
 
@@ -79,20 +82,24 @@ async def test_answering_the_confirm_question_gives_the_focus_back_to_the_table(
 ) -> None:
     app = confirm_console(tmp_path, cell)
     async with app.run_test(size=(120, 40)) as pilot:
-        await until(pilot, lambda: app.status is not None, "a status")
+        await until(pilot, lambda: app.main_screen.status is not None, "a status")
         await watch_rows(pilot, "watch IO 128", 1)
         await pilot.press("f6")
-        assert app.focused is app.table
+        assert app.focused is app.main_screen.panes.table
         await pilot.press("space")
         await confirm_up(pilot)
         await pilot.press("escape")
         await until(pilot, lambda: not isinstance(app.screen, ConfirmWriteScreen), "closed")
-        await until(pilot, lambda: app.focused is app.table, "the table focused again")
+        await until(
+            pilot, lambda: app.focused is app.main_screen.panes.table, "the table focused again"
+        )
         await pilot.press("space")  # the next bit, at once: the table still has the keys
         await confirm_up(pilot)
         await pilot.press("y")
         await until(pilot, lambda: not isinstance(app.screen, ConfirmWriteScreen), "closed")
-        await until(pilot, lambda: app.focused is app.table, "the table focused again")
+        await until(
+            pilot, lambda: app.focused is app.main_screen.panes.table, "the table focused again"
+        )
 
 
 async def test_answering_the_confirm_question_gives_the_focus_back_to_the_grid(
@@ -100,15 +107,19 @@ async def test_answering_the_confirm_question_gives_the_focus_back_to_the_grid(
 ) -> None:
     app = confirm_console(tmp_path, cell)
     async with app.run_test(size=(120, 40)) as pilot:
-        await until(pilot, lambda: app.status is not None, "a status")
+        await until(pilot, lambda: app.main_screen.status is not None, "a status")
         await watch_rows(pilot, "watch IO 128-135", 8)
         await pilot.press("f5", "f6", "f6")
-        await until(pilot, lambda: app.focused is app.io_panel, "the grid focused")
+        await until(
+            pilot, lambda: app.focused is app.main_screen.panes.io_panel, "the grid focused"
+        )
         await pilot.press("space")
         await confirm_up(pilot)
         await pilot.press("escape")
         await until(pilot, lambda: not isinstance(app.screen, ConfirmWriteScreen), "closed")
-        await until(pilot, lambda: app.focused is app.io_panel, "the grid focused again")
+        await until(
+            pilot, lambda: app.focused is app.main_screen.panes.io_panel, "the grid focused again"
+        )
 
 
 # ------------------------------------------------------ 2. keys after the slash
@@ -133,9 +144,11 @@ async def test_a_burst_after_slash_in_the_table_all_goes_to_its_filter(tmp_path:
         await watch_rows(pilot, "watch I 1-12", 12)
         await pilot.press("f6")
         burst(app, "slash", "i", "1")
-        await until(pilot, lambda: app.table_filter.value == "i1", "i1 in the filter")
-        assert app.focused is app.table_filter
-        assert app.command_line.value == ""
+        await until(
+            pilot, lambda: app.main_screen.panes.table_filter.value == "i1", "i1 in the filter"
+        )
+        assert app.focused is app.main_screen.panes.table_filter
+        assert app.main_screen.panes.command_line.value == ""
 
 
 async def test_a_burst_after_slash_in_the_frame_log_all_goes_to_its_filter(
@@ -144,10 +157,12 @@ async def test_a_burst_after_slash_in_the_frame_log_all_goes_to_its_filter(
     app = make_app(tmp_path)
     async with app.run_test(size=(120, 40)) as pilot:
         await pilot.press("f6", "f6")
-        assert app.focused is app.frame_log
+        assert app.focused is app.main_screen.panes.frame_log
         burst(app, "slash", *"IO131")
-        await until(pilot, lambda: app.log_filter.value == "IO131", "IO131 in the filter")
-        assert app.focused is app.log_filter
+        await until(
+            pilot, lambda: app.main_screen.panes.log_filter.value == "IO131", "IO131 in the filter"
+        )
+        assert app.focused is app.main_screen.panes.log_filter
 
 
 # ----------------------------------------------------------------- 3. footer
@@ -197,13 +212,15 @@ async def test_the_footer_shows_whole_keys_in_every_pane(
         await watch_rows(pilot, "watch IO 128-129", 2)
         await footer_fits(pilot, "command line")
         await pilot.press("f6")
-        assert app.focused is app.table
+        assert app.focused is app.main_screen.panes.table
         await footer_fits(pilot, "table")
         await pilot.press("f6")
-        assert app.focused is app.frame_log
+        assert app.focused is app.main_screen.panes.frame_log
         await footer_fits(pilot, "frame log")
         await pilot.press("f5", "f6", "f6", "f6")  # log → command line → table → grid
-        await until(pilot, lambda: app.focused is app.io_panel, "the grid focused")
+        await until(
+            pilot, lambda: app.focused is app.main_screen.panes.io_panel, "the grid focused"
+        )
         await footer_fits(pilot, "I/O grid")
         await pilot.press("escape")
         await type_line(pilot, "wait 0.5", enter=True)  # Esc cancels: one more key shown
@@ -231,7 +248,7 @@ async def test_a_read_only_target_offers_no_toggle_and_no_put(tmp_path: Path) ->
     app = make_app(tmp_path, read_only=True)
     async with app.run_test(size=(120, 40)) as pilot:
         await watch_rows(pilot, "watch IO 128", 1)
-        assert "put" not in str(app.command_line.placeholder)
+        assert "put" not in str(app.main_screen.panes.command_line.placeholder)
         await pilot.press("f6")
         await until(pilot, lambda: "del Unwatch" in shown_keys(app), "the table's keys")
         assert not any(key.startswith("space") for key in shown_keys(app))
@@ -243,7 +260,7 @@ async def test_a_writable_target_offers_the_toggle(tmp_path: Path) -> None:
     app = make_app(tmp_path)
     async with app.run_test(size=(120, 40)) as pilot:
         await watch_rows(pilot, "watch IO 128", 1)
-        assert "put IO 20 on" in str(app.command_line.placeholder)
+        assert "put IO 20 on" in str(app.main_screen.panes.command_line.placeholder)
         await pilot.press("f6")
         await until(pilot, lambda: "space Toggle" in shown_keys(app), "the toggle offered")
 
@@ -274,9 +291,11 @@ async def test_hex_view_says_where_the_bytes_are_and_lines_them_up(tmp_path: Pat
         await until(pilot, lambda: "S1 =" in results_text(app), "replies")
         await pilot.press("f7")
         await until(pilot, lambda: "hex view" in last_hex_message(app), "the message")
-        assert "under" not in last_hex_message(app), "\n".join(app.frame_log.lines)
-        app.flush_log()
-        lines = [line for line in app.frame_log.lines if "│" in line]
+        assert "under" not in last_hex_message(app), "\n".join(
+            app.main_screen.panes.frame_log.lines
+        )
+        app.main_screen.flush_log()
+        lines = [line for line in app.main_screen.panes.frame_log.lines if "│" in line]
         assert len(lines) >= 4
         columns = {line.index("│") for line in lines}
         assert len(columns) == 1, lines

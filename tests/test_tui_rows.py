@@ -9,7 +9,6 @@ from pathlib import Path
 import pytest
 from textual.command import CommandPalette
 from textual.pilot import Pilot
-from tui_helpers import make_app, type_line, until
 
 from rac_console.commands.language import VarRef
 from rac_console.commands.policy import TargetProfile, WritePolicy, Writes, parse_allow
@@ -21,6 +20,7 @@ from rac_console.protocol import Variant, kind_of
 from rac_console.tui.app import RacConsoleApp
 from rac_console.tui.help_screen import console_key_groups
 from rac_console.tui.palette_commands import profile_help
+from tests.support.drivers import make_app, type_line, until
 
 P = kind_of("P")
 NOW = 1000.0
@@ -124,7 +124,7 @@ def test_the_help_lists_the_command_line_then_the_table_then_panes_then_the_app(
 
 
 def detail_lines(app: RacConsoleApp) -> list[str]:
-    return app.row_detail.shown_text.split("\n")
+    return app.main_screen.panes.row_detail.shown_text.split("\n")
 
 
 async def watch_ok(pilot: Pilot, line: str, rows: int) -> None:
@@ -133,7 +133,10 @@ async def watch_ok(pilot: Pilot, line: str, rows: int) -> None:
     await type_line(pilot, line)
     await until(
         pilot,
-        lambda: app.table.row_count == rows and all(v.status == "OK" for v in app.rows.values()),
+        lambda: (
+            app.main_screen.panes.table.row_count == rows
+            and all(v.status == "OK" for v in app.main_screen.members.rows.values())
+        ),
         f"{rows} rows with values",
     )
 
@@ -143,13 +146,18 @@ async def test_d_shows_the_row_under_the_cursor_in_full_at_80_columns(tmp_path: 
     app = make_app(tmp_path)
     async with app.run_test(size=(80, 24)) as pilot:
         await watch_ok(pilot, "watch P 1 J 1", 2)
-        value = str(app.table.get_cell_at((0, 5)))
+        value = str(app.main_screen.panes.table.get_cell_at((0, 5)))  # type: ignore[arg-type]
         assert "Fig" in value  # the table holds it all, but the screen cuts it
-        assert app.table.virtual_size.width > app.table.scrollable_content_region.width
+        assert (
+            app.main_screen.panes.table.virtual_size.width
+            > app.main_screen.panes.table.scrollable_content_region.width
+        )
         await pilot.press("f6", "d")
-        await until(pilot, lambda: app.row_detail.is_open, "the detail")
-        await until(pilot, lambda: "Fig" in app.row_detail.shown_text, "the P row")
-        assert not app.frame_log.display  # in its place; the log keeps collecting
+        await until(pilot, lambda: app.main_screen.panes.row_detail.is_open, "the detail")
+        await until(
+            pilot, lambda: "Fig" in app.main_screen.panes.row_detail.shown_text, "the P row"
+        )
+        assert not app.main_screen.panes.frame_log.display  # in its place; the log keeps collecting
         assert [line.split()[0] for line in detail_lines(app)] == [
             "X",
             "Y",
@@ -159,14 +167,14 @@ async def test_d_shows_the_row_under_the_cursor_in_full_at_80_columns(tmp_path: 
             "Rz",
             "Fig",
         ]
-        assert "P1" in str(app.row_detail.border_title)
-        assert app.focused is app.table  # the arrows stay the table's
+        assert "P1" in str(app.main_screen.panes.row_detail.border_title)
+        assert app.focused is app.main_screen.panes.table  # the arrows stay the table's
         await pilot.press("down")
-        await until(pilot, lambda: "J8" in app.row_detail.shown_text, "the J row")
-        assert "J1" in str(app.row_detail.border_title)
+        await until(pilot, lambda: "J8" in app.main_screen.panes.row_detail.shown_text, "the J row")
+        assert "J1" in str(app.main_screen.panes.row_detail.border_title)
         await pilot.press("d")
-        await until(pilot, lambda: not app.row_detail.is_open, "closed")
-        assert app.frame_log.display
+        await until(pilot, lambda: not app.main_screen.panes.row_detail.is_open, "closed")
+        assert app.main_screen.panes.frame_log.display
 
 
 @pytest.mark.slow
@@ -175,13 +183,13 @@ async def test_the_detail_and_the_trend_take_turns_in_the_logs_place(tmp_path: P
     async with app.run_test(size=(100, 30)) as pilot:
         await watch_ok(pilot, "watch P 1", 1)
         await pilot.press("f6", "d")
-        await until(pilot, lambda: app.row_detail.is_open, "the detail")
+        await until(pilot, lambda: app.main_screen.panes.row_detail.is_open, "the detail")
         await pilot.press("t")
-        await until(pilot, lambda: app.trend_view.has_class("-open"), "the trend")
-        assert not app.row_detail.is_open
+        await until(pilot, lambda: app.main_screen.panes.trend_view.has_class("-open"), "the trend")
+        assert not app.main_screen.panes.row_detail.is_open
         await pilot.press("shift+tab", "d")  # back on the table: the detail again
-        await until(pilot, lambda: app.row_detail.is_open, "the detail again")
-        assert not app.trend_view.has_class("-open")
+        await until(pilot, lambda: app.main_screen.panes.row_detail.is_open, "the detail again")
+        assert not app.main_screen.panes.trend_view.has_class("-open")
 
 
 @pytest.mark.slow
@@ -189,20 +197,27 @@ async def test_rows_added_below_the_view_are_scrolled_to(tmp_path: Path) -> None
     app = make_app(tmp_path)
     async with app.run_test(size=(80, 24)) as pilot:
         await watch_ok(pilot, "watch P 0 J 0 T 0 S 1 I 20", 5)
-        await until(pilot, lambda: app.table.scroll_y == 0, "at the top")
+        await until(pilot, lambda: app.main_screen.panes.table.scroll_y == 0, "at the top")
         await type_line(pilot, "watch I 0-99")
-        await until(pilot, lambda: app.table.row_count == 104, "the new rows")
-        await until(pilot, lambda: app.table.scroll_y > 0, "scrolled", timeout=3)
-        room = app.table.scrollable_content_region.height - app.table.header_height
-        top = round(app.table.scroll_y)
-        shown = [str(app.table.get_row_at(n)[0]) for n in range(top, top + room)]
+        await until(pilot, lambda: app.main_screen.panes.table.row_count == 104, "the new rows")
+        await until(pilot, lambda: app.main_screen.panes.table.scroll_y > 0, "scrolled", timeout=3)
+        room = (
+            app.main_screen.panes.table.scrollable_content_region.height
+            - app.main_screen.panes.table.header_height
+        )
+        top = round(app.main_screen.panes.table.scroll_y)
+        shown = [str(app.main_screen.panes.table.get_row_at(n)[0]) for n in range(top, top + room)]
         assert shown[0] == "I0", shown  # too many to show: the first at the top
         await type_line(pilot, "watch I 300")  # one more: the least scroll shows it
-        await until(pilot, lambda: app.table.row_count == 105, "one more row")
-        last = app.table.row_count - 1
+        await until(pilot, lambda: app.main_screen.panes.table.row_count == 105, "one more row")
+        last = app.main_screen.panes.table.row_count - 1
         await until(
             pilot,
-            lambda: round(app.table.scroll_y) <= last < round(app.table.scroll_y) + room,
+            lambda: (
+                round(app.main_screen.panes.table.scroll_y)
+                <= last
+                < round(app.main_screen.panes.table.scroll_y) + room
+            ),
             "the new row in view",
             timeout=3,
         )

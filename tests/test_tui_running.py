@@ -6,14 +6,14 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
-from tui_helpers import FrameTap, make_app, results_text, type_line, until
 
 from rac_console.tui.status_bar import StatusBar
+from tests.support.drivers import FrameTap, make_app, results_text, type_line, until
 
 pytestmark = pytest.mark.slow
 
 
-def status_line(app) -> str:  # type: ignore[no-untyped-def]
+def status_line(app) -> str:
     return str(app.query_one(StatusBar).render())
 
 
@@ -43,14 +43,25 @@ async def test_a_toggle_pressed_during_a_wait_is_queued_and_esc_drops_it(tmp_pat
     tap = FrameTap(tmp_path)
     async with app.run_test(size=(120, 30)) as pilot:
         await type_line(pilot, "watch IO 128")
-        await until(pilot, lambda: len(app.rows) == 1 and app.table.row_count == 1, "the row")
-        await until(pilot, lambda: next(iter(app.rows.values())).status == "OK", "its value")
+        await until(
+            pilot,
+            lambda: (
+                len(app.main_screen.members.rows) == 1
+                and app.main_screen.panes.table.row_count == 1
+            ),
+            "the row",
+        )
+        await until(
+            pilot,
+            lambda: next(iter(app.main_screen.members.rows.values())).status == "OK",
+            "its value",
+        )
         await type_line(pilot, "wait I 1 >= 100 within 60")
         await until(pilot, lambda: b"GET:RC8:1:I:\r" in tap.sent, "the wait's first read")
         await pilot.press("f6", "space")  # a toggle of IO128, queued behind the wait
         await until(pilot, lambda: "+1 queued" in status_line(app), "the toggle counted")
         await pilot.press("escape")  # from the table back to the command line
-        assert app.focused is app.command_line
+        assert app.focused is app.main_screen.panes.command_line
         await pilot.press("escape")
         await until(pilot, lambda: "not run" in results_text(app), "the toggle dropped")
         assert not any(frame.startswith(b"PUT:") for frame in tap.sent)

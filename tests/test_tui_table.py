@@ -6,14 +6,14 @@ import math
 from pathlib import Path
 
 import pytest
-from servers import Valve
 from textual.pilot import Pilot
-from tui_helpers import FrameTap, make_app, results_text, type_line, until
 
 from rac_console.present.trends import span_text
 from rac_console.sim.thread import SimulatorThread
 from rac_console.tui.app import RacConsoleApp
 from rac_console.tui.trend_view import TrendView
+from tests.support.drivers import FrameTap, make_app, results_text, type_line, until
+from tests.support.servers import Valve
 
 #: Over half a second each (a terminal app, a subprocess, a timed server):
 #: `pytest -m "not slow"` skips them.
@@ -30,20 +30,23 @@ async def watch(pilot: Pilot, line: str, rows: int) -> None:
     await until(
         pilot,
         lambda: (
-            app.table.row_count == rows
-            and all(view.status == "OK" for view in app.rows.values())
-            and "OK" in str(app.table.get_cell_at((rows - 1, 2)))
+            app.main_screen.panes.table.row_count == rows
+            and all(view.status == "OK" for view in app.main_screen.members.rows.values())
+            and "OK" in str(app.main_screen.panes.table.get_cell_at((rows - 1, 2)))  # type: ignore[arg-type]
         ),
         f"{rows} rows with values",
     )
 
 
 def keys(app: RacConsoleApp) -> list[str]:
-    return [str(app.table.get_row_at(n)[0]) for n in range(app.table.row_count)]
+    return [
+        str(app.main_screen.panes.table.get_row_at(n)[0])
+        for n in range(app.main_screen.panes.table.row_count)
+    ]
 
 
 def cursor(app: RacConsoleApp) -> str | None:
-    view = app.table.cursor_view()
+    view = app.main_screen.panes.table.cursor_view()
     return view.key if view is not None else None
 
 
@@ -61,26 +64,31 @@ async def test_f6_moves_between_panes_and_the_cursor_shows_only_in_the_table(
     app = make_app(tmp_path)
     async with app.run_test(size=SIZE) as pilot:
         await watch(pilot, "watch IO 128-129", 2)
-        assert app.focused is app.command_line
-        assert not app.table.show_cursor  # no cursor drawn while unfocused
+        assert app.focused is app.main_screen.panes.command_line
+        assert not app.main_screen.panes.table.show_cursor  # no cursor drawn while unfocused
         await pilot.press("f6")
-        assert app.focused is app.table and app.table.show_cursor
+        assert (
+            app.focused is app.main_screen.panes.table and app.main_screen.panes.table.show_cursor
+        )
         await pilot.press("f6")
-        assert app.focused is app.frame_log and not app.table.show_cursor
+        assert (
+            app.focused is app.main_screen.panes.frame_log
+            and not app.main_screen.panes.table.show_cursor
+        )
         await pilot.press("f6")
-        assert app.focused is app.command_line
+        assert app.focused is app.main_screen.panes.command_line
         await pilot.press("shift+f6")
-        assert app.focused is app.frame_log
+        assert app.focused is app.main_screen.panes.frame_log
         await pilot.press("shift+tab")
-        assert app.focused is app.table
+        assert app.focused is app.main_screen.panes.table
         await pilot.press("tab")
-        assert app.focused is app.frame_log
+        assert app.focused is app.main_screen.panes.frame_log
         await pilot.press("escape")
-        assert app.focused is app.command_line
+        assert app.focused is app.main_screen.panes.command_line
         await pilot.press("f6", "escape")
-        assert app.focused is app.command_line
+        assert app.focused is app.main_screen.panes.command_line
         await pilot.press("tab")  # in the command line: completion, not focus
-        assert app.focused is app.command_line
+        assert app.focused is app.main_screen.panes.command_line
 
 
 async def test_enter_puts_the_rows_value_on_the_command_line_and_sends_nothing(
@@ -92,10 +100,10 @@ async def test_enter_puts_the_rows_value_on_the_command_line_and_sends_nothing(
         await watch(pilot, "watch P 1 pick", 1)
         await pilot.press("f6", "enter")
         line = "put P 1 350 0 450 180 0 180 5"
-        assert app.command_line.value == line
-        assert app.command_line.cursor_position == len(line)
-        assert app.command_line.selection.is_empty
-        assert app.focused is app.command_line
+        assert app.main_screen.panes.command_line.value == line
+        assert app.main_screen.panes.command_line.cursor_position == len(line)
+        assert app.main_screen.panes.command_line.selection.is_empty
+        assert app.focused is app.main_screen.panes.command_line
         before = polls(tap)
         await until(pilot, lambda: polls(tap) >= before + 3, "three more polls")
         assert puts(tap) == []
@@ -106,14 +114,18 @@ async def test_enter_on_a_row_without_a_value_leaves_the_hint(tmp_path: Path) ->
     app = make_app(tmp_path)
     async with app.run_test(size=SIZE) as pilot:
         await type_line(pilot, "pause")
-        await until(pilot, lambda: app.status is not None and app.status.paused, "the pause")
-        await type_line(pilot, "watch P 2")
-        await until(pilot, lambda: app.table.row_count == 1, "the row")
-        await pilot.press("f6", "enter")
-        assert app.command_line.value == "put P 2 "
         await until(
             pilot,
-            lambda: app.command_line._suggestion == "put P 2 X Y Z Rx Ry Rz Fig",
+            lambda: app.main_screen.status is not None and app.main_screen.status.paused,
+            "the pause",
+        )
+        await type_line(pilot, "watch P 2")
+        await until(pilot, lambda: app.main_screen.panes.table.row_count == 1, "the row")
+        await pilot.press("f6", "enter")
+        assert app.main_screen.panes.command_line.value == "put P 2 "
+        await until(
+            pilot,
+            lambda: app.main_screen.panes.command_line._suggestion == "put P 2 X Y Z Rx Ry Rz Fig",
             "the hint of what put P needs",
         )
 
@@ -123,11 +135,13 @@ async def test_space_toggles_an_io_bit_through_the_typed_put_path(tmp_path: Path
     async with app.run_test(size=SIZE) as pilot:
         tap = FrameTap(tmp_path)
         await watch(pilot, "watch IO 128", 1)
-        assert app.table.get_cell("IO128", "value").plain.strip() == "ON"
+        assert app.main_screen.panes.table.get_cell("IO128", "value").plain.strip() == "ON"  # type: ignore[attr-defined]
         await pilot.press("f6", "space")
         await until(pilot, lambda: puts(tap) == [b"PUT:RC8:128:IO:11,0\r"], "the PUT on the wire")
         await until(
-            pilot, lambda: app.table.get_cell("IO128", "value").plain.strip() == "OFF", "OFF"
+            pilot,
+            lambda: app.main_screen.panes.table.get_cell("IO128", "value").plain.strip() == "OFF",  # type: ignore[attr-defined]
+            "OFF",
         )
         assert "› put IO 128 off" in results_text(app)
         assert "IO128: ON → OFF  S_OK  read back OFF ✓" in results_text(app)
@@ -143,7 +157,9 @@ async def test_space_in_a_read_only_console_is_refused_and_nothing_is_sent(
         await pilot.press("f6", "space")
         await until(pilot, lambda: "PUT IO128 refused" in results_text(app), "the refusal")
         assert puts(tap) == []
-        assert not app.toggles.busy(next(iter(app.rows)))  # free again: it never went out
+        assert not app.main_screen.members.toggles.busy(
+            next(iter(app.main_screen.members.rows))
+        )  # free again: it never went out
 
 
 async def test_space_on_a_row_that_is_not_io_sends_nothing(tmp_path: Path) -> None:
@@ -177,9 +193,13 @@ async def _a_second_space_is_ignored(app: RacConsoleApp, valve: Valve, tmp_path:
         tap = FrameTap(tmp_path)
         await watch(pilot, "watch IO 128", 1)
         await type_line(pilot, "pause")
-        await until(pilot, lambda: app.status is not None and app.status.paused, "the pause")
+        await until(
+            pilot,
+            lambda: app.main_screen.status is not None and app.main_screen.status.paused,
+            "the pause",
+        )
         await pilot.press("f6")
-        await until(pilot, lambda: app.focused is app.table, "the table's focus")
+        await until(pilot, lambda: app.focused is app.main_screen.panes.table, "the table's focus")
         valve.shut()  # the controller's answers held: the write stays in flight
         await pilot.press("space", "space")  # the second before the first came back
         refusal = "IO128: the last toggle has not come back yet"
@@ -190,14 +210,22 @@ async def _a_second_space_is_ignored(app: RacConsoleApp, valve: Valve, tmp_path:
         await until(pilot, lambda: done in results_text(app), "the first one's reply")
         assert puts(tap) == [b"PUT:RC8:128:IO:11,0\r"]
         await until(  # the read-back shows the row its value, polling paused
-            pilot, lambda: app.table.get_cell("IO128", "value").plain.strip() == "OFF", "OFF"
+            pilot,
+            lambda: app.main_screen.panes.table.get_cell("IO128", "value").plain.strip() == "OFF",  # type: ignore[attr-defined]
+            "OFF",
         )
-        var = next(iter(app.rows))
-        await until(pilot, lambda: not app.toggles.busy(var), "the toggle to come back")
+        var = next(iter(app.main_screen.members.rows))
+        await until(
+            pilot, lambda: not app.main_screen.members.toggles.busy(var), "the toggle to come back"
+        )
         await pilot.press("space")
         await until(pilot, lambda: len(puts(tap)) == 2, "the second toggle")
         assert puts(tap)[1] == b"PUT:RC8:128:IO:11,-1\r"
-        await until(pilot, lambda: app.table.get_cell("IO128", "value").plain.strip() == "ON", "ON")
+        await until(
+            pilot,
+            lambda: app.main_screen.panes.table.get_cell("IO128", "value").plain.strip() == "ON",  # type: ignore[attr-defined]
+            "ON",
+        )
 
 
 async def test_delete_unwatches_the_row_under_the_cursor(tmp_path: Path) -> None:
@@ -205,7 +233,7 @@ async def test_delete_unwatches_the_row_under_the_cursor(tmp_path: Path) -> None
     async with app.run_test(size=SIZE) as pilot:
         await watch(pilot, "watch IO 128-131", 4)
         await pilot.press("f6", "down", "delete")
-        await until(pilot, lambda: app.table.row_count == 3, "the row to go")
+        await until(pilot, lambda: app.main_screen.panes.table.row_count == 3, "the row to go")
         assert keys(app) == ["IO128", "IO130", "IO131"]
         assert "› unwatch IO 129" in results_text(app)
         assert cursor(app) == "IO130"  # the row that took its place
@@ -220,34 +248,34 @@ async def test_filter_narrows_rows_keeps_the_cursor_and_esc_restores(tmp_path: P
         await pilot.press("f6", "down", "down", "down")
         assert cursor(app) == "IO130"
         await pilot.press("slash")
-        assert app.focused is app.table_filter
+        assert app.focused is app.main_screen.panes.table_filter
         await pilot.press(*"IO13")
         await until(pilot, lambda: keys(app) == ["IO130", "IO131"], "two rows")
         assert cursor(app) == "IO130"
-        assert "2 of 7 rows" in app.table.title_text
-        assert 'filter "IO13"' in app.table.title_text
+        assert "2 of 7 rows" in app.main_screen.panes.table.title_text
+        assert 'filter "IO13"' in app.main_screen.panes.table.title_text
         await pilot.press("escape")
-        await until(pilot, lambda: app.table.row_count == 7, "every row back")
+        await until(pilot, lambda: app.main_screen.panes.table.row_count == 7, "every row back")
         assert cursor(app) == "IO130"
-        assert app.focused is app.table
-        assert "7 rows" in app.table.title_text
+        assert app.focused is app.main_screen.panes.table
+        assert "7 rows" in app.main_screen.panes.table.title_text
         await pilot.press("slash", *"temp", "enter")  # a label, any case; Enter keeps it
         await until(pilot, lambda: keys(app) == ["F0"], "the labelled row")
-        assert app.focused is app.table
+        assert app.focused is app.main_screen.panes.table
 
 
 async def test_hide_io_works_with_the_filter(tmp_path: Path) -> None:
     app = make_app(tmp_path)
     async with app.run_test(size=SIZE) as pilot:
         await watch(pilot, "watch P 1 IO 128-129 I 0", 4)
-        app.table.set_hide_io(True)
+        app.main_screen.panes.table.set_hide_io(True)
         assert keys(app) == ["P1", "I0"]
-        assert "2 of 4 rows (IO hidden)" in app.table.title_text
-        app.table.set_filter("p")
+        assert "2 of 4 rows (IO hidden)" in app.main_screen.panes.table.title_text
+        app.main_screen.panes.table.set_filter("p")
         assert keys(app) == ["P1"]
-        app.table.set_hide_io(False)
+        app.main_screen.panes.table.set_hide_io(False)
         assert keys(app) == ["P1"]
-        app.table.set_filter("")
+        app.main_screen.panes.table.set_filter("")
         assert keys(app) == ["P1", "IO128", "IO129", "I0"]
 
 
@@ -259,16 +287,16 @@ async def test_s_cycles_the_sort_and_the_cursor_follows_its_variable(tmp_path: P
         assert cursor(app) == "I0"
         await pilot.press("s")
         assert keys(app) == ["F1", "I0", "IO128", "P1"]
-        assert "sort: name" in app.table.title_text
+        assert "sort: name" in app.main_screen.panes.table.title_text
         assert cursor(app) == "I0"
         await pilot.press("s")
-        assert "sort: last change" in app.table.title_text
+        assert "sort: last change" in app.main_screen.panes.table.title_text
         # I0 counts at 10 Hz in the simulator: it is always the newest change.
         await until(pilot, lambda: keys(app)[0] == "I0", "the moving row first")
         assert cursor(app) == "I0"
         await pilot.press("s")
         assert keys(app) == ["P1", "IO128", "I0", "F1"]
-        assert "sort: as added" in app.table.title_text
+        assert "sort: as added" in app.main_screen.panes.table.title_text
 
 
 async def test_trend_cells_and_f_cycles_a_positions_field(tmp_path: Path) -> None:
@@ -276,13 +304,17 @@ async def test_trend_cells_and_f_cycles_a_positions_field(tmp_path: Path) -> Non
     async with app.run_test(size=SIZE) as pilot:
         await watch(pilot, "watch P 1 IO 128 S 1", 3)
         await until(
-            pilot, lambda: "█" in app.table.get_cell("IO128", "trend").plain, "the IO trend"
+            pilot,
+            lambda: "█" in app.main_screen.panes.table.get_cell("IO128", "trend").plain,  # type: ignore[attr-defined]
+            "the IO trend",
         )
-        assert app.table.get_cell("P1", "trend").plain.startswith("X ")
-        assert app.table.get_cell("S1", "trend").plain == ""
+        assert app.main_screen.panes.table.get_cell("P1", "trend").plain.startswith("X ")  # type: ignore[attr-defined]
+        assert app.main_screen.panes.table.get_cell("S1", "trend").plain == ""  # type: ignore[attr-defined]
         await pilot.press("f6", "f")
         await until(
-            pilot, lambda: app.table.get_cell("P1", "trend").plain.startswith("Y "), "field Y"
+            pilot,
+            lambda: app.main_screen.panes.table.get_cell("P1", "trend").plain.startswith("Y "),  # type: ignore[attr-defined]
+            "field Y",
         )
 
 
@@ -293,19 +325,27 @@ async def test_trend_view_of_a_moving_value(tmp_path: Path) -> None:
         await pilot.press("f6", "t")
         view = app.query_one(TrendView)
         assert view.display and app.focused is view
-        assert not app.frame_log.display
-        var = next(iter(app.rows))
+        assert not app.main_screen.panes.frame_log.display
+        var = next(iter(app.main_screen.members.rows))
 
         def figures() -> str:
             return str(view.stats.render())
 
-        await until(pilot, lambda: app.trends.window(var, 0, 10).count >= 4, "four samples")
+        await until(
+            pilot,
+            lambda: app.main_screen.members.trends.window(var, 0, 10).count >= 4,
+            "four samples",
+        )
         await pilot.press("f2")  # pause, so the figures hold still to be compared
-        await until(pilot, lambda: app.status is not None and app.status.paused, "the pause")
+        await until(
+            pilot,
+            lambda: app.main_screen.status is not None and app.main_screen.status.paused,
+            "the pause",
+        )
         await pilot.pause(0.3)
-        window = app.trends.window(var, 0, view.window)
+        window = app.main_screen.members.trends.window(var, 0, view.window)
         numbers = [v for v in window.values if v is not None]
-        assert window.low == min(numbers) < window.high == max(numbers) == window.last
+        assert window.low == min(numbers) < window.high == max(numbers) == window.last  # type: ignore[operator]
         await until(pilot, lambda: figures().startswith(f"last {window.last:g}"), "the figures")
         text = figures()
         assert f"min {window.low:g}" in text and f"max {window.high:g}" in text
@@ -325,10 +365,10 @@ async def test_trend_view_of_a_moving_value(tmp_path: Path) -> None:
         await pilot.press("w", "w")
         assert view.window == 10
         await pilot.press("t")
-        assert not view.display and app.frame_log.display
-        assert app.focused is app.table
+        assert not view.display and app.main_screen.panes.frame_log.display
+        assert app.focused is app.main_screen.panes.table
         await pilot.press("t", "escape")
-        assert not view.display and app.focused is app.table
+        assert not view.display and app.focused is app.main_screen.panes.table
 
 
 async def test_a_command_typed_while_the_table_has_focus_goes_to_the_command_line(
@@ -341,12 +381,12 @@ async def test_a_command_typed_while_the_table_has_focus_goes_to_the_command_lin
     async with app.run_test(size=SIZE) as pilot:
         await watch(pilot, "watch IO 128-129", 2)
         await pilot.press("f6")
-        assert app.focused is app.table
+        assert app.focused is app.main_screen.panes.table
         for key in [*"get IO 5", "enter"]:  # queued at once, as a fast typist's
             app.simulate_key(key)
         await until(pilot, lambda: "IO5 = " in results_text(app), "the get's answer")
         assert "› get IO 5" in results_text(app)
-        assert app.focused is app.command_line
+        assert app.focused is app.main_screen.panes.command_line
         assert not app.query_one(TrendView).display
         assert not any(frame.startswith(b"PUT:") for frame in tap.sent)
 
@@ -357,5 +397,7 @@ async def test_keys_right_after_f6_go_to_the_new_pane(tmp_path: Path) -> None:
         await watch(pilot, "watch I 1-3", 3)
         for key in ("f6", "down", "down"):  # queued at once, as a fast typist's
             app.simulate_key(key)
-        await until(pilot, lambda: app.table.cursor_row == 2, "the cursor two rows down")
-        assert app.command_line.value == ""  # no history recalled by the downs
+        await until(
+            pilot, lambda: app.main_screen.panes.table.cursor_row == 2, "the cursor two rows down"
+        )
+        assert app.main_screen.panes.command_line.value == ""  # no history recalled by the downs

@@ -15,17 +15,18 @@ from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
-from textual import events
-from textual.pilot import Pilot
-from tui_helpers import REQUEST_TIMEOUT, WIRE_RECORD, FrameTap, results_text, until
 
-from rac_console.commands.policy import TargetProfile, WritePolicy, Writes, parse_allow
-from rac_console.engine import Engine
-from rac_console.present.history import History
 from rac_console.present.type_ahead import may_ask
 from rac_console.sim.thread import SimulatorThread
-from rac_console.tui.app import RacConsoleApp
-from rac_console.tui.confirm_screen import ConfirmWriteScreen
+from tests.support.drivers import (
+    FrameTap,
+    burst,
+    confirm_console,
+    connected,
+    modal,
+    results_text,
+    until,
+)
 
 pytestmark = pytest.mark.slow
 
@@ -34,48 +35,6 @@ pytestmark = pytest.mark.slow
 def cell() -> Iterator[SimulatorThread]:
     with SimulatorThread() as simulator:
         yield simulator
-
-
-def confirm_console(
-    tmp_path: Path, cell: SimulatorThread, allow: str | None = None
-) -> RacConsoleApp:
-    """The console on ``cell3``: writes ask first (and only ``allow`` may be written)."""
-    rules = (parse_allow(allow),) if allow else None
-    policy = WritePolicy(Writes.CONFIRM, rules, "profile cell3")
-    profile = TargetProfile("cell3", cell.host, cell.port, "Cell 3", "red", policy)
-    engine = Engine(
-        cell.host,
-        cell.port,
-        timeout=REQUEST_TIMEOUT,
-        interval=0.05,
-        record=str(tmp_path / WIRE_RECORD),
-        cycles=True,
-        policy=policy,
-        profile=profile,
-        profiles={"cell3": profile},
-    )
-    return RacConsoleApp(engine, History(tmp_path / "history"))
-
-
-def burst(app: RacConsoleApp, text: str) -> None:
-    """Keys typed faster than anything answers: all posted before any is handled."""
-    for character in text:
-        if character == "\r":
-            app.post_message(events.Key("enter", "\r"))
-        else:
-            app.post_message(events.Key(character, character))
-
-
-def modal(app: RacConsoleApp) -> ConfirmWriteScreen | None:
-    return app.screen if isinstance(app.screen, ConfirmWriteScreen) else None
-
-
-async def connected(pilot: Pilot, app: RacConsoleApp) -> None:
-    await until(
-        pilot,
-        lambda: app.status is not None and app.status.connection == "connected",
-        "connected",
-    )
 
 
 async def test_keys_typed_before_the_question_never_reach_the_command_line(
@@ -96,9 +55,9 @@ async def test_keys_typed_before_the_question_never_reach_the_command_line(
         results = results_text(app)
         assert "› y" not in results and "unknown command" not in results, results
         assert "2 keys typed ahead of the question were ignored" in results
-        assert app.command_line.value == ""
+        assert app.main_screen.panes.command_line.value == ""
         assert not any(frame.startswith(b"PUT:") for frame in tap.sent)
-        assert not app.lines_pending
+        assert not app.main_screen.lines.pending
         # The command line is the user's again: a line typed now runs.
         burst(app, "get I 1\r")
         await until(pilot, lambda: "› get I 1" in results_text(app), "the next line")
@@ -115,7 +74,9 @@ async def test_keys_held_for_a_write_that_did_not_ask_are_typed_in_in_order(
         results = results_text(app)
         assert "refused" in results.partition("› put IO 67 on")[2]
         assert modal(app) is None
-        assert app.command_line.value == "get I"  # the unfinished line, to go on typing
+        assert (
+            app.main_screen.panes.command_line.value == "get I"
+        )  # the unfinished line, to go on typing
         assert "typed ahead" not in results
 
 
@@ -126,12 +87,14 @@ async def test_a_write_queued_behind_a_running_line_holds_no_keys(
     async with app.run_test(size=(100, 30)) as pilot:
         await connected(pilot, app)
         burst(app, "wait I 1 >= 100 within 30\r")
-        await until(pilot, lambda: bool(app.lines_pending), "the wait running")
+        await until(pilot, lambda: bool(app.main_screen.lines.pending), "the wait running")
         burst(app, "put IO 67 on\rget I")
-        await until(pilot, lambda: app.command_line.value == "get I", "the keys typed in")
+        await until(
+            pilot, lambda: app.main_screen.panes.command_line.value == "get I", "the keys typed in"
+        )
         assert modal(app) is None
         await pilot.press("escape")  # the wait and the put behind it end
-        await until(pilot, lambda: not app.lines_pending, "the cancel")
+        await until(pilot, lambda: not app.main_screen.lines.pending, "the cancel")
 
 
 @pytest.mark.parametrize(
@@ -161,10 +124,14 @@ async def test_keys_typed_after_space_on_a_row_do_not_reach_the_command_line(
     async with app.run_test(size=(100, 30)) as pilot:
         await connected(pilot, app)
         burst(app, "watch IO 67\r")
-        await until(pilot, lambda: app.table.row_count == 1, "the row")
-        await until(pilot, lambda: next(iter(app.rows.values())).status == "OK", "its value")
+        await until(pilot, lambda: app.main_screen.panes.table.row_count == 1, "the row")
+        await until(
+            pilot,
+            lambda: next(iter(app.main_screen.members.rows.values())).status == "OK",
+            "its value",
+        )
         await pilot.press("f6")
-        assert app.focused is app.table
+        assert app.focused is app.main_screen.panes.table
         burst(app, " y\r")  # Space writes the opposite, y and Enter typed after it
         await until(pilot, lambda: modal(app) is not None, "the question", timeout=3)
         screen = modal(app)
@@ -175,4 +142,4 @@ async def test_keys_typed_after_space_on_a_row_do_not_reach_the_command_line(
         await pilot.pause(0.3)
         results = results_text(app)
         assert "› y" not in results and "unknown command" not in results, results
-        assert app.command_line.value == ""
+        assert app.main_screen.panes.command_line.value == ""

@@ -6,16 +6,16 @@ from pathlib import Path
 
 import pytest
 from textual.timer import Timer
-from tui_helpers import log_text, make_app, until
 
 from rac_console.tui import app as app_module
 from rac_console.tui.app import OutboxWoke, RacConsoleApp
+from tests.support.drivers import log_text, make_app, until
 
 
 class Noting(RacConsoleApp):
     """The console, counting the engine's wakes it handles."""
 
-    CSS_PATH = Path(app_module.__file__).with_name("app.tcss")  # beside the app, not here
+    CSS_PATH = Path(app_module.__file__).with_name("app.tcss")  # type: ignore[assignment]  # beside the app, not here
     woken = 0
 
     def on_outbox_woke(self, message: OutboxWoke) -> None:
@@ -24,8 +24,10 @@ class Noting(RacConsoleApp):
 
 
 def running_timers(app: RacConsoleApp) -> list[Timer]:
-    """The app's own timers still running (Textual keeps them in ``_timers``)."""
-    return [timer for timer in app._timers if timer._task is not None and not timer._task.done()]
+    """The console's own timers still running: the app's, and its screen's but for the
+    repaint timer Textual gives every screen (Textual keeps them in ``_timers``)."""
+    screen = [t for t in app.main_screen._timers if t.name != "screen_update"]
+    return [t for t in [*app._timers, *screen] if t._task is not None and not t._task.done()]
 
 
 @pytest.mark.slow  # over half a second
@@ -33,20 +35,23 @@ async def test_the_only_timer_is_the_clock_and_a_get_reaches_the_log_when_the_en
     tmp_path: Path,
 ) -> None:
     base = make_app(tmp_path)
-    app = Noting(base.engine, base.history)
+    app = Noting(base.main_screen.members.engine, base.main_screen.history)
     async with app.run_test() as pilot:
         await until(
             pilot,
-            lambda: app.status is not None and app.status.connection == "connected",
+            lambda: (
+                app.main_screen.status is not None
+                and app.main_screen.status.connection == "connected"
+            ),
             "the connection",
         )
         await until(pilot, lambda: len(running_timers(app)) == 1, "one timer left")
-        clock = app._clock
+        clock = app.main_screen.pacing.clock
         assert running_timers(app) == [clock]
 
-        clock.pause()  # nothing periodic at all: only the engine's notify wakes the app
+        clock.pause()  # type: ignore[union-attr]  # nothing periodic at all: only the engine's notify wakes the app
         woken = app.woken
-        app.submit_line("get I 1")
+        app.main_screen.submit_line("get I 1")
         await until(pilot, lambda: "GET:RC8:1:I:" in log_text(app), "the GET's request")
         await until(pilot, lambda: "← " in log_text(app).split("GET:RC8:1:I:")[-1], "its reply")
         assert app.woken > woken  # brought by the engine's wakes

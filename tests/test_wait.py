@@ -11,7 +11,6 @@ from collections.abc import Callable
 from pathlib import Path
 
 import pytest
-from test_engine import Front
 
 from rac_console.commands.conditions import holds, parse_wait
 from rac_console.commands.language import Op, Put
@@ -20,6 +19,7 @@ from rac_console.engine import Engine
 from rac_console.engine.commands import parse_command
 from rac_console.protocol import InputError, Variant
 from rac_console.session import Session
+from tests.support.drivers import Front
 
 # ------------------------------------------------------------------ parser
 
@@ -197,7 +197,7 @@ def test_a_wait_that_times_out_fails_the_script_with_exit_1() -> None:
 
 
 async def test_the_repl_waits_and_logs(tmp_path: Path) -> None:
-    from test_repl import Driver
+    from tests.support.drivers import Driver
 
     csv_path = tmp_path / "repl.csv"
     driver = Driver(tmp_path, interval=0.02)
@@ -277,10 +277,9 @@ def test_no_poll_that_could_outlast_the_deadline_starts_during_a_wait(
     import threading
     import time
 
-    from servers import RecordingServer
-
     import rac_console.engine.poller as poller_module
     from rac_console.engine.poller import Poller
+    from tests.support.servers import RecordingServer
 
     class Clock:
         """``time`` for the engine module: the real one, noting each thread's last

@@ -10,10 +10,10 @@ from pathlib import Path
 
 import pytest
 from textual.widgets import RichLog
-from tui_helpers import make_app, type_line, until
 
 from rac_console.tui.app import RacConsoleApp
 from rac_console.tui.frame_log import FrameLog
+from tests.support.drivers import make_app, type_line, until
 
 pytestmark = pytest.mark.slow  # a console a size, seconds each
 
@@ -61,9 +61,7 @@ async def test_a_put_of_many_numbers_shows_every_one_whole(
     async with app.run_test(size=size) as pilot:
         await type_line(pilot, line)
         pane = app.query_one("#results", RichLog)
-        await until(
-            pilot, lambda: any("read back" in s.text for s in pane.lines), "the read-back"
-        )
+        await until(pilot, lambda: any("read back" in s.text for s in pane.lines), "the read-back")
         await pilot.pause()  # the screen drawn after the write (no time: until it is idle)
         held = "\n".join(strip.text for strip in pane.lines)
         for value in values:  # the new value and its read-back, each in one piece

@@ -39,11 +39,13 @@ from ..engine import (
     EngineOptions,
     Message,
     Result,
+    Status,
 )
 from ..engine.cell import Cell, member_name
 from ..engine.csvlog import timestamp
 from ..engine.execute import outcome_of
 from ..engine.where import Where
+from ..present.batches import BatchReader
 from ..present.render import error_text, outcome_text, print_error
 from ..protocol import InputError, hresult_name
 from ..session import BadReply, ConnectFailed, RequestTimeout
@@ -110,6 +112,7 @@ def run_live(
         print_error(output.err, str(exc))
         return ExitStatus.REFUSED
     own = by_member or {}
+    cell_alerts = _Alerts(output)
     runs = [
         _LiveRun(m.engine, None if cell.single else m.name, output, watched, show, line)
         for m in cell.members
@@ -120,9 +123,7 @@ def run_live(
     def wait() -> None:
         woke.wait(WAKE_EVERY)
         woke.clear()
-        for event in cell.outbox.drain().events:  # a file of the cell's that failed
-            if isinstance(event, Alert):
-                output.alert(event)
+        cell_alerts.read(None, cell.outbox.drain())  # a file of the cell's that failed
         for run in runs:
             run.take(run.engine.outbox.drain())
 
@@ -146,16 +147,24 @@ def run_live(
             raise
     finally:
         cell.stop()
-    for event in cell.outbox.drain().events:
-        if isinstance(event, Alert):
-            output.alert(event)
+    cell_alerts.read(None, cell.outbox.drain())
     for run in runs:
         run.ended = True
         run.take(run.engine.outbox.drain())  # the last alerts (a file that failed at the end)
     return output.status(worst([run.worst for run in runs]))
 
 
-class _LiveRun:
+class _Alerts(BatchReader):
+    """The cell's own batch: only the alerts of its files are said."""
+
+    def __init__(self, output: Output) -> None:
+        self.output = output
+
+    def take_alert(self, target: str | None, alert: Alert) -> None:
+        self.output.alert(alert)
+
+
+class _LiveRun(BatchReader):
     """The CLI's side of one target's engine: what it said, and the worst status seen."""
 
     def __init__(
@@ -208,19 +217,23 @@ class _LiveRun:
         return True
 
     def take(self, batch: Batch) -> None:
-        status = batch.status
-        if status is not None:
-            self.csv_failure = status.csv_failure
-        if status is not None and status.is_simulator and not self._told_simulator:
+        self.read(self.name or "", batch)
+
+    def take_status(self, target: str, status: Status) -> None:
+        self.csv_failure = status.csv_failure
+        if status.is_simulator and not self._told_simulator:
             self._told_simulator = True
             print_error(self.output.err, f"{SIMULATOR_NOTICE} (at {status.host}:{status.port})")
-        for event in batch.events:
-            if isinstance(event, Alert):  # a --record, --log or CSV file that failed
-                self.output.alert(event)
-            elif isinstance(event, Result):
-                self._results.append(event)
-            elif isinstance(event, Cycle) and not self.ended:
-                self._cycle(event)
+
+    def take_alert(self, target: str | None, alert: Alert) -> None:
+        self.output.alert(alert)  # a --record, --log or CSV file that failed
+
+    def take_result(self, target: str | None, result: Result) -> None:
+        self._results.append(result)
+
+    def take_cycle(self, target: str | None, cycle: Cycle) -> None:
+        if not self.ended:
+            self._cycle(cycle)
 
     def _cycle(self, cycle: Cycle) -> None:
         read = {var: outcome_of(Get(var), reading, self.line) for var, reading in cycle.readings}

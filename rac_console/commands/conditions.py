@@ -17,7 +17,7 @@ from .language import (
     CsvLog,
     Op,
     Wait,
-    _parse_seconds,
+    parse_seconds,
     parse_var,
 )
 
@@ -69,7 +69,7 @@ def _parse_one(rest: str) -> Wait:
     condition, within = after.strip(), DEFAULT_WITHIN
     match = _WITHIN_RE.fullmatch(condition)
     if match:
-        condition, within = match.group(1).strip(), _parse_seconds(match.group(2), "within")
+        condition, within = match.group(1).strip(), parse_seconds(match.group(2), "within")
     if not condition:
         raise InputError(f"wait needs a condition: {WAIT_USAGE}")
     word = condition.lower()

@@ -266,6 +266,20 @@ Command = (
     | Publish
 )
 
+#: The command words, in the order ``help`` lists them. Each is the name of one entry in
+#: a module of :mod:`rac_console.engine.commands`; an entry whose word is not here, or a
+#: word here with no entry, stops the registry from loading, so a command added is listed
+#: where it is declared here, never wherever its module happened to put it.
+COMMAND_WORDS = (
+    "get", "put", "send",
+    "watch", "unwatch", "interval", "pause", "resume",
+    "connect", "use", "disconnect",
+    "save", "load",
+    "frames", "latency", "wait", "log", "publish",
+    "record", "transcript",
+    "clear", "help", "quit",
+)  # fmt: skip
+
 MAX_LATENCY_COUNT = 100_000
 
 MAX_RANGE = 256
@@ -351,7 +365,7 @@ def parse_unwatch(rest: str) -> Unwatch:
 
 
 def parse_interval(rest: str) -> SetInterval:
-    return SetInterval(_parse_seconds(rest))
+    return SetInterval(parse_seconds(rest))
 
 
 def parse_save(rest: str) -> WatchFile:
@@ -431,7 +445,7 @@ def parse_watch(text: str) -> Watch:
         label, rest = rest[1:close], rest[close + 1 :].strip()
     match = re.fullmatch(r"(.*?)\s*\bevery\s+(\S+?)s?", rest, re.ASCII | re.DOTALL)
     if match:
-        rest, every = match.group(1).strip(), _parse_seconds(match.group(2), "every")
+        rest, every = match.group(1).strip(), parse_seconds(match.group(2), "every")
     if label and rest:
         raise InputError(f"after a quoted label only every SECONDS may follow, not {rest!r}")
     label = label or rest
@@ -458,7 +472,9 @@ def parse_latency(text: str) -> Latency:
     return Latency(var, count)
 
 
-def _parse_seconds(text: str, word: str = "interval") -> float:
+def parse_seconds(text: str, word: str = "interval") -> float:
+    """``text`` as a number of seconds (0 to MAX_INTERVAL), ``word`` naming it in the
+    refusal: ``interval``, ``every``, ``within``."""
     try:
         seconds = float(text)
     except ValueError:

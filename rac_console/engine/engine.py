@@ -2,11 +2,13 @@
 
 See the package docstring for the thread rules. Jobs (typed lines, or commands a
 front end made) come in through :meth:`Engine.submit` from any thread and run one at
-a time, in order, between polls; everything else goes out through the outbox. The
-engine itself only schedules: the parts are the link (:mod:`.link`), the poller
-(:mod:`.poller`), the frame files and the publisher, and every command is run by its
-registry entry's handler (:mod:`.jobs`). Engines share no mutable state: several run
-side by side in one process, one per controller.
+a time, in order, between polls (:mod:`.inbox` holds them); everything else goes out
+through the outbox. The engine itself only schedules: the parts are the link
+(:mod:`.link`), the poller (:mod:`.poller`), the frame files and the publisher, every
+command is run by its registry entry's handler (:mod:`.jobs`) with a context over the
+parts (:mod:`.engine_context`), and the status is read out of them (:mod:`.readout`).
+Engines share no mutable state: several run side by side in one process, one per
+controller.
 
 The parts (and the commands) are made when the engine starts, on the thread that starts
 it, or when first needed: the console makes its engine before its first paint, which
@@ -16,8 +18,6 @@ that cannot be opened is said before anything starts.
 
 from __future__ import annotations
 
-import itertools
-import queue
 import threading
 import time
 from collections.abc import Callable, Iterator, Mapping
@@ -25,8 +25,10 @@ from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING
 
 from ..commands.target import Target
+from .inbox import Inbox
 from .options import EngineOptions, options_of, target_of
 from .outbox import Outbox
+from .readout import status_of
 from .status import Status, described, status_before_start
 from .where import Where
 
@@ -35,9 +37,9 @@ if TYPE_CHECKING:
     from ..commands.policy import TargetProfile
     from ..session import Frame
     from .cellcsv import CellCsv
-    from .context import EngineParts
     from .csvsink import CsvSink
-    from .events import ConfirmWrite, Feedback
+    from .engine_context import EngineParts
+    from .events import Feedback
     from .frame_files import FrameFiles
     from .job import Job
     from .link import Link
@@ -52,8 +54,6 @@ SIMULATOR_NOTICE = "no -H given: talking to the built-in RC8 simulator, not a co
 STATUS_EVERY = 0.1
 #: How often an idle engine (nothing to poll) looks whether its connection still lives.
 LINK_CHECK_EVERY = 1.0
-#: How often a write waiting for its confirmation looks for the answer (polling between).
-CONFIRM_CHECK_EVERY = 0.02
 NOT_RUN = "not run: cancelled (Esc, Ctrl+C) before it started"
 
 
@@ -97,13 +97,9 @@ class Engine:
         self.outbox = outbox if outbox is not None else Outbox()
         self.where, self._registry = where, registry
         self._cell_files = cell_files
-        self._inbox: queue.SimpleQueue[Job | None] = queue.SimpleQueue()
+        self._inbox = Inbox(numbers)
         #: Where submitted jobs get their numbers (shared by the engines of a cell).
-        self.numbers = numbers if numbers is not None else itertools.count(1)
-        self._jobs_lock = threading.Lock()
-        self._queued: dict[int, Job] = {}  # submitted, not started
-        self._running: Job | None = None
-        self._answers: dict[int, bool] = {}  # confirm answers, by seq (any thread writes)
+        self.numbers = self._inbox.numbers
         self._status_at = 0.0
         self._connect_first = True
         self._started = threading.Event()
@@ -120,8 +116,8 @@ class Engine:
         with self._build_lock:
             if self._built:
                 return
-            from .context import EngineParts
             from .csvsink import CsvSink
+            from .engine_context import EngineParts
             from .frame_files import FrameFiles
             from .link import Link
             from .poller import Poller
@@ -158,7 +154,8 @@ class Engine:
             )
             self._parts: EngineParts = EngineParts(
                 self._link, self._poller, self._publisher, self._files, self._csv,
-                self._switch_target, self._plain_policy, self._ask_confirm, self._plant,
+                self._switch_target, self._plain_policy, self._plant, self._inbox.take_answer,
+                lambda: self.publish_status(force=True),
             )  # fmt: skip
             self._built = True
             if options.log_csv:
@@ -195,7 +192,7 @@ class Engine:
 
     def submit(self, line: str) -> int:
         """Queue a typed line; its :class:`Result` comes out with the number returned."""
-        return self._queue(line)
+        return self._inbox.put(line)
 
     def submit_command(
         self, command: Command, line: str | None = None, seq: int | None = None
@@ -204,23 +201,14 @@ class Engine:
         run like a typed line, never parsed; ``line`` is how it is shown (the echo,
         the result), or None for nothing to echo. ``seq``: the number its cell gave
         the line (else the next of :attr:`numbers`)."""
-        return self._queue(command, line, seq)
-
-    def _queue(self, what: str | Command, line: str | None = None, seq: int | None = None) -> int:
-        from .job import Job
-
-        with self._jobs_lock:
-            job = Job(next(self.numbers) if seq is None else seq, what, line)
-            self._queued[job.seq] = job
-        self._inbox.put(job)
-        return job.seq
+        return self._inbox.put(command, line, seq)
 
     def stop(self, timeout: float = 5.0) -> None:
         """End the thread: a request in flight is cut short, the target closed."""
         if not self._thread.is_alive():
             return
         self._stopping.set()  # jobs still queued are not run; a latency run ends
-        self._inbox.put(None)
+        self._inbox.put_stop()
         session = self._link.session
         if session is not None:
             session.interrupt()
@@ -231,14 +219,7 @@ class Engine:
         fails at once, a latency run or a wait ends; polling goes on. With ``queued``
         (Esc in the console), the jobs submitted so far behind it are not run either:
         a write typed during a long wait must not go out once the user said stop."""
-        with self._jobs_lock:
-            running = self._running
-            cancelled = list(self._queued.values()) if queued else []
-            if running is not None:
-                cancelled.append(running)
-        for job in cancelled:
-            job.cancel()
-        if running is None:
+        if not self._inbox.cancel(queued):
             return  # nothing in flight (nor, before the start, any part to reach)
         session = self._link.session
         if session is not None:
@@ -246,8 +227,7 @@ class Engine:
 
     def answer_confirm(self, seq: int, yes: bool) -> None:
         """A front end's answer to a :class:`ConfirmWrite` (any thread)."""
-        with self._jobs_lock:
-            self._answers[seq] = yes
+        self._inbox.answer(seq, yes)
 
     def set_poll_frames(self, shown: bool) -> None:
         """Whether the front end shows poll frames (any thread). When nobody shows,
@@ -289,7 +269,7 @@ class Engine:
                         self.publish_status(force=True)
                 else:  # polling flat out: rows, cycles and notes still go out in batches
                     self._publisher.flush_due()
-                item = self._next(LINK_CHECK_EVERY if idle else wait)
+                item = self._inbox.next(LINK_CHECK_EVERY if idle else wait)
                 if item is None:
                     break  # stop
                 if item:
@@ -310,31 +290,20 @@ class Engine:
             if self._publisher.tap is not None:
                 self._publisher.tap.close()
 
-    def _next(self, wait: float | None) -> Job | tuple[()] | None:
-        """The next job; ``()`` when none came in time; None: stop."""
-        try:
-            if wait == 0:  # between polls: ask without raising when nothing came
-                return self._inbox.get_nowait() if not self._inbox.empty() else ()
-            return self._inbox.get(timeout=wait)
-        except queue.Empty:
-            return ()
-
     def _run_job(self, job: Job) -> None:
         """Run one job; the status, then its Result, go to the outbox (so a front end
         showing the result knows the state it left)."""
-        from .context import CommandContext
+        from .engine_context import EngineContext
         from .events import Message, Result
         from .jobs import run_job
 
-        with self._jobs_lock:
-            self._queued.pop(job.seq, None)
-            self._running = job
+        self._inbox.begin(job)
         try:
             feedback: list[Feedback]
             if job.cancelled():
                 command, feedback = self._parsed(job.what), [Message(NOT_RUN, "error")]
             else:
-                context = CommandContext(
+                context = EngineContext(
                     job,
                     self._parts,
                     self.registry,
@@ -344,8 +313,7 @@ class Engine:
                 )
                 command, feedback = run_job(self.registry, context, job.what, self.where, job.line)
         finally:
-            with self._jobs_lock:
-                self._running = None
+            self._inbox.end()
         self.publish_status(force=True)
         self._publisher.emit(Result(job.seq, tuple(feedback), job.line, command))
         self._publisher.flush()
@@ -425,26 +393,6 @@ class Engine:
         self.publish_status(force=True)
         self._publisher.flush()
 
-    def _ask_confirm(self, question: ConfirmWrite, cancelled: Callable[[], bool]) -> bool:
-        """Publish the question and keep polling until the front end answers; a cancel
-        (Esc, Ctrl-C) or a stop is a No."""
-        with self._jobs_lock:
-            self._answers.pop(question.seq, None)
-        if cancelled():  # cancelled already: no question about a write that ended
-            return False
-        self._publisher.emit(question)
-        self.publish_status(force=True)
-        self._publisher.flush()
-        while not cancelled():
-            with self._jobs_lock:
-                answer = self._answers.pop(question.seq, None)
-            if answer is not None:
-                return answer
-            until = time.perf_counter() + CONFIRM_CHECK_EVERY
-            self._poller.poll_until(until, float("inf"), cancelled)
-            self._publisher.flush()
-        return False
-
     def publish_status(self, force: bool = False) -> None:
         now = time.monotonic()
         if not force and now - self._status_at < STATUS_EVERY:
@@ -476,41 +424,8 @@ class Engine:
     def _status(self) -> Status:
         if not self._built:
             return status_before_start(self._rules, self.options)
-        link, poller, files, rules = self._link, self._poller, self._files, self._rules
-        session = link.session
-        profile = rules.profile
-        return Status(
-            target=link.described,
-            is_simulator=link.simulator is not None,
-            has_session=session is not None,
-            host=link.host,
-            port=link.port,
-            timeout=link.timeout,
-            read_only=rules.read_only,
-            connection=link.connection,
-            retry_at=link.retry_at,
-            rtt=session.last_rtt if session is not None else None,
-            paused=poller.paused,
-            watched=len(poller.watch.rows),
-            interval=poller.interval,
-            period=poller.period,
-            cycle_seconds=poller.cycle_seconds,
-            polls_per_second=poller.polls_per_second,
-            interval_met=poller.interval_met(),
-            record_failure=files.failure("record"),
-            transcript_failure=files.failure("transcript"),
-            csv_log=self._csv.path,
-            csv_failure=self._csv.failure,
-            seen=poller.seen,
-            profile=profile.name if profile is not None else None,
-            label=profile.label if profile is not None else None,
-            colour=profile.colour if profile is not None else None,
-            writes=rules.writes,
-            verify=self.options.verify,
-            target_id=link.opened,
-            ever_connected=link.ever_connected,
-            recording=files.path("record"),
-            transcribing=files.path("transcript"),
-            reads=(poller.reads[0], poller.reads[1], poller.reads[2]),
-            broker=self._publisher.tap.broker_state if self._publisher.tap else None,
-        )
+        tap = self._publisher.tap
+        return status_of(
+            self._link, self._poller, self._files, self._csv, self._rules, self.options,
+            broker=tap.broker_state if tap is not None else None,
+        )  # fmt: skip

@@ -7,23 +7,30 @@ feedback, never an exception.
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 from ..commands.language import Command
 from ..protocol import InputError
 from .events import Feedback, Message
 from .registry import Registry
 from .where import Where
 
+if TYPE_CHECKING:
+    from .context import JobContext
+
 
 def run_job(
     registry: Registry,
-    context: object,
+    context: JobContext,
     what: str | Command,
     where: Where,
     line: str | None = None,
 ) -> tuple[Command | None, list[Feedback]]:
     """Parse ``what`` (a typed line; a command object is run as it is, ``line`` being
     what it was made from), check that its command runs ``where``, and run it: the
-    command as parsed and its feedback."""
+    command as parsed and its feedback. ``context``: the engine's for a job an engine
+    runs (any command), the CLI's for one on a plain session (the entries whose handler
+    takes a :class:`~.context.JobContext`)."""
     command: Command | None = None
     line = what if isinstance(what, str) else line
     try:
@@ -33,7 +40,7 @@ def run_job(
         spec = registry.spec_of(command)
         if where not in spec.where:
             return command, [Message(not_here(registry, spec.name, where), "error")]
-        return command, spec.handle(context, command, line)
+        return command, spec.run(context, command, line)
     except InputError as exc:
         return command, [Message(str(exc), "error")]
     except Exception as exc:  # a bug must not end the session at the cell

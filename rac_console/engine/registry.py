@@ -3,16 +3,24 @@ its parser and its handler.
 
 Everything that knows about a command reads its entry: ``help``, completion, hints,
 the lexer's colours, the parser, the job runner (:mod:`.jobs`) and ``run``'s refusal
-of what only works at a terminal. Adding a command is one :class:`CommandSpec` in a
-module of :mod:`rac_console.engine.commands` (or :meth:`Registry.register` at run
-time), and its tests; no front end matches on its name.
+of what only works at a terminal. Adding a command is one entry in a module of
+:mod:`rac_console.engine.commands` and its word in the language's
+:data:`~rac_console.commands.language.COMMAND_WORDS` (or :meth:`Registry.register` at
+run time), and its tests; no front end matches on its name.
+
+An entry is typed by the context its handler takes and the command object its parser
+makes: a :class:`CommandSpec` runs with any job's context (:class:`~.context.JobContext`:
+the console's, the REPL's, ``rac-console run``'s, the command line's), an
+:class:`EngineSpec` with an engine's (:class:`~.context.CommandContext`). mypy checks
+each entry where it is made: the handler takes what the parser makes and the context
+its kind of entry gives.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable, Iterable, Iterator, Sequence
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Generic, TypeVar
 
 from ..commands.language import (
     Command,
@@ -27,7 +35,8 @@ from ..commands.language import (
 from ..commands.routing import Route, Traits, plan
 from ..protocol import KINDS, InputError
 from ..protocol.text import close_match
-from .events import Feedback
+from .context import CommandContext, JobContext
+from .events import Feedback, Message
 
 # Kept here too, where the commands' modules find them with the rest of a command's spec.
 from .where import AT_A_TERMINAL as AT_A_TERMINAL
@@ -54,10 +63,15 @@ class Sources:
 Completer = Callable[[list[str], Sources], Sequence[Option]]
 #: What the command still needs after the arguments given, in grey; "" for nothing.
 Hinter = Callable[[list[str]], str]
-#: Runs the parsed command on the engine's thread (or the CLI's): the feedback to show.
-#: Its first argument is the job's context: a :class:`~.context.JobContext` for the
-#: commands that run everywhere, a :class:`~.context.CommandContext` for the rest.
-Handler = Callable[[Any, Any, "str | None"], list[Feedback]]
+#: The context a handler takes (:class:`~.context.JobContext` or
+#: :class:`~.context.CommandContext`).
+C = TypeVar("C")
+#: The command object a parser makes and its handler runs.
+T = TypeVar("T")
+#: Runs the parsed command (``T``) on the engine's thread (or the CLI's), given its
+#: job's context (``C``): the feedback to show, and the line typed (None: a command a
+#: front end made, with nothing to echo).
+Handler = Callable[[C, T, "str | None"], list[Feedback]]
 
 
 TYPE_OPTIONS: tuple[Option, ...] = tuple((code, kind.title) for code, kind in KINDS.items())
@@ -88,10 +102,10 @@ def variable_completion(
     return complete
 
 
-def no_argument(step: Step) -> Callable[[str], Command]:
+def no_argument(step: Step) -> Callable[[str], Simple]:
     """The parser of a command that takes nothing."""
 
-    def parse(rest: str) -> Command:
+    def parse(rest: str) -> Simple:
         if rest:
             raise InputError(f"{step.value} takes no argument")
         return Simple(step)
@@ -110,19 +124,24 @@ def words_of(arguments: str) -> Hinter:
 
 
 @dataclass(frozen=True)
-class CommandSpec:
+class Spec(Generic[C, T]):
+    """What every entry holds; made as a :class:`CommandSpec` or an :class:`EngineSpec`,
+    which say the context its handler takes."""
+
     name: str
     arguments: str
     summary: str
-    parse: Callable[[str], Command]
-    handle: Handler
+    parse: Callable[[str], T]
+    handle: Handler[C, T]
     example: str = ""
     notes: tuple[str, ...] = ()  # more lines for ``help NAME``
     where: frozenset[Where] = AT_A_TERMINAL
     takes_variable: bool = False  # TYPE INDEX first: coloured, and P10 split as P 10
     complete: Completer = no_completion
     hint: Hinter | None = None  # None: the usage's words (:func:`words_of`)
-    types: tuple[type, ...] = field(default=())  # the command objects its parser makes
+    #: The command objects its parser makes (one at least): the registry finds the
+    #: entry of a command a front end made by them, and the handler is given only them.
+    types: tuple[type[T], ...] = field(default=())
     #: What the planner and the guards know of it: whether it writes, where it runs in
     #: a cell (:mod:`rac_console.commands.routing`).
     traits: Traits = field(default_factory=Traits)
@@ -133,6 +152,38 @@ class CommandSpec:
 
     def hint_for(self, args: list[str]) -> str:
         return (self.hint or words_of(self.arguments))(args)
+
+    def command_of(self, command: object) -> T:
+        """``command`` as its handler takes it (TypeError: this entry does not run it)."""
+        if isinstance(command, self.types):
+            return command
+        raise TypeError(f"{self.name} does not run {type(command).__name__}")
+
+
+@dataclass(frozen=True)
+class CommandSpec(Spec[JobContext, T]):
+    """A command whose handler takes any job's context: it runs wherever :attr:`where`
+    says, ``rac-console run`` and the command line included."""
+
+    def run(self, context: JobContext, command: object, line: str | None) -> list[Feedback]:
+        return self.handle(context, self.command_of(command), line)
+
+
+@dataclass(frozen=True)
+class EngineSpec(Spec[CommandContext, T]):
+    """A command whose handler takes an engine's context (the watch list, the files,
+    the target): the console's, the REPL's, the command line's ``watch``."""
+
+    def run(self, context: JobContext, command: object, line: str | None) -> list[Feedback]:
+        engine = context.engine_context()
+        if engine is None:  # its ``where`` says a place with no engine: a mistake
+            return [Message(f"{self.name!r} needs the console or the REPL", "error")]
+        return self.handle(engine, self.command_of(command), line)
+
+
+#: An entry of any command: each entry's own command type is checked where it is made,
+#: and :meth:`Spec.command_of` checks a command against it before its handler runs.
+AnySpec = CommandSpec[Any] | EngineSpec[Any]
 
 
 #: Words typed for a command that has another name here (suggested, never run).
@@ -158,13 +209,16 @@ class Registry:
     """The commands by name, in the order ``help`` lists them, and the handler of each
     kind of command object (a raw line, or F2's pause, made without a name)."""
 
-    def __init__(self, specs: Iterable[CommandSpec] = ()) -> None:
-        self._specs: dict[str, CommandSpec] = {}
-        self._by_type: dict[type, CommandSpec] = {}
+    def __init__(self, specs: Iterable[AnySpec] = ()) -> None:
+        self._specs: dict[str, AnySpec] = {}
+        self._by_type: dict[type, AnySpec] = {}
         for spec in specs:
             self.register(spec)
 
-    def register(self, spec: CommandSpec) -> CommandSpec:
+    def register(self, spec: AnySpec) -> AnySpec:
+        """Add ``spec`` (after the others: ``help`` lists it last)."""
+        if not spec.types:
+            raise ValueError(f"{spec.name}: its entry names no command type (types=...)")
         self._specs[spec.name] = spec
         for kind in spec.types:
             self._by_type.setdefault(kind, spec)
@@ -174,19 +228,19 @@ class Registry:
         spec = self._specs.pop(name)
         self._by_type = {k: s for k, s in self._by_type.items() if s is not spec}
 
-    def __iter__(self) -> Iterator[CommandSpec]:
+    def __iter__(self) -> Iterator[AnySpec]:
         return iter(list(self._specs.values()))
 
     def __contains__(self, name: object) -> bool:
         return name in self._specs
 
-    def get(self, name: str) -> CommandSpec | None:
+    def get(self, name: str) -> AnySpec | None:
         return self._specs.get(name)
 
     def names(self) -> list[str]:
         return list(self._specs)
 
-    def spec_of(self, command: Command) -> CommandSpec:
+    def spec_of(self, command: Command) -> AnySpec:
         """The entry that runs ``command`` (a command object carries no name)."""
         named = _named(command)
         spec = self._specs.get(named) if named is not None else self._by_type.get(type(command))
@@ -211,7 +265,8 @@ class Registry:
                 f"unknown command {word!r}: {guess}type help for the list, "
                 "or start a raw line with GET: or PUT:"
             )
-        return spec.parse(rest)
+        command: Command = spec.parse(rest)  # or an object of a command registered at run time
+        return command
 
     def help_lines(self, topic: str | None = None) -> list[str]:
         """The text of ``help`` or ``help COMMAND``."""
@@ -241,3 +296,30 @@ class Registry:
 
     def runs_in(self, where: Where) -> list[str]:
         return [spec.name for spec in self._specs.values() if where in spec.where]
+
+
+def in_order(specs: Iterable[AnySpec], words: Sequence[str]) -> list[AnySpec]:
+    """``specs`` in the order of ``words`` (the language's command words, as ``help``
+    lists them). ValueError naming every entry whose word is not there, every word
+    with no entry and every word given twice: a command added is listed where it is
+    declared, or the registry does not load."""
+    by_name: dict[str, AnySpec] = {}
+    twice = [word for n, word in enumerate(words) if word in words[:n]]
+    for spec in specs:
+        if spec.name in by_name:
+            twice.append(spec.name)
+        by_name[spec.name] = spec
+    unplaced = [name for name in by_name if name not in words]
+    missing = [word for word in words if word not in by_name]
+    problems = [
+        f"{what}: {', '.join(names)}"
+        for what, names in (
+            ("not among the command words (commands/language.py: COMMAND_WORDS)", unplaced),
+            ("command words with no entry", missing),
+            ("declared twice", twice),
+        )
+        if names
+    ]
+    if problems:
+        raise ValueError("the built-in commands: " + "; ".join(problems))
+    return [by_name[word] for word in words]

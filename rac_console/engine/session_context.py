@@ -5,6 +5,7 @@ list, no one to ask (a ``confirm`` target's write needs ``--yes``) and no poller
 from __future__ import annotations
 
 import time
+from typing import TYPE_CHECKING
 
 from ..commands.language import VarRef
 from ..commands.outcome import Outcome
@@ -12,6 +13,9 @@ from ..commands.target import Target
 from ..protocol import Variant
 from ..session import ConnectFailed, Session, TransportError
 from .writes import Confirm
+
+if TYPE_CHECKING:
+    from .context import CommandContext
 
 
 class SessionContext:
@@ -43,3 +47,7 @@ class SessionContext:
 
     def mark_failure(self, error: TransportError) -> None:
         """The outcome says it; no frame log."""
+
+    def engine_context(self) -> CommandContext | None:
+        """No engine: a command that needs one does not run here."""
+        return None

@@ -51,3 +51,28 @@ def simulated_banner(names: Sequence[str]) -> Text:
         ("SIMULATOR", "bold black on yellow"),
         f" {shown} {verb} playing a handshake, not controllers (--cell demo).",
     )
+
+
+def welcome_lines(
+    names: Sequence[str],
+    status: Status | None,
+    simulated: Sequence[str],
+    version: str,
+    next_key: str = "F8",
+) -> list[Text]:
+    """What the console says first: the cell and its simulated targets, or the one
+    target (the simulator marked, a controller's banner), then how to begin."""
+    from ..engine import SIMULATOR_NOTICE
+
+    lines: list[Text] = []
+    if len(names) > 1:
+        lines.append(cell_banner(names, next_key))
+        if simulated:
+            lines.append(simulated_banner(simulated))
+    elif status is not None and status.is_simulator:
+        lines.append(Text.assemble(("SIMULATOR", "bold black on yellow"), f" {SIMULATOR_NOTICE}."))
+    elif status is not None:
+        lines.append(live_banner(status))
+    begin = f"rac-console {version}: type help, or try watch P 0, watch IO 0-7, get S 1"
+    lines.append(Text(begin, style="dim"))
+    return lines

@@ -12,6 +12,8 @@ import re
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 
+from rich.text import Text
+
 from ..commands.language import is_raw_line
 from ..engine.commands import BUILTIN
 from ..engine.registry import Registry, Sources
@@ -96,6 +98,22 @@ def shown_candidates(candidates: list[Candidate]) -> tuple[list[Candidate], int]
         return candidates, 0
     shown = candidates[: WHOLE_LIST - 1]
     return shown, len(candidates) - len(shown)
+
+
+def completions_text(candidates: list[Candidate]) -> Text:
+    """The list under the command line: each candidate and what it means, aligned, and
+    how many more when the list is cut."""
+    shown, more = shown_candidates(candidates)
+    width = max(len(c.text) for c in shown)
+    text = Text()
+    for n, candidate in enumerate(shown):
+        if n:
+            text.append("\n")
+        text.append(f"{candidate.text:<{width}}", style="bold")
+        text.append(f"  {candidate.help}", style="dim")
+    if more:
+        text.append(f"\n… and {more} more: type a letter or two to narrow", style="italic")
+    return text
 
 
 def hint(text: str, registry: Registry = BUILTIN) -> str:

@@ -9,7 +9,7 @@ from typing import TYPE_CHECKING
 from rich.text import Text
 
 from ..protocol.errors import InputError
-from ..protocol.text import terminal_safe
+from ..protocol.text import counted, terminal_safe
 
 if TYPE_CHECKING:
     from ..protocol.request import RequestLine
@@ -72,3 +72,24 @@ class FrameFilter:
         if self.var is not None:
             return request is not None and request.names(*self.var)
         return self.needle in body.lower()
+
+
+TITLE = "Frames (→ sent, ← received)"
+FROZEN_TITLE = "Frames (FROZEN: F4 follows)"
+
+
+def log_title(
+    frozen: bool, hex_view: bool, typed: str, polls: bool, shown: tuple[int, int]
+) -> Text:
+    """The frame log's border title: frozen or following, the hex view, the filter as
+    typed and how many frames pass it (``shown`` of kept), whether polls are hidden."""
+    title = Text(FROZEN_TITLE if frozen else TITLE)
+    if hex_view:
+        title.append("  hex")
+    if typed:
+        add_filter_title(title, typed)
+    if typed or not polls:
+        title.append(f"  {shown[0]} of {counted(shown[1], 'frame')}")
+    if not polls:
+        title.append("  polls hidden (F3)")
+    return title

@@ -106,3 +106,33 @@ def frame_body(frame: Frame) -> str:
     else:
         notes.append(decoding(frame))
     return line + "   " + "  ".join(notes)
+
+
+#: Where the hex view puts each frame's bytes, by what the log drew last.
+HEX_PLACES = {
+    "beside": "beside its text, in one column",
+    "under": "on lines under its text (wider terminals put them beside)",
+    "mixed": "beside its text, or under it when the line is too long",
+    "none": "beside its text, or under it when both do not fit",
+}
+
+
+def hex_view_said(shown: bool, placement: str) -> str:
+    """What F7 says: where the bytes go now, or that they are hidden."""
+    return (
+        f"hex view: each frame's bytes {HEX_PLACES[placement]} (F7 hides them)"
+        if shown
+        else "hex view off"
+    )
+
+
+def frame_times_said(shown: bool) -> str:
+    if shown:
+        return "frame times: the time since the previous frame on each line"
+    return "frame times hidden (t in the frame log shows them)"
+
+
+def poll_frames_said(shown: bool) -> str:
+    if shown:
+        return "poll frames shown"
+    return "poll frames hidden (typed commands only; F3 shows them)"

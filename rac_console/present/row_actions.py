@@ -105,3 +105,15 @@ def toggle_command(var: VarRef, variant: Variant | None) -> tuple[Put, str] | No
         return None
     value, text = encode_value(var.kind, "off" if variant and variant.value else "on")
     return Put.of(var, value, text), line
+
+
+def toggle_refusal(var: VarRef, toggled: object, busy: bool, paused: bool) -> str | None:
+    """Why Space on a row sends nothing: not an IO bit, no value read yet, or the last
+    toggle not come back (it would toggle from a value already being replaced)."""
+    if toggled is None:
+        why = "is not an IO row" if var.kind.code != "IO" else "has no value read yet"
+        return f"Space toggles an IO bit: {var} {why}; nothing sent"
+    if busy:
+        wait = " (polling is paused: F2 resumes it)" if paused else ""
+        return f"{var}: the last toggle has not come back yet{wait}; nothing sent"
+    return None

@@ -392,3 +392,22 @@ def status_text(
                 forms[i] += 1
                 break
     return _joined([fields[i] for i in kept], [forms[i] for i in kept])
+
+
+def writes_refused(status: Status | None) -> bool:
+    """True on a read-only target (``--read-only``, or a profile's ``writes``)."""
+    return status is not None and (status.read_only or status.writes == "read-only")
+
+
+#: The command line's placeholder: examples that work on the target. A write is
+#: suggested on the built-in simulator only: on a controller, the first thing a newcomer
+#: reads is a read.
+PLACEHOLDER = "get P 1 · put IO 20 on · watch IO 0-7 · help"
+READ_ONLY_PLACEHOLDER = "get P 1 · watch IO 0-7 · help"
+
+
+def placeholder_for(status: Status | None) -> str:
+    """The examples for this target (the reads alone until its status is known)."""
+    if status is None or writes_refused(status) or not status.is_simulator:
+        return READ_ONLY_PLACEHOLDER
+    return PLACEHOLDER

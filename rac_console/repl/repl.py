@@ -40,6 +40,7 @@ from ..engine import (
 from ..engine.cell import Cell
 from ..engine.events import Event
 from ..present.banner import live_banner
+from ..present.batches import BatchReader
 from ..present.cell_view import by_target, cell_targets
 from ..present.cells import age_text, status_cell, value_cell
 from ..present.completion import WHOLE_LIST, hint
@@ -70,7 +71,7 @@ LIVE_REFRESH_SECONDS = 0.25
 DRAIN_SECONDS = 0.1
 
 
-class Repl:
+class Repl(BatchReader):
     """Runs typed lines on the engine and prints what the outbox brings back."""
 
     def __init__(
@@ -182,29 +183,37 @@ class Repl:
     def drain(self) -> None:
         """Take everything the targets published: state first, then events in order."""
         for name, batch in self.cell.drain():
-            self._take(name, batch)
+            self.read(name, batch)
 
-    def _take(self, name: str | None, batch: Batch) -> None:
-        if name is not None:
-            if batch.status is not None:
-                self.statuses[name] = batch.status
-            batch.apply_rows(self.rows_of[name])
-        for event in batch.events:
-            if isinstance(event, Result):
-                waiter = self._waiting.pop(event.seq, None)
-                if waiter is not None and name is not None:  # read once the line's answer is in
-                    self._ran_on[event.seq] = name
-                if waiter is not None and not waiter.done():
-                    waiter.set_result(event)
-                else:
-                    self._show_result(event, name)
-            elif isinstance(event, ConfirmWrite):
-                by = None if self.cell.single else name
-                task = asyncio.get_running_loop().create_task(self.confirm(event, by))
-                self._questions.add(task)
-                task.add_done_callback(self._questions.discard)
-            else:
-                self._echo(event, name)
+    def take_status(self, target: str, status: Status) -> None:
+        self.statuses[target] = status
+
+    def take_rows(self, target: str, batch: Batch) -> None:
+        batch.apply_rows(self.rows_of[target])
+
+    def take_result(self, target: str | None, result: Result) -> None:
+        waiter = self._waiting.pop(result.seq, None)
+        if waiter is not None and target is not None:  # read once the line's answer is in
+            self._ran_on[result.seq] = target
+        if waiter is not None and not waiter.done():
+            waiter.set_result(result)
+        else:
+            self._show_result(result, target)
+
+    def take_confirm(self, target: str | None, question: ConfirmWrite) -> None:
+        by = None if self.cell.single else target
+        task = asyncio.get_running_loop().create_task(self.confirm(question, by))
+        self._questions.add(task)
+        task.add_done_callback(self._questions.discard)
+
+    def take_alert(self, target: str | None, alert: Alert) -> None:
+        self._echo(alert, target)
+
+    def take_note(self, target: str | None, note: Note) -> None:
+        self._echo(note, target)
+
+    def take_frame(self, target: str | None, frame: Frame) -> None:
+        self._echo(frame, target)
 
     async def confirm(self, question: ConfirmWrite, target: str | None = None) -> None:
         """A write on a ``confirm`` target: ``Write I10: 14 → 15 on Cell 3? [y/N]``; only

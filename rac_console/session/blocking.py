@@ -1,9 +1,9 @@
 """The session driver: one blocking socket, driven by the thread that owns the session.
 
-Over 450 lines on purpose: this is the only client code that touches a socket, and
-connecting, the one exchange, the resend of a GET, the idle check, keepalive and the
-abort of a timed-out PUT all share the socket's state; split, they would share it
-through attributes of one another.
+Connecting, the one exchange, the resend of a GET, the idle check and the abort of a
+timed-out PUT share the socket's state, and live here; what is done to the socket below
+the protocol (its options, asking it without blocking, resetting it, the words for a
+failure) is :mod:`.sockets`, which holds no state.
 
 The protocol allows one request in flight, so a request is ``sendall`` then ``recv``
 until the reply: no event loop between the bytes and the caller. The rules live in
@@ -20,14 +20,8 @@ answer to a later one. Before each request the socket is asked (one ``poll``, or
 
 from __future__ import annotations
 
-import contextlib
-import errno
-import logging
-import os
 import select
 import socket
-import struct
-import sys
 import time
 from collections.abc import Callable
 from typing import Any
@@ -35,14 +29,15 @@ from typing import Any
 from ..protocol import RequestLine, Variant, VarKind, format_variant
 from ..protocol.request import Request, get_for, put_for, raw_request
 from ..protocol.text import escape_bytes
-from .machine import SessionMachine, Verdict, bad_reply_message
+from . import sockets
+from .machine import SessionMachine, Verdict, no_reply
+from .observers import Observers
+from .sockets import READ_SIZE
 from .types import (
     DEFAULT_PORT,
     DEFAULT_TIMEOUT,
     MAX_REPLY_LINE,
-    BadReply,
     ConnectFailed,
-    ConnectProblem,
     Disconnected,
     Frame,
     FrameObserver,
@@ -54,28 +49,17 @@ from .types import (
     TransportError,
 )
 
-logger = logging.getLogger(__name__)
-
 #: A Reply made straight from its fields' tuple (the named tuple's own ``__new__`` is
 #: one more Python call, on every exchange).
 _new_reply = tuple.__new__
 
 _POLL = getattr(select, "poll", None)  # POSIX; select.select serves where it is missing
-READ_SIZE = 65536
 
 #: Once a peer has sent a line nobody asked for, each request first waits this long
 #: (seconds) after the last reply for the socket to stay quiet; each further stray doubles
 #: the wait, up to MAX_SETTLE. A well-behaved controller never pays it.
 SETTLE = 0.002
 MAX_SETTLE = 0.05
-
-#: TCP keepalive: an idle connection is probed after KEEPALIVE_IDLE seconds of silence,
-#: every KEEPALIVE_INTERVAL seconds, and given up after KEEPALIVE_COUNT unanswered
-#: probes: a controller that vanished (rebooted while the cable was out) is known dead
-#: about 11 s into a quiet spell, not at the next command.
-KEEPALIVE_IDLE = 5
-KEEPALIVE_INTERVAL = 2
-KEEPALIVE_COUNT = 3
 
 
 class Session:
@@ -100,9 +84,7 @@ class Session:
         self.connect_timeout = connect_timeout if connect_timeout is not None else timeout
         self.last_rtt: float | None = None
         self._machine = SessionMachine(max_line)
-        self._frame_observers: list[FrameObserver] = []
-        self._state_observers: list[StateObserver] = []
-        self._resend_observers: list[Callable[[str], None]] = []
+        self._observers = Observers()
         self._state: State = "closed"
         self._sock: socket.socket | None = None
         self._poll: Any = None
@@ -123,30 +105,22 @@ class Session:
         return self._state
 
     def add_frame_observer(self, observer: FrameObserver) -> None:
-        self._frame_observers.append(observer)
+        self._observers.frames.append(observer)
 
     def remove_frame_observer(self, observer: FrameObserver) -> None:
-        self._frame_observers.remove(observer)
+        self._observers.frames.remove(observer)
 
     def add_state_observer(self, observer: StateObserver) -> None:
-        self._state_observers.append(observer)
+        self._observers.states.append(observer)
 
     def add_resend_observer(self, observer: Callable[[str], None]) -> None:
         """Told why, when a GET is sent again on a fresh connection (see :meth:`exchange`)."""
-        self._resend_observers.append(observer)
-
-    def _publish(self, frame: Frame) -> None:
-        for observer in self._frame_observers:
-            try:
-                observer(frame)
-            except Exception:  # an observer (a log, a recorder) must never break the session
-                logger.exception("frame observer failed")
+        self._observers.resends.append(observer)
 
     def _set_state(self, state: State) -> None:
         if state != self._state:
             self._state = state
-            for observer in self._state_observers:
-                observer(state)
+            self._observers.state(state)
 
     # ------------------------------------------------------------ requests
 
@@ -187,8 +161,7 @@ class Session:
                 raise
             if self._interrupted or self._cancel_requested:
                 raise
-            for observer in self._resend_observers:
-                observer(str(exc))
+            self._observers.resend(str(exc))
         return self._exchange_once(request, poll, cancelled, observe)
 
     def _exchange_once(
@@ -227,7 +200,7 @@ class Session:
         # Both clocks read before sendall: after it the thread may run again only once
         # the reply is in (the GIL, the scheduler), and the frame must say when it left.
         # (The wall clock only when someone keeps frames: they alone are stamped.)
-        observed = observe and bool(self._frame_observers)
+        observed = observe and bool(self._observers.frames)
         sent_at = time.perf_counter()
         sent_time = time.time() if observed else 0.0
         try:
@@ -239,10 +212,10 @@ class Session:
         except OSError as exc:
             self._drop()
             raise Disconnected(
-                f"the connection failed while sending: {_reason(exc)}", before_reply=True
+                f"the connection failed while sending: {sockets.reason_of(exc)}", before_reply=True
             ) from None
         if observed:
-            self._publish(Frame(sent_time, "tx", data, poll=poll, request=request.line))
+            self._observers.publish(Frame(sent_time, "tx", data, poll=poll, request=request.line))
         else:  # the usual case, inlined: the whole good reply in the first read
             try:
                 chunk = sock.recv(READ_SIZE)
@@ -304,14 +277,14 @@ class Session:
         remaining = deadline - time.perf_counter()
         if remaining <= 0:
             raise self._timed_out()
-        self._set_timeout(sock, remaining)
+        sockets.set_timeout(sock, remaining, self._kernel_timeout)
         try:
             return sock.recv(READ_SIZE)
         except OSError as exc:
             raise self._read_failed(exc) from None
         finally:
             if self._sock is sock:
-                self._set_timeout(sock, self.timeout)
+                sockets.set_timeout(sock, self.timeout, self._kernel_timeout)
 
     def _read_failed(self, exc: OSError) -> TransportError:
         """What a failed read means: no reply in time (BlockingIOError: SO_RCVTIMEO ran
@@ -320,7 +293,7 @@ class Session:
             return self._timed_out()
         if isinstance(exc, ConnectionError):
             return self._lost()
-        return self._lost(f"the connection failed: {_reason(exc)}")
+        return self._lost(f"the connection failed: {sockets.reason_of(exc)}")
 
     def _conclude(
         self,
@@ -334,49 +307,16 @@ class Session:
     ) -> Reply:
         answer = verdict.answer
         response = verdict.response
-        if answer is not None and observers:
-            self._publish(
-                Frame(
-                    arrived,
-                    "rx",
-                    answer + b"\r",
-                    rtt,
-                    poll=poll,
-                    response=response,
-                    problem=verdict.problem,
-                    request=asked,
-                )
-            )
+        self._observers.read(verdict, arrived, rtt, poll, asked, observers)
         if verdict.strays:
             self._saw_stray()
-        for stray in verdict.strays:
-            self._publish(Frame(arrived, "rx", stray, unsolicited=True))
-        if verdict.too_long is not None:
-            unasked = answer is not None  # the reply came: the tail answers nothing
-            self._publish(
-                Frame(
-                    arrived,
-                    "rx",
-                    verdict.too_long,
-                    unsolicited=unasked,
-                    request=None if unasked else asked,
-                )
-            )
         if verdict.drop:
             self._drop()
-        if verdict.problem is not None:
-            if answer is None:  # too long: the tail is in the log
-                raise BadReply(verdict.problem, verdict.too_long)
-            raise BadReply(bad_reply_message(answer, verdict.problem), answer)
-        if answer is None or response is None:
-            raise Disconnected("the connection was dropped: a line nobody asked for came")
+        if verdict.problem is not None or answer is None or response is None:
+            raise no_reply(verdict)
         self._replied_at = now
         self.last_rtt = rtt
         return Reply(answer, response, rtt)
-
-    def _set_timeout(self, sock: socket.socket, seconds: float) -> None:
-        if not (self._kernel_timeout and _set_kernel_timeout(sock, seconds)):
-            sock.settimeout(seconds)
 
     def _timed_out(self) -> RequestTimeout:
         # Aborted, not closed: a graceful close lets the kernel keep re-sending the
@@ -390,8 +330,7 @@ class Session:
         fragment = self._machine.pending
         if fragment:
             in_flight = self._machine.in_flight  # the request this fragment began to answer
-            asked = in_flight.line if in_flight is not None else None
-            self._publish(Frame(time.time(), "rx", fragment, request=asked))
+            self._observers.cut_short(fragment, in_flight.line if in_flight is not None else None)
         self._drop(abort=True)  # nothing more of ours may reach a peer that dropped us
         detail = f" after '{escape_bytes(fragment)}'" if fragment else ""
         return Disconnected(f"{message}{detail}", fragment or None, before_reply=not fragment)
@@ -403,23 +342,11 @@ class Session:
         waiting up to ``timeout`` seconds for them (a diagnostic: tests use it to know a
         stray line has landed before the next request)."""
         sock = self._sock
-        if sock is None:
-            return False
-        try:
-            return bool(select.select((sock,), (), (), timeout)[0])
-        except (OSError, ValueError):
-            return True
+        return sock is not None and sockets.readable(sock, timeout)
 
     def _peer_spoke(self, sock: socket.socket) -> bool:
         """True when bytes, EOF or an error wait on the connection: one syscall, no wait."""
-        if self._machine.holds_stray():
-            return True
-        try:
-            if self._poll is not None:
-                return bool(self._poll.poll(0))
-            return bool(select.select((sock,), (), (), 0)[0])
-        except (OSError, ValueError):
-            return True  # a socket that cannot be asked cannot be trusted
+        return self._machine.holds_stray() or sockets.readable(sock, 0.0, self._poll)
 
     def _saw_stray(self) -> None:
         """A line nobody asked for: settle before each request from now on, longer each time."""
@@ -429,14 +356,13 @@ class Session:
         """Log what waits as unsolicited and drop the connection: what waited (strays
         empty: the peer closed it, with nothing said); None when it was only the LF of a
         CRLF peer's last reply, consumed here, and the connection is kept."""
-        data, still_open = _read_waiting(sock)
+        data, still_open = sockets.read_waiting(sock)
         verdict = self._machine.waiting_verdict(data, still_open)
         if not verdict.drop:
             return None
         if verdict.strays:
             self._saw_stray()
-        for line in verdict.strays:
-            self._publish(Frame(time.time(), "rx", line, unsolicited=True))
+        self._observers.strays(verdict.strays)
         self._drop()
         return verdict
 
@@ -458,20 +384,17 @@ class Session:
         except (OSError, UnicodeError, ValueError) as exc:  # TimeoutError is an OSError
             self._set_state("closed")
             hint = f" ({self.unreachable_hint})" if self.unreachable_hint else ""
+            why, problem = sockets.reason_of(exc), sockets.problem_of(exc)
             raise ConnectFailed(
-                f"cannot connect to {self.address}: {_reason(exc)}{hint}", problem=_problem(exc)
+                f"cannot connect to {self.address}: {why}{hint}", problem=problem
             ) from None
-        with contextlib.suppress(OSError):
-            sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
-        _set_keepalive(sock)
-        self._kernel_timeout = _set_kernel_timeout(sock, self.timeout)
-        sock.settimeout(None if self._kernel_timeout else self.timeout)
+        self._kernel_timeout = sockets.prepare(sock, self.timeout)
         self._sock = sock
         self._machine.reset()
         if _POLL is not None:
             self._poll = _POLL()
             self._poll.register(sock, select.POLLIN)
-        if self._peer_spoke(sock) and _closed_at_once(sock):
+        if self._peer_spoke(sock) and sockets.ended(sock) is not None:
             # Closed by the peer as soon as it was made: say so now rather than send into it.
             self._drop()
             raise Disconnected("the controller closed the connection as soon as it was made")
@@ -484,10 +407,7 @@ class Session:
         sock, self._sock, self._poll = self._sock, None, None
         self._machine.reset()
         if sock is not None:
-            if abort:
-                _discard_unsent(sock)
-            with contextlib.suppress(OSError):
-                sock.close()
+            sockets.close(sock, abort)
         self._set_state("closed")
 
     def check_idle(self) -> str | None:
@@ -498,20 +418,9 @@ class Session:
         sock = self._sock
         if sock is None or not self._peer_spoke(sock) or self._machine.holds_stray():
             return None
-        timeout = sock.gettimeout()
-        try:
-            sock.setblocking(False)
-            try:
-                if sock.recv(1, socket.MSG_PEEK):
-                    return None  # a stray line: the next request logs it
-                reason = "the controller closed the connection"
-            finally:
-                sock.settimeout(timeout)
-        except BlockingIOError:
-            return None
-        except OSError as exc:
-            reason = f"the connection failed: {_reason(exc)}"
-        self._drop()
+        reason = sockets.ended(sock)  # None: a stray line, which the next request logs
+        if reason is not None:
+            self._drop()
         return reason
 
     def cancel(self) -> None:
@@ -520,8 +429,7 @@ class Session:
         self._cancel_requested = True
         sock = self._sock
         if sock is not None:
-            with contextlib.suppress(OSError):
-                sock.shutdown(socket.SHUT_RDWR)
+            sockets.shut(sock)
 
     def interrupt(self) -> None:
         """Wake a request blocked on this session from another thread (it then fails
@@ -538,163 +446,3 @@ class Session:
 
     def __exit__(self, *exc_info: object) -> None:
         self.close()
-
-
-def _set_kernel_timeout(sock: socket.socket, seconds: float) -> bool:
-    """Put the send and receive timeouts in the kernel (SO_SNDTIMEO, SO_RCVTIMEO), so a
-    blocking ``recv`` is one system call instead of Python's poll-then-recv. False where
-    the options cannot be set: the caller then uses Python's socket timeout."""
-    try:
-        if sys.platform == "win32":
-            value = struct.pack("=L", max(1, round(seconds * 1000)))  # a DWORD of ms
-        else:
-            whole = int(seconds)
-            value = struct.pack("@ll", whole, max(1, int((seconds - whole) * 1e6)))
-        sock.setsockopt(socket.SOL_SOCKET, socket.SO_RCVTIMEO, value)
-        sock.setsockopt(socket.SOL_SOCKET, socket.SO_SNDTIMEO, value)
-    except (OSError, AttributeError, struct.error, OverflowError):
-        return False
-    return True
-
-
-def _set_keepalive(sock: socket.socket) -> None:
-    """TCP keepalive with an idle time of seconds (the systems' default is two hours),
-    on Linux, macOS and Windows; left at the system's where an option is missing."""
-    with contextlib.suppress(OSError, AttributeError, ValueError):
-        sock.setsockopt(socket.SOL_SOCKET, socket.SO_KEEPALIVE, 1)
-        if sys.platform == "win32":
-            ms = (1, KEEPALIVE_IDLE * 1000, KEEPALIVE_INTERVAL * 1000)
-            sock.ioctl(socket.SIO_KEEPALIVE_VALS, ms)  # type: ignore[attr-defined]
-            return
-        idle = getattr(socket, "TCP_KEEPIDLE", None) or getattr(socket, "TCP_KEEPALIVE", None)
-        for option, value in (
-            (idle, KEEPALIVE_IDLE),
-            (getattr(socket, "TCP_KEEPINTVL", None), KEEPALIVE_INTERVAL),
-            (getattr(socket, "TCP_KEEPCNT", None), KEEPALIVE_COUNT),
-        ):
-            if option is not None:
-                sock.setsockopt(socket.IPPROTO_TCP, option, value)
-
-
-def _discard_unsent(sock: socket.socket) -> None:
-    """SO_LINGER on, time 0: the close that follows resets the connection."""
-    layout = "=HH" if sys.platform == "win32" else "ii"
-    with contextlib.suppress(OSError, struct.error):
-        sock.setsockopt(socket.SOL_SOCKET, socket.SO_LINGER, struct.pack(layout, 1, 0))
-
-
-def _closed_at_once(sock: socket.socket) -> bool:
-    """True when a fresh connection already reads EOF or an error (peeked, not taken)."""
-    timeout = sock.gettimeout()
-    try:
-        sock.setblocking(False)
-        try:
-            return sock.recv(1, socket.MSG_PEEK) == b""
-        finally:
-            sock.settimeout(timeout)
-    except BlockingIOError:
-        return False
-    except OSError:
-        return True
-
-
-def _read_waiting(sock: socket.socket) -> tuple[bytes, bool]:
-    """What waits on ``sock``, read without blocking for the log, and whether the
-    connection is still open (the read stopped for want of bytes, not at EOF or error)."""
-    chunks: list[bytes] = []
-    limit = MAX_REPLY_LINE
-    still_open = False
-    timeout = sock.gettimeout()
-    try:
-        sock.setblocking(False)
-        size = 0
-        while size < limit:
-            chunk = sock.recv(min(READ_SIZE, limit - size))
-            if not chunk:
-                break  # EOF
-            chunks.append(chunk)
-            size += len(chunk)
-    except BlockingIOError:
-        still_open = True  # all read
-    except OSError:
-        pass  # reset: drop it all the same
-    finally:
-        with contextlib.suppress(OSError):
-            sock.settimeout(timeout)
-    return b"".join(chunks), still_open
-
-
-#: errno values (POSIX and WinSock) of a host or network that cannot be reached.
-_UNREACHABLE = {
-    getattr(errno, "EHOSTUNREACH", 113),
-    getattr(errno, "ENETUNREACH", 101),
-    getattr(errno, "EHOSTDOWN", 112),
-    getattr(errno, "ENETDOWN", 100),
-    10065,  # WSAEHOSTUNREACH
-    10051,  # WSAENETUNREACH
-    10064,  # WSAEHOSTDOWN
-    10050,  # WSAENETDOWN
-}
-
-
-def _problem(exc: BaseException) -> ConnectProblem:
-    """Why a connection could not be opened, in a word, the same on every system."""
-    if isinstance(exc, socket.gaierror | UnicodeError | ValueError):
-        return "unknown host"
-    if isinstance(exc, ConnectionRefusedError):
-        return "refused"
-    if isinstance(exc, TimeoutError):
-        return "timed out"
-    if isinstance(exc, OSError) and (
-        exc.errno in _UNREACHABLE or getattr(exc, "winerror", None) in _UNREACHABLE
-    ):
-        return "unreachable"
-    return "failed"
-
-
-#: The words for the failures a user can act on, keyed by errno and WinSock code, so
-#: Linux, macOS and Windows say them alike: os.strerror knows no WinSock code (it says
-#: "Unknown error" for 10061), and each system words its own codes its own way.
-_WORDS = {
-    errno.ECONNREFUSED: "Connection refused",
-    10061: "Connection refused",  # WSAECONNREFUSED
-    errno.ETIMEDOUT: "timed out",
-    10060: "timed out",  # WSAETIMEDOUT
-    errno.EHOSTUNREACH: "No route to host",
-    10065: "No route to host",  # WSAEHOSTUNREACH
-    errno.ENETUNREACH: "Network is unreachable",
-    10051: "Network is unreachable",  # WSAENETUNREACH
-}
-
-#: getaddrinfo's codes for a name that does not exist: glibc and macOS (EAI_NONAME,
-#: EAI_NODATA) and WinSock (WSAHOST_NOT_FOUND 11001, WSANO_DATA 11004). They are a
-#: table of their own: macOS's EAI_NONAME is 8, an errno too.
-_NAME_NOT_FOUND = {
-    socket.EAI_NONAME,
-    getattr(socket, "EAI_NODATA", socket.EAI_NONAME),
-    11001,  # WSAHOST_NOT_FOUND
-    11004,  # WSANO_DATA
-}
-
-
-def _reason(exc: BaseException) -> str:
-    """Why a connection failed, in words: never 'Unknown error -2', nor Windows'
-    'Unknown error' for a WinSock code (a table first, then the exception's own text)."""
-    if isinstance(exc, TimeoutError):
-        return "timed out"
-    if isinstance(exc, socket.gaierror):
-        if exc.errno in _NAME_NOT_FOUND:
-            return "host not found"
-        if exc.strerror:
-            return exc.strerror  # "Temporary failure in name resolution"
-    elif isinstance(exc, OSError):
-        for code in (getattr(exc, "winerror", None), exc.errno):
-            if code in _WORDS:
-                return _WORDS[code]
-        if exc.strerror:
-            return exc.strerror  # the system's own words for this exception
-        if exc.errno and exc.errno > 0:
-            return os.strerror(exc.errno)
-    if isinstance(exc, UnicodeError | ValueError):
-        return "not a valid host name"
-    return str(exc) or type(exc).__name__

@@ -23,8 +23,9 @@ from ..commands.check import CheckReport, Problem, StepName, StepResult
 from ..protocol import describe_hresult, kind_of
 from ..protocol.request import get_for
 from ..protocol.text import endpoint, escape_bytes
-from .blocking import Session, _reason
+from .blocking import Session
 from .endpoints import RESOLVE_SECONDS
+from .sockets import reason_of
 from .types import (
     BadReply,
     ConnectFailed,
@@ -130,7 +131,7 @@ def _resolve(host: str, within: float, done: list[StepResult]) -> list[str]:
     except (OSError, UnicodeError, ValueError) as exc:
         busy = isinstance(exc, socket.gaierror) and exc.errno in _NAME_SERVER_BUSY
         problem: Problem = "dns timeout" if busy else "unknown host"
-        raise _failed("resolve", started, f"{host}: {_reason(exc)}", problem) from None
+        raise _failed("resolve", started, f"{host}: {reason_of(exc)}", problem) from None
     seconds = time.perf_counter() - started
     if _is_address(host):
         detail = f"{host} is an IP address: nothing to look up"

@@ -15,6 +15,7 @@ from ..protocol import FrameTooLong, LineDecoder, ProtocolError, Response
 from ..protocol.messages import decode_frame, parse_response
 from ..protocol.request import ReplyCheck, Request
 from ..protocol.text import escape_bytes
+from .types import BadReply, Disconnected, TransportError
 
 #: Bytes of a bad reply quoted in a message; the whole reply is in the log and --record.
 QUOTED_BYTES = 120
@@ -188,6 +189,17 @@ def bad_reply_message(line: bytes, problem: str) -> str:
     if len(problem) > QUOTED_BYTES:  # a parser's message may quote the reply too
         problem = problem[:QUOTED_BYTES] + "…"
     return f"bad reply '{quoted(line)}': {problem}"
+
+
+def no_reply(verdict: Verdict) -> TransportError:
+    """Why the read that ended a request's wait gives it no reply: the answer failed its
+    check, a line grew too long (its tail is in the log), or a line nobody asked for
+    dropped the connection."""
+    if verdict.problem is None:
+        return Disconnected("the connection was dropped: a line nobody asked for came")
+    if verdict.answer is None:  # too long: the tail is in the log
+        return BadReply(verdict.problem, verdict.too_long)
+    return BadReply(bad_reply_message(verdict.answer, verdict.problem), verdict.answer)
 
 
 def quoted(frame: bytes) -> str:

@@ -140,16 +140,16 @@ class SimulatedController:
         if reply is not None:
             return reply, False
         if len(line) + 1 > MAX_REQUEST:
-            return _reply(E_INVALIDRCVPACKET), True
+            return code_reply(E_INVALIDRCVPACKET), True
         try:
             text = line.decode("ascii")
         except UnicodeDecodeError:
-            return _reply(E_INVALIDCOMMAND), False
+            return code_reply(E_INVALIDCOMMAND), False
         self._keep = False
         try:
             reply = self._answer(text.lstrip(" \t")).encode("ascii") + b"\r"
         except Exception:  # a bug here must cost one answer, never the session
-            return _reply(E_UNEXPECTED), False
+            return code_reply(E_UNEXPECTED), False
         if self._keep and self._own_values():
             if len(self._replies) >= MAX_CACHED:
                 self.forget()
@@ -233,7 +233,8 @@ def _code(code: int) -> str:
     return str(code - 2**32 if code >= 2**31 else code)
 
 
-def _reply(code: int) -> bytes:
+def code_reply(code: int) -> bytes:
+    """A reply that is a result code alone, with its CR: what a request that failed gets."""
     return _code(code).encode("ascii") + b"\r"
 
 

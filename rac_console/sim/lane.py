@@ -21,21 +21,30 @@ import contextlib
 import select
 import socket
 import time
-from typing import TYPE_CHECKING
+from typing import Protocol
 
 from ..protocol.hresult import E_INVALIDRCVPACKET
-from .controller import _reply
-from .session import READ_SIZE, WRITE_BATCH, Owed, SimSession
+from .controller import code_reply
+from .notices import Notices
+from .session import READ_SIZE, WRITE_BATCH, Host, Owed, SimSession
 
-if TYPE_CHECKING:
-    from .server import SimulatorServer
+
+class LaneHost(Host, Protocol):
+    """What the lane needs of its server (:class:`~.server.SimulatorServer`, which
+    imports this module) beyond what a session does."""
+
+    notices: Notices
+
+    @property
+    def plain(self) -> bool: ...
+    def adopt(self, session: SimSession, conn: socket.socket) -> None: ...
 
 
 class FastLane:
     """Sessions on an epoll set of their own, whose descriptor the loop watches."""
 
     def __init__(
-        self, server: SimulatorServer, loop: asyncio.AbstractEventLoop, epoll: select.epoll
+        self, server: LaneHost, loop: asyncio.AbstractEventLoop, epoll: select.epoll
     ) -> None:
         self._server = server
         self._loop = loop
@@ -43,7 +52,7 @@ class FastLane:
         self._sessions: dict[int, tuple[SimSession, socket.socket]] = {}  # by descriptor
 
     @classmethod
-    def open(cls, server: SimulatorServer, loop: asyncio.AbstractEventLoop) -> FastLane | None:
+    def open(cls, server: LaneHost, loop: asyncio.AbstractEventLoop) -> FastLane | None:
         """A lane on ``loop``; None without epoll, or on a loop that cannot watch a
         descriptor (Windows' proactor)."""
         if not hasattr(select, "epoll"):
@@ -174,7 +183,7 @@ class FastLane:
             if not self._send(session, sock, b"".join(replies), lines[n:], too_long, close):
                 return
         if too_long and not close:
-            if not self._send(session, sock, _reply(E_INVALIDRCVPACKET), close=True):
+            if not self._send(session, sock, code_reply(E_INVALIDRCVPACKET), close=True):
                 return
             close = True
         if close:

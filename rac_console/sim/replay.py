@@ -49,7 +49,7 @@ from ..protocol.hresult import (
     E_UNEXPECTED,
 )
 from ..protocol.text import terminal_safe
-from .controller import MAX_REQUEST, _reply, read_request
+from .controller import MAX_REQUEST, code_reply, read_request
 
 END_MODES = ("hold", "cycle")
 DEFAULT_END = "hold"
@@ -360,29 +360,29 @@ class ReplayController:
         """The reply frame (CR included) to one request line, and whether to close."""
         self.requests += 1
         if len(line) + 1 > MAX_REQUEST:
-            return _reply(E_INVALIDRCVPACKET), True
+            return code_reply(E_INVALIDRCVPACKET), True
         try:
             return self._answer(line.decode("ascii")), False
         except UnicodeDecodeError:
-            return _reply(E_INVALIDCOMMAND), False
+            return code_reply(E_INVALIDCOMMAND), False
         except Exception:  # a bug here must cost one answer, never the session
-            return _reply(E_UNEXPECTED), False
+            return code_reply(E_UNEXPECTED), False
 
     def _answer(self, text: str) -> bytes:
         request = read_request(text)
         if request is None:
-            return _reply(E_INVALIDCOMMAND)
+            return code_reply(E_INVALIDCOMMAND)
         command, kind, index, parameter = request
         key = (kind.code, index)
         if command == "PUT":
             self._say("put", key, "refused (E_ACCESSDENIED): a replay is read-only")
-            return _reply(READ_ONLY)
+            return code_reply(READ_ONLY)
         if parameter.strip(" \t"):
-            return _reply(E_INVALIDCOMMAND)
+            return code_reply(E_INVALIDCOMMAND)
         replies = self.recording.answers.get(key)
         if replies is None:
             self._say("unrecorded", key, "not in the recording: answered E_NOTIMPL")
-            return _reply(NOT_RECORDED)
+            return code_reply(NOT_RECORDED)
         n = self._next.get(key, 0)
         if n == len(replies):  # past the last answer
             n = 0 if self.end == "cycle" else n - 1

@@ -34,10 +34,10 @@ import itertools
 import os
 import socket
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 
 from ..protocol.hresult import E_INVALIDARG, E_INVALIDCOMMAND
-from .controller import SimulatedController, _reply
+from .controller import SimulatedController, code_reply
 from .faults import FaultPlan, FaultSettings
 from .lane import FastLane
 from .notices import Notices
@@ -108,7 +108,7 @@ class SimulatorServer:
         self.idle_timeout = idle_timeout
         self.control_lines = control
         self.notices = Notices(notify or _nobody, schedule=self._later)
-        self._numbers = itertools.count(1)
+        self.numbers: Iterator[int] = itertools.count(1)  # each new session's number
         self._sockets: list[socket.socket] = []
         self._accepting: list[asyncio.Task[None]] = []
         self._connecting: set[asyncio.Task[None]] = set()
@@ -168,11 +168,11 @@ class SimulatorServer:
             try:
                 self.set_faults(self.plan.settings.updated(command[4:]))
             except ValueError:
-                return _reply(E_INVALIDARG)
+                return code_reply(E_INVALIDARG)
             return b"0\r"
         if command.upper() == "GET:":
             return b"0,8," + self.plan.settings.describe().encode("ascii") + b"\r"
-        return _reply(E_INVALIDCOMMAND)
+        return code_reply(E_INVALIDCOMMAND)
 
     # ------------------------------------------------------------- serving
 
@@ -252,6 +252,11 @@ class SimulatorServer:
         except OSError as exc:  # that client only (epoll out of memory, say)
             conn.close()
             self.notices.note("accept", f"cannot take a client: {_reason(exc)}")
+
+    def forget(self, session: SimSession) -> None:
+        """A session whose connection is gone: neither open nor being shed any more."""
+        self.sessions.discard(session)
+        self._shedding.discard(session)
 
     def adopt(self, session: SimSession, conn: socket.socket) -> None:
         """A transport for a session leaving the fast lane (``SimSession.hand_over``)."""

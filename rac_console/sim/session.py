@@ -13,7 +13,9 @@ own, so it can land while later requests are in flight.
 On Linux a session starts in the server's :class:`~.lane.FastLane`, with no transport:
 the lane serves the plain path itself and hands the session over (``adopt``) with what
 it still owes when it needs more than that: faults, a transcript, a client that does
-not read its replies.
+not read its replies. What a session needs of its server and of the lane is said here
+(:class:`Host`, :class:`Lane`): the server imports the lane and this module, the lane
+this module, and this module neither of them.
 
 A session reads at most ``READ_SIZE`` bytes at a time, and stops reading while its
 client leaves more than ``WRITE_HIGH`` bytes of replies unread, or while its fault
@@ -26,17 +28,15 @@ from __future__ import annotations
 import asyncio
 import socket
 import time
+from collections.abc import Iterator
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import Protocol
 
 from ..protocol import FrameTooLong, LineDecoder
 from ..protocol.hresult import E_INVALIDRCVPACKET
-from .controller import MAX_REQUEST, _reply
-from .faults import EXTRA_LINE, GARBAGE
-
-if TYPE_CHECKING:
-    from .lane import FastLane
-    from .server import SimulatorServer
+from .controller import MAX_REQUEST, SimulatedController, code_reply
+from .faults import EXTRA_LINE, GARBAGE, FaultPlan
+from .replay import ReplayController
 
 CONTROL_PREFIX = b"SIM:"
 CR = b"\r"
@@ -59,17 +59,44 @@ class Owed:
     abort: bool = False  # the server closed it on the way (stopping)
 
 
+class Host(Protocol):
+    """What a session needs of its server (:class:`~.server.SimulatorServer`)."""
+
+    sessions: set[SimSession]
+    refused: int
+    numbers: Iterator[int]  # each new session's number, 1 the first
+    fast_frames: dict[bytes, bytes]
+    control_lines: bool
+
+    @property
+    def controller(self) -> SimulatedController | ReplayController: ...
+    @property
+    def plan(self) -> FaultPlan: ...
+    def full(self) -> bool: ...
+    def answer(self, line: bytes) -> tuple[bytes, bool]: ...
+    def note(self, session: int, line: bytes, reply: bytes | None = None) -> int: ...
+    def sent(self, entry: int, reply: bytes) -> None: ...
+    def control(self, line: bytes) -> bytes: ...
+    def forget(self, session: SimSession) -> None: ...
+
+
+class Lane(Protocol):
+    """What a session needs of the lane serving it (:class:`~.lane.FastLane`)."""
+
+    def drop(self, session: SimSession) -> None: ...
+
+
 class SimSession(asyncio.BufferedProtocol):
     """One client connection. It reads into a small buffer of its own and stops reading
     while its client does not read (or its fault queue is full), so no client can make
     the server buffer, or compute replies, without bound. ``sock`` and ``lane`` are set
     while the fast lane serves it (then it has no transport)."""
 
-    def __init__(self, server: SimulatorServer, sock: socket.socket | None = None) -> None:
+    def __init__(self, server: Host, sock: socket.socket | None = None) -> None:
         self._server = server
-        self.number = next(server._numbers)
+        self.number = next(server.numbers)
         self.sock = sock
-        self.lane: FastLane | None = None
+        self.lane: Lane | None = None
         self._owed: Owed | None = None  # set when the lane hands it over
         self.connected = False  # connection_made has run: it has (or had) a transport
         self._decoder = LineDecoder(MAX_REQUEST - 1)
@@ -127,8 +154,7 @@ class SimSession(asyncio.BufferedProtocol):
             self._release()
 
     def connection_lost(self, exc: Exception | None) -> None:
-        self._server.sessions.discard(self)
-        self._server._shedding.discard(self)
+        self._server.forget(self)
         self.sock, self.lane = None, None
         self._transport = None
         self._view = None
@@ -223,7 +249,7 @@ class SimSession(asyncio.BufferedProtocol):
                 transport.close()
                 return
         if too_long:
-            transport.write(_reply(E_INVALIDRCVPACKET))
+            transport.write(code_reply(E_INVALIDRCVPACKET))
             transport.close()
 
     def _hold(self, lines: list[bytes], too_long: bool) -> None:
@@ -329,7 +355,7 @@ class SimSession(asyncio.BufferedProtocol):
                 if transport is None or transport.is_closing():
                     return
             if line == CR:
-                transport.write(_reply(E_INVALIDRCVPACKET))
+                transport.write(code_reply(E_INVALIDRCVPACKET))
                 transport.close()
                 return
             if self._server.control_lines and line.startswith(CONTROL_PREFIX):
@@ -362,7 +388,7 @@ class SimSession(asyncio.BufferedProtocol):
         if fault.action == "garble":
             reply = GARBAGE + b"\r"
         elif fault.action == "error":
-            reply = _reply(fault.error_code)
+            reply = code_reply(fault.error_code)
         server.sent(entry, reply)
         # Without a gap the extra line goes out with the reply's end, in the same write.
         tail = EXTRA_LINE if fault.extra and fault.extra_gap is None else b""

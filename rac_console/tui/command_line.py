@@ -10,11 +10,12 @@ from collections.abc import Callable, Iterable
 from typing import TYPE_CHECKING, ClassVar
 
 from textual import events
-from textual.binding import Binding, BindingType
+from textual.binding import BindingType
 from textual.message import Message
 from textual.suggester import Suggester
 from textual.widgets import Input
 
+from . import keys
 from .compat import input_suggestion, key_bindings
 
 if TYPE_CHECKING:
@@ -47,9 +48,6 @@ class HintSuggester(Suggester):
         return value + needs if needs else None
 
 
-HISTORY_HELP = "Walk the history (kept across restarts)"
-
-
 class CommandLine(Input):
     """The line, its history, completion and hints; and the keys typed ahead of a
     write's question.
@@ -69,32 +67,7 @@ class CommandLine(Input):
     targets: tuple[tuple[str, str], ...] = ()
     #: A cell's targets (name, label): ``use NAME`` and ``@NAME`` complete to them.
     cell: tuple[tuple[str, str], ...] = ()
-    BINDINGS: ClassVar[list[BindingType]] = [
-        # The tooltip is the help screen's line (Up and Down share one).
-        Binding(
-            "tab",
-            "complete",
-            "Complete",
-            tooltip="Complete the command, type, index or on/off; several: listed with help",
-            id="complete",
-        ),
-        Binding(
-            "up",
-            "history(-1)",
-            "History back",
-            tooltip=HISTORY_HELP,
-            show=False,
-            id="history-back",
-        ),
-        Binding(
-            "down",
-            "history(1)",
-            "History forward",
-            tooltip=HISTORY_HELP,
-            show=False,
-            id="history-forward",
-        ),
-    ]
+    BINDINGS: ClassVar[list[BindingType]] = keys.COMMAND_LINE
 
     class Entered(Message):
         """A line the user entered, taken out of the line the moment Enter was read;
@@ -326,3 +299,13 @@ class CommandLine(Input):
         """Up recalls the line at once; the app settles it by its result (a refused
         line is never suggested nor written)."""
         self.history.enter(line)
+
+
+def dropped_text(count: int) -> str:
+    """What the console says of the keys typed ahead of a question, and dropped."""
+    keys_were = (
+        "1 key typed ahead of the question was"
+        if count == 1
+        else f"{count} keys typed ahead of the question were"
+    )
+    return f"{keys_were} ignored: nothing typed before a question answers it"

@@ -10,29 +10,29 @@ any time. Nothing here can be focused, so no Enter presses a button.
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 from rich.text import Text
 from textual import events, on
-from textual.app import ComposeResult
-from textual.color import Color
+from textual.app import App, ComposeResult
 from textual.containers import Horizontal, Vertical
 from textual.screen import ModalScreen
 from textual.widgets import Button, Static
 
 from ..engine import CONFIRM_GUARD_SECONDS, ConfirmWrite
-from ..present.status import label_text, profile_colour
+from ..present.status import label_text
 from ..protocol.text import terminal_safe
+from .borders import border_colour
+from .command_line import CommandLine
 from .compat import event_clock  # the clock of an event's ``time``
+
+if TYPE_CHECKING:
+    from .lines import Lines
+    from .members import MemberState
 
 #: Keys in the first this many seconds of the question (and any typed before it) are
 #: ignored; Esc still answers No.
 GUARD_SECONDS = CONFIRM_GUARD_SECONDS  # as the REPL's (tests lengthen it here)
-
-
-def border_colour(colour: str | None) -> Color | None:
-    """A profile's colour for Textual (an ANSI colour stays one); None when nobody knows
-    the name: the caller keeps its default."""
-    parsed = profile_colour(colour)
-    return Color.from_rich_color(parsed) if parsed is not None else None
 
 
 def question_text(question: ConfirmWrite) -> Text:
@@ -151,3 +151,32 @@ class ConfirmWriteScreen(ModalScreen[bool]):
             self.answer(False)
         elif self.accepting:
             self.answer(True)
+
+
+def ask(
+    app: App[int], question: ConfirmWrite, state: MemberState, named: str | None, lines: Lines
+) -> None:
+    """A write on a ``confirm`` target asks first: old → new, ``[y/N]``, default No;
+    the engine polls on until the answer, then the focus is back where it was (a
+    table row or a grid bit: the next Space toggles the next one). The keys typed
+    after the write's Enter were typed ahead of the question: they answer nothing."""
+    colour = state.status.colour if state.status is not None else state.colour
+    held = question.seq == lines.held_seq
+    if held:
+        lines.command_line.post_message(CommandLine.Asked())
+
+    def answered(yes: bool | None) -> None:
+        lines.cell.answer_confirm(question.seq, bool(yes))
+        if not yes:  # no write: the row's next Space need not wait for the refusal
+            state.toggles.declined(question.seq)
+        if held and lines.held_seq == question.seq:
+            lines.command_line.post_message(CommandLine.Answered())
+
+    app.push_screen(ConfirmWriteScreen(question, colour, named), answered)
+
+
+def close_question(app: App[int], seq: int) -> None:
+    """A write that ended (a cancel came before its answer) asks nothing any more."""
+    screen = app.screen
+    if isinstance(screen, ConfirmWriteScreen) and screen.question.seq == seq:
+        screen.dismiss(False)

@@ -4,9 +4,11 @@ from __future__ import annotations
 
 from typing import ClassVar, Protocol
 
-from textual.binding import Binding, BindingType
+from textual.binding import BindingType
 from textual.widget import Widget
 from textual.widgets import Input
+
+from . import keys
 
 
 class Filterable(Protocol):
@@ -22,10 +24,7 @@ class FilterLine(Input):
     """Filters its pane as you type; Enter keeps the filter (the pane's border shows it,
     ``/`` edits it), Esc clears it; both go back to the pane."""
 
-    BINDINGS: ClassVar[list[BindingType]] = [
-        Binding("escape", "clear", "Clear filter", id="filter-clear"),
-        Binding("enter", "done", "Keep filter", id="filter-done"),
-    ]
+    BINDINGS: ClassVar[list[BindingType]] = keys.FILTER_LINE
 
     def __init__(self, target: Filterable, placeholder: str, **kwargs: object) -> None:
         super().__init__(placeholder=placeholder, **kwargs)  # type: ignore[arg-type]

@@ -6,35 +6,38 @@ carries its request), so the hex view (F7), the frame times, the filter (``/``) 
 frames (F3) redraw what is on screen, not only what comes; a fast poll cannot push the
 typed exchanges out (with polls hidden they would vanish at the next redraw).
 Lines are plain strings (cheap to write at thousands a second); the few on screen are
-styled as they are drawn, by :class:`FrameHighlighter`. Over 450 lines on purpose: the
-kept frames, their redraw and the batched writing share the log's one view of what is
-on screen (the formatting of a line is :mod:`rac_console.present.frames`').
+styled as they are drawn, by :class:`FrameHighlighter`; where the hex goes is
+:mod:`.frame_lines`', the formatting of a line :mod:`rac_console.present.frames`'.
 """
 
 from __future__ import annotations
 
 import heapq
 import itertools
-import math
-import re
 import time
 from collections import deque
 from operator import itemgetter
 from typing import TYPE_CHECKING, ClassVar
 
-from rich.cells import cell_len
-from rich.highlighter import Highlighter
 from rich.text import Text
-from textual.binding import Binding, BindingType
+from textual.binding import BindingType
 from textual.message import Message as TextualMessage
 
-from ..present.filtering import FrameFilter, add_filter_title
-from ..present.frames import clock_text, frame_body, gap_text, hex_text
-from ..protocol.text import counted, terminal_safe
+from ..present.filtering import FrameFilter, log_title
+from ..present.frames import (
+    clock_text,
+    frame_body,
+    frame_times_said,
+    gap_text,
+    hex_text,
+    hex_view_said,
+    poll_frames_said,
+)
+from ..protocol.text import terminal_safe
 from ..session.types import Frame
+from . import frame_lines, keys
 from .compat import InlineWidthLog, forget_drawn_lines
-from .filter_line import FilterLine
-from .pane_keys import pane_bindings
+from .frame_lines import HEX_SEPARATOR, FrameHighlighter, hex_fits, hex_plan, hex_under
 
 if TYPE_CHECKING:
     from ..engine.events import Alert, Note
@@ -47,14 +50,6 @@ MAX_LINES_PER_FLUSH = 500
 #: Poll frames kept to be drawn again (by the hex view, the frame times, the filter and
 #: F3), and as many others (typed exchanges, notes). The filter looks through these.
 KEPT = 20_000
-#: Between a frame's text and its bytes in hex, when both fit the width.
-HEX_SEPARATOR = "  │ "
-TITLE = "Frames (→ sent, ← received)"
-FROZEN_TITLE = "Frames (FROZEN: F4 follows)"
-FILTER_HINT = "filter frames: text, or a variable (IO128, I 10, P[3]): its requests and replies"
-#: A gap before a reply at least this long (the app sets half the timeout) stands out.
-SLOW_STYLE = "bold black on yellow"
-
 
 #: What the log holds: a frame, or a note (its time and text).
 Event = Frame | tuple[float, str]
@@ -69,14 +64,7 @@ class FrameLog(InlineWidthLog):
     app drains the engine (30 times a second at most): one ``write_lines`` per flush
     instead of one per frame."""
 
-    BINDINGS: ClassVar[list[BindingType]] = [
-        Binding("escape", "app.focus_command_line", "Command line", id="log-leave"),
-        # Priority: the filter line opens as the key arrives, so the keys typed right
-        # after it go there (the log takes no other printable key).
-        Binding("slash", "app.filter_frames", "Filter", id="log-filter", priority=True),
-        Binding("t", "app.toggle_frame_times", "Frame times", id="log-frame-times"),
-        *pane_bindings("log"),
-    ]
+    BINDINGS: ClassVar[list[BindingType]] = keys.FRAME_LOG
 
     class OptionsChanged(TextualMessage):
         """(log → app) Polls shown, the hex view or the frame times changed: settings
@@ -165,6 +153,21 @@ class FrameLog(InlineWidthLog):
             self._redraw()
             self.post_message(self.OptionsChanged())
 
+    def toggle_polls(self) -> str:
+        """F3: poll frames shown or hidden; what to say of it."""
+        self.show_polls = not self.show_polls
+        return poll_frames_said(self.show_polls)
+
+    def toggle_hex(self) -> str:
+        """F7: the bytes in hex, or not; what to say of it."""
+        self.hex_view = not self.hex_view
+        return hex_view_said(self.hex_view, self.hex_placement)
+
+    def toggle_gaps(self) -> str:
+        """``t``: the time since the previous frame on each line, or not."""
+        self.show_gaps = not self.show_gaps
+        return frame_times_said(self.show_gaps)
+
     @property
     def slow_after(self) -> float:
         """A reply this many seconds after its request has its gap highlighted."""
@@ -202,15 +205,10 @@ class FrameLog(InlineWidthLog):
 
     def update_title(self) -> None:
         """Frozen or following, the hex view, the filter and how many frames pass it."""
-        title = Text(TITLE if self.auto_scroll else FROZEN_TITLE)
-        if self._hex_view:
-            title.append("  hex")
-        if self._filter:
-            add_filter_title(title, self._filter.typed)
-        if self._filter or not self._show_polls:
-            title.append(f"  {self._frames_shown} of {counted(self._frames_kept, 'frame')}")
-        if not self._show_polls:
-            title.append("  polls hidden (F3)")
+        shown = (self._frames_shown, self._frames_kept)
+        title = log_title(
+            not self.auto_scroll, self._hex_view, self._filter.typed, self._show_polls, shown
+        )
         if title != self._title:
             self._title = title
             self.border_title = title
@@ -373,7 +371,8 @@ class FrameLog(InlineWidthLog):
             return
         shown = shown[-MAX_LINES:]
         self._hex_width = self._width_now()
-        self._hex_column = self._hex_plan(shown, self._hex_width) if self._hex_view else 0
+        width = self._hex_width
+        self._hex_column = hex_plan(self._hex_sizes(shown), width) if self._hex_view else 0
         self._hex_placed = [0, 0]
         lines = self._draw(shown)
         super().clear()
@@ -404,46 +403,19 @@ class FrameLog(InlineWidthLog):
             head = f"{head} {self._origin.get(id(event), ''):<{self.target_width}}"
         return f"{head} {self._bodies.get(id(event)) or frame_body(event)}", len(head) + 1
 
-    def _hex_fits(self, width: int, line: str, hexed: str) -> bool:
-        return not width or len(line) + len(HEX_SEPARATOR) + len(hexed) <= width
-
-    def _hex_plan(self, shown: list[Drawn], width: int) -> int | None:
-        """Where these frames' bytes go at this width: the column beside their text (the
-        longest text of the frames whose bytes could fit beside it), when every such
-        frame fits at that column; else None: under every frame's text, so requests and
-        replies are never laid out two ways. A frame too long for its bytes beside it at
-        any column has them under it either way."""
-        if not width:
-            return 0  # not laid out yet: drawn again at the first size
-        fits: list[tuple[int, int]] = []  # (text, hex) lengths of the frames that could
-        for event, gap in shown:
-            if isinstance(event, Frame):
-                line, _ = self._frame_line(event, gap)
-                hexed = len(event.data) * 3 - 1
-                if len(line) + len(HEX_SEPARATOR) + hexed <= width:
-                    fits.append((len(line), hexed))
-        column = max((text for text, _ in fits), default=0)
-        if all(column + len(HEX_SEPARATOR) + hexed <= width for _, hexed in fits):
-            return column
-        return None
+    def _hex_sizes(self, shown: list[Drawn]) -> list[tuple[int, int]]:
+        """Each frame's text and hex lengths, as the hex layout weighs them."""
+        return [
+            (len(self._frame_line(event, gap)[0]), len(event.data) * 3 - 1)
+            for event, gap in shown
+            if isinstance(event, Frame)
+        ]
 
     def _hex_moves(self, shown: list[Drawn]) -> bool:
         """True when new frames change where the bytes go (or the width changed)."""
         width = self._width_now()
-        if width != self._hex_width:
-            return True
-        column = self._hex_column
-        if column is None:
-            return False  # every frame's bytes under it: more frames cannot change that
-        for event, gap in shown:
-            if isinstance(event, Frame):
-                line, _ = self._frame_line(event, gap)
-                hexed = len(event.data) * 3 - 1
-                if len(line) + len(HEX_SEPARATOR) + hexed > width:
-                    continue  # under it, wherever the others are
-                if len(line) > column or column + len(HEX_SEPARATOR) + hexed > width:
-                    return True
-        return False
+        moved = frame_lines.hex_moves(self._hex_sizes(shown), self._hex_column, width)
+        return width != self._hex_width or moved
 
     def _draw(self, shown: list[Drawn]) -> list[str]:
         lines: list[str] = []
@@ -461,69 +433,14 @@ class FrameLog(InlineWidthLog):
                 lines.append(line)
                 continue
             hexed = hex_text(event.data)
-            if column is not None and self._hex_fits(width, f"{line:<{column}}", hexed):
+            if column is not None and hex_fits(width, f"{line:<{column}}", hexed):
                 lines.append(f"{line:<{column}}" + HEX_SEPARATOR + hexed)
                 placed[0] += 1
             else:
                 lines.append(line)
-                lines.extend(_hex_under(hexed, indent, width))
+                lines.extend(hex_under(hexed, indent, width))
                 placed[1] += 1
         return lines
 
     def lines_width(self, lines: list[str]) -> int:
-        """Frame lines are ASCII but for the arrows, so their length is their width;
-        only another line is measured (thousands of lines a second)."""
-        return max(
-            len(line) if line.isascii() or _NARROW.issuperset(line) else cell_len(line)
-            for line in lines
-        )
-
-
-#: Characters of a frame line that are one cell wide though not ASCII.
-_NARROW = frozenset("→←↵─│ ·") | frozenset(chr(c) for c in range(32, 127))
-
-
-def _hex_under(hexed: str, indent: int, width: int) -> list[str]:
-    """A frame's hex on lines of their own under it, from its arrow's column."""
-    per_line = max(4, (width - indent + 1) // 3)
-    pairs = hexed.split(" ")
-    pad = " " * indent
-    return [pad + " ".join(pairs[at : at + per_line]) for at in range(0, len(pairs), per_line)]
-
-
-#: A frame line's start: the time, the gap (when shown), the arrow.
-_HEAD = re.compile(r"\d\d:\d\d:\d\d\.\d{3} +(?:(\+\d+(?:\.\d+)?)(ms|s) )?(?:\S+ +)?([→←]) ")
-#: A line of hex under its frame.
-_HEX_LINE = re.compile(r" +[0-9a-f]{2}(?: [0-9a-f]{2})*$")
-
-
-class FrameHighlighter(Highlighter):
-    """Styles a frame line as it is drawn (the lines on screen only): the gap dim, or
-    highlighted before a reply that took :attr:`slow_after` seconds or more; the hex dim."""
-
-    def __init__(self) -> None:
-        self.slow_after = math.inf
-
-    def highlight(self, text: Text) -> None:
-        plain = text.plain
-        head = _HEAD.match(plain)
-        if head is None:
-            if _HEX_LINE.match(plain):
-                text.stylize("dim")
-            return
-        number, unit, arrow = head.groups()
-        if number is not None:
-            seconds = float(number[1:]) / (1000 if unit == "ms" else 1)
-            slow = arrow == "←" and seconds >= self.slow_after
-            text.stylize(SLOW_STYLE if slow else "dim", head.start(1), head.end(2))
-        at = plain.rfind(HEX_SEPARATOR)
-        if at >= 0:
-            text.stylize("dim", at)
-
-
-CELL_FILTER_HINT = "filter frames: @NAME for a target, text, or a variable (@robotB IO64)"
-
-
-def log_filter_line(log: FrameLog, cell: bool = False) -> FilterLine:
-    """The frame log's filter line (``/``); in a cell it says how to name a target."""
-    return FilterLine(log, CELL_FILTER_HINT if cell else FILTER_HINT, id="log-filter")
+        return frame_lines.lines_width(lines)

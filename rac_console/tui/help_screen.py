@@ -27,6 +27,7 @@ from ..present.help_text import (
     key_label,
     plain_lines,
 )
+from . import keys
 from .command_line import CommandLine
 from .filter_line import FilterLine
 from .frame_log import FrameLog
@@ -39,17 +40,31 @@ from .watch_table import WatchTable
 TERM_WIDTH = 24
 
 
-def bindings_of(cls: type) -> list[Binding]:
-    """The bindings a class declares itself (not those it inherits)."""
-    declared: Iterable[BindingType] = cls.__dict__.get("BINDINGS", ())
+#: Where keys are read from: a widget's class (its own and its console parents'
+#: bindings), or a list of bindings (the console screen's, :data:`keys.CONSOLE`).
+KeySource = type | list[BindingType]
+
+
+def bindings_of(source: KeySource) -> list[Binding]:
+    """The bindings a class declares itself (not those it inherits), or the list's."""
+    declared: Iterable[BindingType] = (
+        source if isinstance(source, list) else source.__dict__.get("BINDINGS", ())
+    )
     return list(Binding.make_bindings(declared))
 
 
-def key_of(cls: type, action: str) -> str | None:
-    """The key bound to ``action`` on ``cls`` or a class it inherits from, as printed
-    on the keyboard (``F2``, ``Ctrl+L``); None when no key runs it."""
-    for klass in cls.__mro__:
-        for binding in bindings_of(klass):
+def _sources(source: KeySource) -> list[KeySource]:
+    """The console's classes ``source`` is made of, or the list alone."""
+    if isinstance(source, list):
+        return [source]
+    return [klass for klass in source.__mro__ if klass.__module__.startswith("rac_console.")]
+
+
+def key_of(source: KeySource, action: str) -> str | None:
+    """The key bound to ``action`` on ``source``, as printed on the keyboard (``F2``,
+    ``Ctrl+L``); None when no key runs it."""
+    for part in _sources(source):
+        for binding in bindings_of(part):
             if binding.action == action:
                 return key_label(binding.key_display or binding.key)
     return None
@@ -60,24 +75,23 @@ CELL_KEYS = frozenset({"next-target", "row-overlay"})
 
 
 def _pairs(
-    cls: type, only: Sequence[str] | None = None, without: frozenset[str] = frozenset()
+    source: KeySource, only: Sequence[str] | None = None, without: frozenset[str] = frozenset()
 ) -> list[tuple[str, str]]:
     """The keys of ``cls`` and of the console's classes it inherits from (not those of
     Textual's), labelled, with their descriptions; a key given twice counts once.
     With ``only`` (binding ids), just those, in that order; never those ``without``."""
     pairs: dict[str, str] = {}
     found: dict[str, tuple[str, str]] = {}
-    for klass in cls.__mro__:
-        if klass.__module__.startswith("rac_console."):
-            for binding in bindings_of(klass):
-                if binding.id in without:
-                    continue
-                key = key_label(binding.key_display or binding.key)
-                text = binding.tooltip or binding.description
-                if only is None:
-                    pairs.setdefault(key, text)
-                elif binding.id is not None and binding.id in only:
-                    found.setdefault(binding.id, (key, text))
+    for part in _sources(source):
+        for binding in bindings_of(part):
+            if binding.id in without:
+                continue
+            key = key_label(binding.key_display or binding.key)
+            text = binding.tooltip or binding.description
+            if only is None:
+                pairs.setdefault(key, text)
+            elif binding.id is not None and binding.id in only:
+                found.setdefault(binding.id, (key, text))
     if only is not None:
         return [found[id_] for id_ in only if id_ in found]
     return list(pairs.items())
@@ -106,11 +120,11 @@ def console_key_groups(app_class: type[App[int]], cell: bool = False) -> list[Ke
     as on the keyboard: the command line's first, then the table's, the other panes',
     and last the keys that work anywhere (a cell's own keys only in a cell)."""
     without = frozenset() if cell else CELL_KEYS
-    pane = key_of(app_class, "focus_pane(1)") or "F6"
-    grid = key_of(app_class, "toggle_io_grid") or "F5"
+    pane = key_of(keys.CONSOLE, "focus_pane(1)") or "F6"
+    grid = key_of(keys.CONSOLE, "toggle_io_grid") or "F5"
     trend = key_of(WatchTable, "row('trend')") or "t"
     row_filter = key_of(WatchTable, "row('filter')") or "/"
-    anywhere = _pairs(app_class, APP_KEYS, without)
+    anywhere = _pairs([*keys.CONSOLE, *keys.APP], APP_KEYS, without)
     palette = (key_label(app_class.COMMAND_PALETTE_BINDING), "Command palette")
     return [
         (
@@ -120,7 +134,7 @@ def console_key_groups(app_class: type[App[int]], cell: bool = False) -> list[Ke
                 *_pairs(CommandLine),
                 ("Right", "Accept the grey suggestion from history (at the end of the line)"),
                 ("?", "Help (on an empty line)"),
-                *_pairs(app_class, ("cancel-command",)),
+                *_pairs(keys.CONSOLE, ("cancel-command",)),
             ],
         ),
         (f"watch table ({pane})", _pairs(WatchTable, without=without)),
@@ -160,13 +174,7 @@ class HelpScreen(Screen[None]):
     """The help, filtered by the line at its top; Esc (or F1 again) closes it."""
 
     CSS_PATH = "help_screen.tcss"
-    BINDINGS: ClassVar[list[BindingType]] = [
-        Binding("escape", "close", "Close help", id="help-close"),
-        Binding("up", "scroll(-1)", "Scroll up", show=False, id="help-up"),
-        Binding("down", "scroll(1)", "Scroll down", show=False, id="help-down"),
-        Binding("pageup", "page(-1)", "Page up", show=False, id="help-page-up"),
-        Binding("pagedown", "page(1)", "Page down", show=False, id="help-page-down"),
-    ]
+    BINDINGS: ClassVar[list[BindingType]] = keys.HELP_SCREEN
 
     def __init__(self, sections: Sequence[HelpSection]) -> None:
         super().__init__()

@@ -15,7 +15,7 @@ from typing import TYPE_CHECKING, ClassVar
 from rich.text import Text
 from textual import events
 from textual.app import ComposeResult
-from textual.binding import Binding, BindingType
+from textual.binding import BindingType
 from textual.containers import Container, VerticalScroll
 from textual.geometry import Region
 from textual.message import Message
@@ -24,6 +24,7 @@ from textual.widgets import DataTable, Static
 
 from ..present.cells import change_style
 from ..protocol.text import terminal_safe
+from . import keys
 
 if TYPE_CHECKING:  # the grid is hidden until F5: its modules load when it first shows
     from ..commands.language import VarRef
@@ -102,19 +103,7 @@ def _chrome(widget: Widget) -> int:
 class IoPanel(VerticalScroll, can_focus=True):
     """The grid, scrolled when it has more lines than room; hidden until F5."""
 
-    BINDINGS: ClassVar[list[BindingType]] = [
-        # One entry in the help: ←→↑↓  Move the cursor.
-        Binding(
-            "left", "move(-1, 0)", "Move the cursor", key_display="←", show=False, id="io-left"
-        ),
-        Binding(
-            "right", "move(1, 0)", "Move the cursor", key_display="→", show=False, id="io-right"
-        ),
-        Binding("up", "move(0, -1)", "Move the cursor", key_display="↑", show=False, id="io-up"),
-        Binding("down", "move(0, 1)", "Move the cursor", key_display="↓", show=False, id="io-down"),
-        Binding("space", "toggle_bit", "Toggle bit", id="io-toggle-bit"),
-        Binding("escape", "app.focus_command_line", "Command line", id="io-leave"),
-    ]
+    BINDINGS: ClassVar[list[BindingType]] = keys.IO_PANEL
 
     class Toggle(Message):
         """Space on a watched bit: the app writes its opposite (as a typed line)."""

@@ -18,12 +18,12 @@ from ..commands.language import Connect, CsvLog, FrameFile
 from ..commands.target import DEFAULT_PORT
 from ..present.status import label_text
 from ..protocol.text import terminal_safe
-from .help_screen import key_of
-from .watch_table import WatchTable
+from . import keys
+from .row_keys import put_on_command_line
 
 if TYPE_CHECKING:
     from ..commands.policy import TargetProfile
-    from .host import ConsoleHost
+    from .console import ConsoleScreen
 
 
 @dataclass(frozen=True)
@@ -44,57 +44,56 @@ class PaletteCommand:
         return content
 
 
-def console_commands(app: ConsoleHost) -> Iterator[PaletteCommand]:
+def console_commands(app: ConsoleScreen) -> Iterator[PaletteCommand]:
     """The console's commands, titled for the state they would change."""
-    cls = type(app)
     paused = app.status is not None and app.status.paused
     yield PaletteCommand(
         "Resume polling" if paused else "Pause polling",
         app.action_toggle_polling,
         "poll the watched variables again" if paused else "stop polling the watched variables",
-        key_of(cls, "toggle_polling"),
+        keys.key_for("toggle_polling"),
     )
-    polls = app.frame_log.show_polls
+    polls = app.panes.frame_log.show_polls
     yield PaletteCommand(
         "Hide poll frames" if polls else "Show poll frames",
         app.action_toggle_poll_frames,
         "the frame log shows typed exchanges only" if polls else "the frame log shows polls too",
-        key_of(cls, "toggle_poll_frames"),
+        keys.key_for("toggle_poll_frames"),
     )
-    following = app.frame_log.auto_scroll
+    following = app.panes.frame_log.auto_scroll
     yield PaletteCommand(
         "Freeze log" if following else "Follow log",
         app.action_toggle_scroll,
         "stop the frame log scrolling" if following else "scroll the frame log with new frames",
-        key_of(cls, "toggle_scroll"),
+        keys.key_for("toggle_scroll"),
     )
     yield PaletteCommand(
-        "Clear log", app.action_clear_log, "empty the frame log", key_of(cls, "clear_log")
+        "Clear log", app.action_clear_log, "empty the frame log", keys.key_for("clear_log")
     )
-    grid = app.io_panel.display
+    grid = app.panes.io_panel.display
     yield PaletteCommand(
         "Hide I/O grid" if grid else "Show I/O grid",
         app.action_toggle_io_grid,
         "watched IO bits as rows of the table" if grid else "watched IO bits as a grid of words",
-        key_of(cls, "toggle_io_grid"),
+        keys.key_for("toggle_io_grid"),
     )
     yield PaletteCommand(
         "Hex view of frames",
         app.action_toggle_hex,
         "show or hide each frame's bytes in hex",
-        key_of(cls, "toggle_hex"),
+        keys.key_for("toggle_hex"),
     )
-    detail = app.row_detail.is_open
+    detail = app.panes.row_detail.is_open
     yield PaletteCommand(
         "Hide row details" if detail else "Show row details",
         app.action_toggle_detail,
         "the frame log again"
         if detail
         else "the row under the table's cursor in full, a field a line",
-        f"{key_of(WatchTable, 'app.toggle_detail')} in the table",
+        f"{keys.key_for('screen.toggle_detail', keys.WATCH_TABLE)} in the table",
     )
     yield PaletteCommand(
-        "Help", app.action_help, "keys, commands, what the status line says", key_of(cls, "help")
+        "Help", app.action_help, "keys, commands, what the status line says", keys.key_for("help")
     )
     status = app.status
     on_sim = status is not None and status.is_simulator
@@ -115,12 +114,12 @@ def console_commands(app: ConsoleHost) -> Iterator[PaletteCommand]:
         )
     yield PaletteCommand(
         "load FILE…",
-        lambda: app.put_on_command_line("load "),
+        lambda: put_on_command_line(app.panes, "load "),
         "add a saved watch list: type its file name",
     )
     yield PaletteCommand(
         "save FILE…",
-        lambda: app.put_on_command_line("save "),
+        lambda: put_on_command_line(app.panes, "save "),
         "save the watch list as TOML: type a file name",
     )
     if app.status is not None and app.status.csv_log is not None:
@@ -132,13 +131,13 @@ def console_commands(app: ConsoleHost) -> Iterator[PaletteCommand]:
     else:
         yield PaletteCommand(
             "log FILE.csv…",
-            lambda: app.put_on_command_line("log "),
+            lambda: put_on_command_line(app.panes, "log "),
             "log the watched values to a CSV file: type its name",
         )
     yield from frame_file_commands(app)
 
 
-def frame_file_commands(app: ConsoleHost) -> Iterator[PaletteCommand]:
+def frame_file_commands(app: ConsoleScreen) -> Iterator[PaletteCommand]:
     """``record`` and ``transcript`` from now on, or their stop: the moment worth keeping
     is rarely foreseen when the console starts."""
 
@@ -157,7 +156,7 @@ def frame_file_commands(app: ConsoleHost) -> Iterator[PaletteCommand]:
         else:
             yield PaletteCommand(
                 f"{word} FILE…",
-                partial(app.put_on_command_line, f"{word} "),
+                partial(put_on_command_line, app.panes, f"{word} "),
                 f"write {what} to a file from now on: type its name",
             )
 
@@ -177,12 +176,12 @@ def profile_help(profile: TargetProfile | None, current: bool = False) -> str:
     return escape(terminal_safe(" · ".join(parts)))
 
 
-def textual_commands(app: ConsoleHost) -> Iterator[PaletteCommand]:
+def textual_commands(screen: ConsoleScreen) -> Iterator[PaletteCommand]:
     """Textual's own (Theme, Keys, Screenshot, Quit…), with a key where one runs them."""
-
-    for command in app.get_system_commands(app.screen):
+    app = screen.app
+    for command in app.get_system_commands(screen):
         callback = command.callback
         action = getattr(callback, "__name__", "").removeprefix("action_")
         bound_to_app = getattr(callback, "__self__", None) is app
-        key = key_of(type(app), action) if bound_to_app and action else None
+        key = keys.key_for(f"app.{action}") if bound_to_app and action else None
         yield PaletteCommand(command.title, callback, command.help, key)

@@ -30,19 +30,23 @@ from ..engine.feedback import Message
 from ..protocol.errors import InputError
 
 if TYPE_CHECKING:
+    from textual.app import App
+
     from ..commands.settings import Value
     from ..engine.settings import LoadedSettings, SettingsFile
-    from .host import ConsoleHost
+    from .console import ConsoleScreen
 
 #: Seconds after the last change that the settings are saved.
 SAVE_AFTER = 0.5
 
 
 class SettingsKeeper:
-    """The settings of ``host``, kept in ``store`` (None: not kept, as in most tests)."""
+    """The settings of ``app`` and its ``console``, kept in ``store`` (None: not kept,
+    as in most tests)."""
 
-    def __init__(self, host: ConsoleHost, store: SettingsFile | None) -> None:
-        self.host = host
+    def __init__(self, app: App[int], console: ConsoleScreen, store: SettingsFile | None) -> None:
+        self.app = app
+        self.console = console
         self.store = store
         self._saved: dict[str, Value] = {}  # as the file holds them (or as applied)
         self._tried: dict[str, Value] | None = None  # the last state a save failed for
@@ -68,12 +72,12 @@ class SettingsKeeper:
 
     def current(self) -> dict[str, Value]:
         """The settings as the console shows them now."""
-        host = self.host
-        log = host.frame_log
+        panes = self.console.panes
+        log = panes.frame_log
         return {
-            "theme": host.theme,
+            "theme": self.app.theme,
             # Not .display: False once the panel is being torn down (at exit).
-            "io_grid": host.io_panel.styles.display != "none",
+            "io_grid": panes.io_panel.styles.display != "none",
             "poll_frames": log.show_polls,
             "hex_view": log.hex_view,
             "frame_gaps": log.show_gaps,
@@ -83,9 +87,8 @@ class SettingsKeeper:
         """Apply what the file holds (at mount, before anything is drawn; read here if
         :meth:`load` was not called); then watch for changes. Problems are said by
         :meth:`say_problems`."""
-        host = self.host
         if self._loaded is None:
-            self.load(host.available_themes)
+            self.load(self.app.available_themes)
         loaded, self._loaded = self._loaded, None
         if self.store is None or loaded is None:
             return
@@ -93,10 +96,10 @@ class SettingsKeeper:
         self._problems = list(loaded.problems)
         theme = values.get("theme")
         if isinstance(theme, str):
-            host.theme = theme
-        log = host.frame_log
+            self.app.theme = theme
+        log = self.console.panes.frame_log
         if isinstance(shown := values.get("io_grid"), bool) and shown != self.current()["io_grid"]:
-            host.action_toggle_io_grid()
+            self.console.action_toggle_io_grid()
         if isinstance(shown := values.get("poll_frames"), bool):
             log.show_polls = shown
         if isinstance(shown := values.get("hex_view"), bool):
@@ -110,7 +113,7 @@ class SettingsKeeper:
         """The start's problems, a line each in the results (after the welcome)."""
         problems, self._problems = self._problems, []
         for problem in problems:
-            self.host.show(Message(problem, "error"))
+            self.console.show(Message(problem, "error"))
 
     def changed(self) -> None:
         """A setting may have changed: save after SAVE_AFTER, unless it changes again."""
@@ -118,14 +121,14 @@ class SettingsKeeper:
             return
         if self._due is not None:
             self._due.stop()
-        self._due = self.host.set_timer(SAVE_AFTER, self._save_when_due)
+        self._due = self.app.set_timer(SAVE_AFTER, self._save_when_due)
 
     def _save_when_due(self) -> None:
         """Save what changed (not while the palette is open: again once it is closed;
         not while the console closes: the exit saves)."""
         self._due = None
         try:
-            screen = self.host.screen
+            screen = self.app.screen
         except ScreenStackError:
             return
         if isinstance(screen, CommandPalette):
@@ -150,13 +153,13 @@ class SettingsKeeper:
             # can be is found out now, and said once.
             if not at_exit and not self._probed:
                 self._probed = True
-                probe = self.host.files.run(self.store.can_write)
+                probe = self.console.files.run(self.store.can_write)
                 probe.add_done_callback(partial(self._saved_or_not, now, self._saved, False))
             return
         self._new_file = False
         before = dict(self._saved)
         self._saved.update(changed)  # the next save, queued behind this, needs not repeat it
-        written = self.host.files.run(partial(self.store.save, changed))
+        written = self.console.files.run(partial(self.store.save, changed))
         written.add_done_callback(partial(self._saved_or_not, now, before, at_exit))
 
     def _saved_or_not(
@@ -172,6 +175,6 @@ class SettingsKeeper:
         self._tried = now
         if not self._said and not at_exit:
             self._said = True
-            self.host.show(
+            self.console.show(
                 Message(f"settings not saved (they hold for this session): {error}", "error")
             )

@@ -17,14 +17,14 @@ from typing import TYPE_CHECKING, ClassVar
 
 from rich.text import Text
 from textual.app import ComposeResult
-from textual.binding import Binding, BindingType
+from textual.binding import BindingType
 from textual.containers import Vertical
 from textual.message import Message
 from textual.widget import Widget
 from textual.widgets import Static
 
 from ..present.trends import bar_lines, bin_window, field_labels, number_text, span_text
-from .pane_keys import pane_bindings
+from . import keys
 
 if TYPE_CHECKING:
     from ..commands.language import VarRef
@@ -124,13 +124,7 @@ Series = tuple[str, "VarRef", str]
 
 
 class TrendView(Vertical, can_focus=True):
-    BINDINGS: ClassVar[list[BindingType]] = [
-        Binding("w", "cycle_window", "Window", id="trend-window"),
-        Binding("f", "cycle_field", "Trend field", id="trend-field"),
-        Binding("t", "close", "Close trend", id="trend-close"),
-        Binding("escape", "close", "Close trend", show=False, id="trend-escape"),
-        *pane_bindings("trend"),
-    ]
+    BINDINGS: ClassVar[list[BindingType]] = keys.TREND_VIEW
 
     class Closed(Message):
         """The view asks to close (Esc or t)."""

@@ -3,9 +3,9 @@
 Rows are keyed by variable name (``P10``), so the cursor follows its variable through
 sorting, filtering and rows coming and going. Keys on a row do not act themselves:
 they post :class:`WatchTable.RowAction` and the app decides (a key never writes to a
-controller without going through the same path as a typed line). Just over 450 lines:
-the refresh budget (rows in view now, the others in turn) lives beside the rows it
-keeps up to date.
+controller without going through the same path as a typed line). What a row's cells
+show is :mod:`.row_cells`'; the refresh budget (rows in view now, the others in turn)
+lives here, beside the rows it keeps up to date.
 """
 
 from __future__ import annotations
@@ -17,24 +17,21 @@ from typing import TYPE_CHECKING, ClassVar
 
 from rich.text import Text
 from textual import events
-from textual.binding import Binding, BindingType
+from textual.binding import BindingType
 from textual.message import Message
 from textual.reactive import reactive
 from textual.widgets import DataTable
 
-from ..present.cells import age_text, change_style, status_cell, type_text, value_cell
-from ..present.filtering import add_filter_title, needle_of
-from ..present.status import label_style
+from ..present.filtering import needle_of
 from ..present.table_rows import RowKey, SortMode, ordered_keys, table_key
-from ..present.trends import field_labels, has_trend, sparkline_text
-from ..protocol.text import terminal_safe
+from ..present.trends import field_labels
+from . import keys
 from .filter_line import FilterLine
-from .pane_keys import pane_bindings
+from .row_cells import differs, row_cells, table_title, target_cell, trend_cell
 
 if TYPE_CHECKING:
     from ..commands.language import VarRef
     from ..engine.events import RowView
-    from ..engine.status import Status
     from ..present.trends import TrendStore
 
 #: Status, age and trend before the value, so they stay in view when a long P or J
@@ -55,9 +52,6 @@ CUT_HINT = "values cut: F6, then d shows a row in full"
 CUT_FOCUSED = "values cut: d shows the row in full"
 #: Refreshes to wait at most for new rows to be measured before they are scrolled to.
 REVEAL_TRIES = 5
-#: Bars in a trend cell; a field's label (``Rz``, ``Fig``) takes the first 4 cells.
-SPARK_WIDTH = 16
-FIELD_WIDTH = 4
 
 
 #: Rows out of view are brought up to date this often (seconds); the rows in view at
@@ -77,44 +71,7 @@ class WatchTable(DataTable[object]):
     #: The target refuses writes (set by the app as its status changes): no Space shown.
     refuses_writes = reactive(False, bindings=True)
 
-    BINDINGS: ClassVar[list[BindingType]] = [
-        # In the footer in this order, as many as fit.
-        Binding(
-            "enter",
-            "row('put')",
-            "Edit value",
-            tooltip="Put the row's value on the command line, to edit and write",
-            id="row-put",
-        ),
-        Binding(
-            "d",
-            "app.toggle_detail",
-            "Details",
-            tooltip="The row under the cursor in full, a field a line (d again closes)",
-            id="row-detail",
-        ),
-        Binding("space", "row('toggle')", "Toggle", id="row-toggle"),
-        Binding("delete", "row('unwatch')", "Unwatch", id="row-unwatch"),
-        Binding("slash", "row('filter')", "Filter", id="row-filter"),
-        Binding("t", "row('trend')", "Trend", id="row-trend"),
-        Binding(
-            "T",
-            "row('overlay')",
-            "Overlay trend",
-            tooltip="Add the row to the open trend (a cell: several targets on one time axis)",
-            id="row-overlay",
-        ),
-        Binding("s", "cycle_sort", "Sort", id="row-sort"),
-        Binding(
-            "f",
-            "cycle_field",
-            "Trend field",
-            tooltip="Trend the next field (X, Y, Z…) of a position row",
-            id="row-field",
-        ),
-        Binding("escape", "app.focus_command_line", "Command line", id="row-leave"),
-        *pane_bindings("row"),
-    ]
+    BINDINGS: ClassVar[list[BindingType]] = keys.WATCH_TABLE
 
     class RowAction(Message):
         """A key on a row (``put``, ``toggle``, ``unwatch``, ``trend``, ``overlay``), or
@@ -446,28 +403,18 @@ class WatchTable(DataTable[object]):
         name = self._owner[key][0] if key in self._owner else ""
         target: tuple[object, ...] = ()
         if self.cell:
-            colour = self._colours.get(name)
-            style = label_style(colour) if colour else "bold"
-            shown_name = Text(f" {terminal_safe(name)} ", style=style, no_wrap=True)
+            shown_name = target_cell(name, self._colours.get(name))
             self._target_plain[key] = shown_name.plain
             target = (shown_name,)
-        cells = (
-            *target,
-            str(row.var),
-            Text(terminal_safe(row.label), no_wrap=True),  # never read as markup
-            status_cell(row),
-            age_text(row, now),
-            self._trend_cell(row, name),
-            value_cell(row, now, change_style(self.app.current_theme.dark)),
-            type_text(row),
-        )
+        trend = trend_cell(row, self.trends(name), self.field_of((name, row.var)))
+        cells = (*target, *row_cells(row, now, trend, self.app.current_theme.dark))
         shown = self._shown.get(key)
         if shown is None:
             self.add_row(*cells, key=key)
             self._order.append(key)
         else:
             for (column, _), old, new in zip(self.columns_shown, shown, cells, strict=True):
-                if _differs(old, new):
+                if differs(old, new):
                     # Widening costs a pass over every row: only when a column grows.
                     width = len(str(new))
                     wider = width > self._widths.get(column, 0)
@@ -476,50 +423,13 @@ class WatchTable(DataTable[object]):
                     self.update_cell(key, column, new, update_width=wider)
         self._shown[key] = cells
 
-    def _trend_cell(self, row: RowView, name: str) -> Text:
-        var = row.var
-        trends = self.trends(name)
-        if not has_trend(var.kind) or var not in trends:
-            return Text("")
-        labels = field_labels(var.kind)
-        field = self.field_of((name, var))
-        text = Text(no_wrap=True, overflow="crop")
-        width = SPARK_WIDTH
-        if labels:
-            text.append(f"{labels[field]:<{FIELD_WIDTH - 1}} ", style="dim")
-            width -= FIELD_WIDTH
-        io = var.kind.code == "IO"
-        values = trends.last(var, field, width)
-        bars = sparkline_text(values, width, *((0.0, 1.0) if io else (None, None)))
-        text.append(bars, style="dim" if row.stale else "cyan")
-        return text
-
     def _update_title(self) -> None:
-        total = len(self._views)
-        title = Text("Watch")
-        if self._needle:
-            add_filter_title(title, self._filter)
-        if self._needle or self._hide_io:
-            title.append(f"  {len(self._order)} of {total} rows")
-        else:
-            title.append(f"  {total} row{'s' * (total != 1)}")
-        if self._hide_io:
-            title.append(" (IO hidden)")
-        title.append(f"  sort: {self.sort_mode.value}")
+        typed = self._filter if self._needle else ""
+        shown = (len(self._order), len(self._views))
+        title = table_title(typed, self._hide_io, shown, self.sort_mode.value)
         if title != self._title:
             self._title = title
             self.border_title = title
-
-
-def writes_refused(status: Status | None) -> bool:
-    """True on a read-only target (``--read-only``, or a profile's ``writes``)."""
-    return status is not None and (status.read_only or status.writes == "read-only")
-
-
-def _differs(old: object, new: object) -> bool:
-    if isinstance(old, Text) and isinstance(new, Text):
-        return old.plain != new.plain or old.spans != new.spans
-    return old != new
 
 
 class TableFilter(FilterLine):

@@ -10,9 +10,9 @@ from ...commands.routing import Scope, Traits
 from ...commands.target import Target, resolve_target
 from ...session import ConnectFailed, Disconnected
 from ...session.endpoints import addresses
-from ..context import CommandContext
+from ..context import CommandContext, JobContext
 from ..events import Feedback, Message, shown_label
-from ..registry import CommandSpec, Option, Sources, Where, no_argument
+from ..registry import CommandSpec, EngineSpec, Option, Sources, Where, no_argument
 
 
 def run_connect(context: CommandContext, command: Connect, line: str | None) -> list[Feedback]:
@@ -27,19 +27,19 @@ def run_connect(context: CommandContext, command: Connect, line: str | None) -> 
         given,
         profiles=rules.profiles,
         read_only_flag=rules.read_only_flag,
-        plain_policy=context.parts.plain_policy,
+        plain_policy=context.plain_policy,
         resolve=addresses,
     )
     for notice in target.notices:
-        context.parts.publisher.alert(notice)
-    context.parts.switch_target(target)
-    session = context.parts.link.session
+        context.alert(notice)
+    context.switch_target(target)
+    session = context.session
     assert session is not None
     try:
         session.connect()
     except (ConnectFailed, Disconnected) as exc:
         if isinstance(exc, ConnectFailed):
-            context.parts.link.connect_failed(exc)
+            context.connect_failed(exc)
         text = f"{exc}; will keep retrying while variables are watched"
         text += f" {check_pointer(command.host, given)}"
         return [Message(text, "error")]
@@ -47,13 +47,12 @@ def run_connect(context: CommandContext, command: Connect, line: str | None) -> 
 
 
 def _connected(context: CommandContext, target: Target) -> str:
-    publisher = context.parts.publisher
     writes = "read-only" if target.read_only else f"writes {target.policy.writes.value}"
     if target.host is None:
-        publisher.note("connected to the built-in simulator")
+        context.note("connected to the built-in simulator")
         return f"connected to the built-in simulator ({writes})"
     host, port = target.host, target.port
-    publisher.note(f"connected to {host}:{port}")
+    context.note(f"connected to {host}:{port}")
     profile = target.profile
     if profile is None:
         rules = f" ({writes})" if writes != "writes open" else ""
@@ -68,11 +67,8 @@ def _connected(context: CommandContext, target: Target) -> str:
 
 
 def run_disconnect(context: CommandContext, command: Simple, line: str | None) -> list[Feedback]:
-    parts = context.parts
-    parts.switch_target(None)
-    for row in parts.poller.watch.mark_all("DISCONNECTED"):
-        parts.publisher.show_row(row)
-    parts.publisher.note("disconnected")
+    context.disconnect()
+    context.note("disconnected")
     return [
         Message(
             "disconnected: connect HOST[:PORT] or connect PROFILE to talk to a "
@@ -85,7 +81,7 @@ def _targets(args: list[str], sources: Sources) -> Sequence[Option]:
     return [("sim", "the built-in simulator"), *sources.targets] if not args else ()
 
 
-def run_use(context: CommandContext, command: Use, line: str | None) -> list[Feedback]:
+def run_use(context: JobContext, command: Use, line: str | None) -> list[Feedback]:
     """``use`` run by one engine: it has one target (a cell runs ``use`` itself)."""
     return [
         Message(
@@ -101,7 +97,7 @@ def _cell_targets(args: list[str], sources: Sources) -> Sequence[Option]:
 
 
 SPECS = (
-    CommandSpec(
+    EngineSpec(
         "connect",
         "HOST[:PORT]",
         "talk to a controller (port 5006 by default), a profile, or sim",
@@ -134,11 +130,12 @@ SPECS = (
         types=(Use,),
         traits=Traits(scope=Scope.CELL),
     ),
-    CommandSpec(
+    EngineSpec(
         "disconnect",
         "",
         "close the session and stop polling",
         no_argument(Step.DISCONNECT),
         run_disconnect,
+        types=(Simple,),
     ),
 )

@@ -19,7 +19,7 @@ from ...protocol import InputError
 from ...protocol.text import terminal_safe
 from ..context import CommandContext
 from ..events import Feedback, Message, UiStep
-from ..registry import CommandSpec, Option, Sources, no_argument
+from ..registry import EngineSpec, Option, Sources, no_argument
 
 
 def run_frames(context: CommandContext, command: Frames, line: str | None) -> list[Feedback]:
@@ -29,38 +29,32 @@ def run_frames(context: CommandContext, command: Frames, line: str | None) -> li
 def run_frame_file(context: CommandContext, command: FrameFile, line: str | None) -> list[Feedback]:
     """``record FILE`` / ``transcript FILE`` from now on (the interesting moment is rarely
     foreseen at start), ``… stop``, or where frames go now."""
-    files, word = context.parts.files, command.kind
+    word = command.kind
     flag = "--record" if word == "record" else "--log"
-    running = files.running(word)
+    running = context.frame_file(word)
     if command.stop or command.path is None:
         if running is None:
             return [Message(f"no {word} running: {word} FILE starts one (as {flag} FILE)")]
         if not command.stop:
-            return [Message(f"{word} to {terminal_safe(running.path)}: {word} stop ends it")]
-        running.close()
-        files.set(word, None)
-        context.parts.publisher.status_dirty = True
-        return [Message(f"{word} stopped: {terminal_safe(running.path)}")]
+            return [Message(f"{word} to {terminal_safe(running)}: {word} stop ends it")]
+        context.stop_frame_file(word)
+        return [Message(f"{word} stopped: {terminal_safe(running)}")]
     if running is not None:
         return [
-            Message(
-                f"{word} already goes to {terminal_safe(running.path)}: {word} stop first",
-                "error",
-            )
+            Message(f"{word} already goes to {terminal_safe(running)}: {word} stop first", "error")
         ]
     try:
-        files.set(word, command.path)
+        context.start_frame_file(word, command.path)
     except InputError as exc:
         return [Message(str(exc), "error")]
-    context.parts.publisher.status_dirty = True
     what = "every frame as JSON lines" if word == "record" else "a transcript of every frame"
-    if files.shared:
+    if context.shares_frame_files:
         what += " of every target, each line naming its target,"
     return [Message(f"{word}: {what} to {terminal_safe(command.path)} ({word} stop ends it)")]
 
 
 def run_help(context: CommandContext, command: Help, line: str | None) -> list[Feedback]:
-    return [Message("\n".join(context.registry.help_lines(command.topic)))]
+    return [Message("\n".join(context.help_lines(command.topic)))]
 
 
 def run_step(context: CommandContext, command: Simple, line: str | None) -> list[Feedback]:
@@ -75,19 +69,20 @@ def _commands(args: list[str], sources: Sources) -> Sequence[Option]:
     return sources.commands if not args else ()
 
 
-FRAMES_SPEC = CommandSpec(
-    "frames",
-    "on|off",
-    "echo every frame sent and received (REPL)",
-    parse_frames,
-    run_frames,
-    "frames on",
-    complete=_on_off,
-    types=(Frames,),
-)
-
-FILE_SPECS = (
-    CommandSpec(
+#: This module's commands (``help`` lists them in the order of the language's
+#: COMMAND_WORDS).
+SPECS = (
+    EngineSpec(
+        "frames",
+        "on|off",
+        "echo every frame sent and received (REPL)",
+        parse_frames,
+        run_frames,
+        "frames on",
+        complete=_on_off,
+        types=(Frames,),
+    ),
+    EngineSpec(
         "record",
         "FILE | stop",
         "append every frame to FILE as JSON lines from now on (as --record)",
@@ -100,7 +95,7 @@ FILE_SPECS = (
         ),
         types=(FrameFile,),
     ),
-    CommandSpec(
+    EngineSpec(
         "transcript",
         "FILE | stop",
         "append every frame to FILE as a plain timestamped transcript (as --log)",
@@ -108,14 +103,17 @@ FILE_SPECS = (
         run_frame_file,
         "transcript cell3.log",
         notes=("transcript stop ends it; transcript alone says where it goes",),
+        types=(FrameFile,),
     ),
-)
-
-CONSOLE_SPECS = (
-    CommandSpec(
-        "clear", "", "clear the frame log (the REPL: the screen)", no_argument(Step.CLEAR), run_step
+    EngineSpec(
+        "clear",
+        "",
+        "clear the frame log (the REPL: the screen)",
+        no_argument(Step.CLEAR),
+        run_step,
+        types=(Simple,),
     ),
-    CommandSpec(
+    EngineSpec(
         "help",
         "[COMMAND]",
         "list commands, or explain one",
@@ -125,11 +123,12 @@ CONSOLE_SPECS = (
         complete=_commands,
         types=(Help,),
     ),
-    CommandSpec(
+    EngineSpec(
         "quit",
         "",
         "leave (Ctrl+Q in the console, Ctrl+D in the REPL)",
         no_argument(Step.QUIT),
         run_step,
+        types=(Simple,),
     ),
 )

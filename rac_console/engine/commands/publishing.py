@@ -14,30 +14,27 @@ from ...commands.routing import Scope, Traits
 from ...protocol.errors import InputError
 from ..context import CommandContext
 from ..events import Feedback, Message
-from ..registry import CommandSpec, Option, Sources
+from ..registry import EngineSpec, Option, Sources
 
 
 def run_publish(context: CommandContext, command: Publish, line: str | None) -> list[Feedback]:
-    tap = context.parts.plant()
+    name = context.plant_name()
     if command.off:
-        stopped = tap.stop_publishing()
-        context.parts.publisher.status_dirty = True
-        return [Message(stopped or f"{tap.name} is not publishing: nothing to stop")]
+        stopped = context.stop_publishing()
+        return [Message(stopped or f"{name} is not publishing: nothing to stop")]
     if command.address is None:
-        where = tap.publishing
+        where = context.publishing_to()
         return [
             Message(
-                f"{tap.name}'s watched values go to {where}"
+                f"{name}'s watched values go to {where}"
                 if where is not None
-                else f"{tap.name} is not publishing: {PUBLISH_USAGE}"
+                else f"{name} is not publishing: {PUBLISH_USAGE}"
             )
         ]
-    rows = [row.view() for row in context.parts.poller.watch.rows.values()]
     try:
-        said = tap.publish_to(command.address, rows)
+        said = context.publish_to(command.address)
     except InputError as exc:
         return [Message(str(exc), "error")]
-    context.parts.publisher.status_dirty = True
     return [Message(said)]
 
 
@@ -51,7 +48,7 @@ def _complete(args: list[str], sources: Sources) -> Sequence[Option]:
     )
 
 
-PUBLISH_SPEC = CommandSpec(
+PUBLISH_SPEC = EngineSpec(
     "publish",
     "mqtt://HOST[:PORT]/PREFIX | off",
     "publish the watched values to an MQTT broker (retained, one topic each)",
@@ -69,3 +66,6 @@ PUBLISH_SPEC = CommandSpec(
     types=(Publish,),
     traits=Traits(scope=Scope.EVERY_TARGET),
 )
+
+#: This module's commands.
+SPECS = (PUBLISH_SPEC,)

@@ -23,12 +23,11 @@ from ...commands.language import (
 )
 from ...protocol import InputError
 from ...protocol.text import counted
-from ..context import CommandContext
-from ..csvsink import CsvSink
+from ..context import CommandContext, CsvLogState
 from ..events import Feedback, Message
 from ..registry import (
     AT_A_TERMINAL,
-    CommandSpec,
+    EngineSpec,
     Option,
     Where,
     no_argument,
@@ -39,29 +38,26 @@ from .exchanges import TYPE_NOTE
 
 
 def run_watch(context: CommandContext, command: Watch, line: str | None) -> list[Feedback]:
-    poller, variables = context.parts.poller, command.vars
-    added = poller.watch.add(variables, command.label, command.every)
-    for var in variables:
-        context.parts.publisher.show_row(poller.watch.rows[var])
-    poller.see(variables)
-    poller.wake()
+    variables = command.vars
+    added = context.watch(variables, command.label, command.every)
     names = names_text(variables)
     text = f"watching {names}" if added else f"{names} already watched"
     if command.every is not None:
-        text += f", polled every {command.every:g} s (other rows: interval {poller.interval:g} s)"
-    log = context.parts.csv.log
+        text += f", polled every {command.every:g} s (other rows: interval {context.interval:g} s)"
+    csv = context.csv_log()
+    log = csv.log if not csv.cell else None  # a cell's log: its columns are the cell's
     if log is not None and not set(variables) <= set(log.variables):
         text += " (not in the CSV log's columns: log stop, then log FILE again to add them)"
     return [Message(text)]
 
 
 def run_unwatch(context: CommandContext, command: Unwatch, line: str | None) -> list[Feedback]:
-    watch, variables = context.parts.poller.watch, command.vars
-    absent = [v for v in variables if v not in watch.rows]
+    variables = command.vars
+    watched = {row.var for row in context.watched_rows()}
+    absent = [v for v in variables if v not in watched]
     if variables and len(absent) == len(variables):
         return [Message(f"{names_text(variables)} not watched: nothing to stop", "error")]
-    removed = watch.remove(variables)
-    context.parts.publisher.remove_rows(removed)
+    removed = context.unwatch(variables)
     text = f"stopped watching {counted(len(removed), 'variable')}"
     if absent:
         verb = "was" if len(absent) == 1 else "were"
@@ -70,34 +66,28 @@ def run_unwatch(context: CommandContext, command: Unwatch, line: str | None) -> 
 
 
 def run_interval(context: CommandContext, command: SetInterval, line: str | None) -> list[Feedback]:
-    context.parts.poller.interval = command.seconds
-    context.parts.poller.wake()
+    context.set_interval(command.seconds)
     return [Message(f"poll interval {command.seconds:g} s")]
 
 
 def run_pause(context: CommandContext, command: Simple, line: str | None) -> list[Feedback]:
-    poller = context.parts.poller
-    poller.set_paused(command.step is Step.PAUSE)
-    return [Message("polling paused" if poller.paused else "polling resumed")]
+    paused = context.pause_polling(command.step is Step.PAUSE)
+    return [Message("polling paused" if paused else "polling resumed")]
 
 
 def run_watch_file(context: CommandContext, command: WatchFile, line: str | None) -> list[Feedback]:
     from .. import watchlist  # TOML: loaded by the console's save and load alone
 
-    poller = context.parts.poller
     try:
         if command.action == "save":
-            saved = [(row.var, row.label, row.every) for row in poller.watch.rows.values()]
+            saved = [(row.var, row.label, row.every) for row in context.watched_rows()]
             watchlist.save(command.path, saved)
             return [Message(f"saved {len(saved)} watched variables to {command.path}")]
         rows = watchlist.load(command.path)
     except InputError as exc:
         return [Message(str(exc), "error")]
     for var, label, every in rows:
-        poller.watch.add((var,), label, every)
-        context.parts.publisher.show_row(poller.watch.rows[var])
-    poller.see([var for var, _, _ in rows])
-    poller.wake()
+        context.watch((var,), label, every)
     return [Message(f"loaded {len(rows)} watched variables from {command.path}")]
 
 
@@ -106,36 +96,33 @@ def run_csv_log(context: CommandContext, command: CsvLog, line: str | None) -> l
 
 
 def _csv_log(context: CommandContext, command: CsvLog) -> Message:
-    sink, rows = context.parts.csv, context.parts.poller.watch.rows
-    if sink.cell is not None:
-        return _cell_csv_log(sink, command)
-    current, log = sink.path, sink.log
+    state = context.csv_log()
     if command.stop:
-        ended = sink.stop()
+        ended = context.stop_csv_log()
         if ended is not None:
             return Message(f"CSV log stopped: {counted(ended.rows, 'row')} in {ended.path}")
-        if current is not None:
-            return Message(f"CSV log to {current} stopped before its first row")
+        if state.path is not None:
+            return Message(f"CSV log to {state.path} stopped before its first row")
         return Message("no CSV log to stop", "error")
     if command.path is None:
-        if log is not None:
-            count = counted(len(log.variables), "variable")
-            return Message(f"logging {count} to {log.path}: {counted(log.rows, 'row')} so far")
-        if current is not None:
-            return Message(f"logging to {current} from the first poll cycle")
-        return Message("not logging: log FILE.csv starts a CSV log of the watched values")
-    if current is not None:
-        return Message(f"already logging to {current}: log stop first", "error")
+        return _where_it_goes(state)
+    if state.path is not None and not state.cell:  # a cell's log says so itself
+        return Message(f"already logging to {state.path}: log stop first", "error")
     try:
-        if not rows:
-            sink.wait_for_rows(command.path)
-            return Message(
-                f"logging to {sink.pending} from the first poll cycle: "
-                "the variables watched then are its columns"
-            )
-        started = sink.start(command.path, list(rows))
+        started = context.start_csv_log(command.path)
     except InputError as exc:
         return Message(f"CSV log not started: {exc}", "error")
+    if state.cell:
+        return Message(
+            f"logging every target to {context.csv_log().path} from its next poll cycle: a "
+            "column per target and variable watched then, a row per target's cycle (log "
+            "stop ends it)"
+        )
+    if started is None:
+        return Message(
+            f"logging to {context.csv_log().path} from the first poll cycle: "
+            "the variables watched then are its columns"
+        )
     if started.failure is not None:  # its header failed: said here, not as an alert too
         return Message(started.failure, "error")
     how = "appending to" if started.appending else "logging to"
@@ -145,36 +132,26 @@ def _csv_log(context: CommandContext, command: CsvLog) -> Message:
     )
 
 
-def _cell_csv_log(sink: CsvSink, command: CsvLog) -> Message:
-    """``log`` in a cell: the cell's one log, for every target whichever runs it."""
-    cell = sink.cell
-    assert cell is not None
-    if command.stop:
-        current, ended = cell.path, sink.stop()
-        if ended is not None:
-            return Message(f"CSV log stopped: {counted(ended.rows, 'row')} in {ended.path}")
-        if current is not None:
-            return Message(f"CSV log to {current} stopped before its first row")
-        return Message("no CSV log to stop", "error")
-    log = cell.log
-    if command.path is None:
+def _where_it_goes(state: CsvLogState) -> Message:
+    """``log`` alone: where the CSV log goes (in a cell: the cell's one log, for every
+    target whichever asks)."""
+    log = state.log
+    if state.cell:
         if log is not None:
             rows = counted(log.rows, "row")
             return Message(f"logging every target to {log.path}: {rows} so far")
-        if cell.pending is not None:
-            waiting = ", ".join(cell.waiting_for())
+        if state.path is not None:
+            waiting = ", ".join(state.waiting_for)
             return Message(
-                f"logging to {cell.pending} once every target has polled (waiting for {waiting})"
+                f"logging to {state.path} once every target has polled (waiting for {waiting})"
             )
         return Message("not logging: log FILE.csv starts a CSV log of every target's values")
-    try:
-        sink.wait_for_rows(command.path)
-    except InputError as exc:
-        return Message(f"CSV log not started: {exc}", "error")
-    return Message(
-        f"logging every target to {cell.path} from its next poll cycle: a column per "
-        "target and variable watched then, a row per target's cycle (log stop ends it)"
-    )
+    if log is not None:
+        count = counted(len(log.variables), "variable")
+        return Message(f"logging {count} to {log.path}: {counted(log.rows, 'row')} so far")
+    if state.path is not None:
+        return Message(f"logging to {state.path} from the first poll cycle")
+    return Message("not logging: log FILE.csv starts a CSV log of the watched values")
 
 
 def names_text(variables: tuple[VarRef, ...]) -> str:
@@ -197,8 +174,10 @@ def _watch_hint(args: list[str]) -> str:
 
 _ALL: Sequence[Option] = (("all", "every watched variable"),)
 
+#: This module's commands (``help`` lists them in the order of the language's
+#: COMMAND_WORDS).
 SPECS = (
-    CommandSpec(
+    EngineSpec(
         "watch",
         "TYPE INDEX [LABEL] [every SECONDS]",
         "add variables to the watch list, polled and shown live",
@@ -212,7 +191,7 @@ SPECS = (
         hint=_watch_hint,
         types=(Watch,),
     ),
-    CommandSpec(
+    EngineSpec(
         "unwatch",
         "TYPE INDEX | all",
         "remove variables from the watch list",
@@ -224,7 +203,7 @@ SPECS = (
         complete=variable_completion(first=_ALL),
         types=(Unwatch,),
     ),
-    CommandSpec(
+    EngineSpec(
         "interval",
         "SECONDS",
         "time between poll cycles",
@@ -233,26 +212,25 @@ SPECS = (
         "interval 0.5",
         types=(SetInterval,),
     ),
-    CommandSpec(
+    EngineSpec(
         "pause",
         "",
         "stop polling the watched variables",
         no_argument(Step.PAUSE),
         run_pause,
         where=AT_A_TERMINAL | {Where.COMMAND_LINE},  # watch --log-csv: until the log opened
+        types=(Simple,),
     ),
-    CommandSpec(
+    EngineSpec(
         "resume",
         "",
         "start polling again",
         no_argument(Step.RESUME),
         run_pause,
         where=AT_A_TERMINAL | {Where.COMMAND_LINE},
+        types=(Simple,),
     ),
-)
-
-FILE_SPECS = (
-    CommandSpec(
+    EngineSpec(
         "save",
         "FILE",
         "save the watch list as TOML",
@@ -261,28 +239,29 @@ FILE_SPECS = (
         "save cell3.toml",
         types=(WatchFile,),
     ),
-    CommandSpec(
+    EngineSpec(
         "load",
         "FILE",
         "add the watch list saved in FILE",
         parse_load,
         run_watch_file,
         "load cell3.toml",
+        types=(WatchFile,),
     ),
-)
-
-LOG_SPEC = CommandSpec(
-    "log",
-    "FILE.csv | stop",
-    "log the watched values to a CSV file, one row per poll cycle",
-    parse_log,
-    run_csv_log,
-    "log cell3.csv",
-    notes=(
-        "columns: time, then one per field (P10.X, P10.Y, ..., IO128), taken when logging starts",
-        "an existing file is appended to if its columns are the same; log alone "
-        "says where the log goes",
+    EngineSpec(
+        "log",
+        "FILE.csv | stop",
+        "log the watched values to a CSV file, one row per poll cycle",
+        parse_log,
+        run_csv_log,
+        "log cell3.csv",
+        notes=(
+            "columns: time, then one per field (P10.X, P10.Y, ..., IO128), taken when "
+            "logging starts",
+            "an existing file is appended to if its columns are the same; log alone "
+            "says where the log goes",
+        ),
+        where=AT_A_TERMINAL | {Where.COMMAND_LINE},  # rac-console watch --log-csv
+        types=(CsvLog,),
     ),
-    where=AT_A_TERMINAL | {Where.COMMAND_LINE},  # rac-console watch --log-csv
-    types=(CsvLog,),
 )

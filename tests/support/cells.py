@@ -7,8 +7,6 @@ import time
 from collections.abc import Callable
 from pathlib import Path
 
-from tui_helpers import REQUEST_TIMEOUT
-
 from rac_console.commands.policy import TargetProfile, WritePolicy, Writes
 from rac_console.commands.target import Target
 from rac_console.engine import Alert, Result, RowView
@@ -19,6 +17,7 @@ from rac_console.engine.registry import Where
 from rac_console.present.history import History
 from rac_console.sim.cell import SimulatedCellThread
 from rac_console.tui.app import RacConsoleApp
+from tests.support.drivers import REQUEST_TIMEOUT
 
 COLOURS = ("green", "magenta", "cyan", "yellow")
 
@@ -53,7 +52,9 @@ def make_cell_app(
 
 def row(app: RacConsoleApp, name: str, var: str) -> RowView | None:
     """A target's row of the variable named ``var`` (``IO128``), as the console holds it."""
-    return next((r for r in app.states[name].rows.values() if str(r.var) == var), None)
+    return next(
+        (r for r in app.main_screen.members.states[name].rows.values() if str(r.var) == var), None
+    )
 
 
 #: A wait this long means hung: never a figure a test checks.

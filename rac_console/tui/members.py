@@ -7,7 +7,6 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
 from rich.text import Text
-from textual.widgets import Static
 
 from ..present.cell_status import Badge
 from ..present.table_rows import RowKey
@@ -49,14 +48,15 @@ class MemberState:
         return Badge(self.name, self.status, self.colour, current)
 
 
-class CellMembers:
-    """A mixin of the app: its targets' states, and the current one's as the app's own
+class Members:
+    """The console's targets, by name, and the current one's state as the console's own
     (``status``, ``rows``, ``trends``, ``toggles``: in a cell of one, the console's)."""
 
-    cell: Cell
-    states: dict[str, MemberState]
-    cell_mode: bool
-    prompt: Static
+    def __init__(self, cell: Cell) -> None:
+        self.cell = cell
+        self.states = {member.name: MemberState(member) for member in cell.members}
+        #: More than one target: the table names each row's, the prompt the current.
+        self.cell_mode = len(cell.members) > 1
 
     @property
     def current(self) -> MemberState:
@@ -97,11 +97,10 @@ class CellMembers:
         """A target by name (None, or a name not in the cell: the current one)."""
         return self.states.get(name or "", self.current)
 
-    def show_prompt(self) -> None:
-        """The prompt names the current target (a cell's only)."""
-        if self.cell_mode:
-            shown = f"{terminal_safe(self.current.name)} ›"
-            self.prompt.update(Text.assemble((shown, "bold cyan"), " "))
+    def prompt_text(self) -> Text:
+        """The prompt naming the current target (a cell's only)."""
+        shown = f"{terminal_safe(self.current.name)} ›"
+        return Text.assemble((shown, "bold cyan"), " ")
 
     def row_groups(self) -> list[tuple[str, dict[VarRef, RowView]]]:
         """Every target's rows, in cell order, for the table."""
