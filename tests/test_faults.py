@@ -14,12 +14,13 @@ from typing import cast
 
 import pytest
 
-from rac_console.engine import Alert, Engine, Result, RowView
+from rac_console.engine import Engine
 from rac_console.protocol import Variant, kind_of, parse_response
-from rac_console.session import BadReply, Disconnected, Frame, RequestTimeout
+from rac_console.session import BadReply, Disconnected, RequestTimeout
 from rac_console.sim.controller import SimulatedController
 from rac_console.sim.faults import GARBAGE, FaultPlan, FaultSettings
 from rac_console.sim.server import SimulatorServer
+from tests.support.drivers import Front
 from tests.support.sessions import AsyncSession
 
 #: Over half a second each (a terminal app, a subprocess, a timed server):
@@ -156,47 +157,39 @@ def test_the_console_marks_failed_rows_stale_and_keeps_good_values_right() -> No
             seed=3, drop_every=9, stall_every=11, garble_every=13, error_rate=0.05, split=True
         )
         engine = Engine(simulator.host, simulator.port, timeout=0.3, interval=0)
-        rows: dict[str, RowView] = {}
-        alerts: list[str] = []
-        polls = 0
-        answered: set[str] = set()
+        front = Front(engine)  # reads the batches as every front end does
 
-        def drain() -> None:
-            nonlocal polls
-            batch = engine.outbox.drain()
-            rows.update({str(var): view for var, view in batch.rows.items()})
-            for event in batch.events:
-                if isinstance(event, Frame) and event.poll and event.direction == "tx":
-                    polls += 1
-                elif isinstance(event, Alert):
-                    alerts.append(event.text)
-                elif isinstance(event, Result):
-                    answered.add(event.line or "")
+        def polls() -> int:
+            return sum(1 for frame in front.frames if frame.poll and frame.direction == "tx")
+
+        def answered() -> set[str]:
+            return {result.line or "" for result in front.results.values()}
 
         await asyncio.to_thread(engine.start)
         try:
             engine.submit(f"watch I 0-{COUNT - 1}")
 
             def polled() -> bool:
-                drain()
-                return polls > 3 * COUNT
+                front.drain()
+                return polls() > 3 * COUNT
 
             await until(polled, "three poll cycles", timeout=20)
             engine.submit("pause")
 
             def paused() -> bool:
-                drain()
-                return "pause" in answered
+                front.drain()
+                return "pause" in answered()
 
             await until(paused, "the pause")
         finally:
             await asyncio.to_thread(engine.stop)
             await simulator.stop()
-        drain()
+        front.drain()
         shown = {
             name: (view.status, view.stale, view.variant.value if view.variant else None)
-            for name, view in rows.items()
+            for name, view in front.rows.items()
         }
+        alerts = front.alerts
         return shown, alerts
 
     rows, alerts = asyncio.run(scenario())

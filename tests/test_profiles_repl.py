@@ -19,7 +19,7 @@ from rac_console.commands.policy import WritePolicy, Writes
 from rac_console.engine import CONFIRM_GUARD_SECONDS, ConfirmWrite
 from rac_console.engine.config import CONFIG_ENV, load_config
 from rac_console.engine.status import LABEL_WIDTH
-from rac_console.repl import repl as repl_module
+from rac_console.repl import asking as asking_module
 from rac_console.repl.prompt_parts import confirm_message, prompt_fragments, toolbar_fragments
 from rac_console.sim.thread import SimulatorThread
 from tests.support.drivers import Driver
@@ -120,12 +120,12 @@ async def test_a_yes_typed_right_after_the_question_is_not_taken(
     async def steps(d: Driver) -> None:
         # "At once" is within the guard time however busy the machine: a guard of a
         # minute for the first answer (a y typed 0.4 s late would be a yes).
-        monkeypatch.setattr(repl_module, "CONFIRM_GUARD_SECONDS", 60.0)
+        monkeypatch.setattr(asking_module, "CONFIRM_GUARD_SECONDS", 60.0)
         d.type("put I 10 15\r")
         await d.until(lambda _: d.repl.asking is not None, "the question")
         d.type("y\r")  # at once
         await d.until(lambda out: "answer again" in out, "the question asked again")
-        monkeypatch.setattr(repl_module, "CONFIRM_GUARD_SECONDS", CONFIRM_GUARD_SECONDS)
+        monkeypatch.setattr(asking_module, "CONFIRM_GUARD_SECONDS", CONFIRM_GUARD_SECONDS)
         assert b"PUT:RC8:10:I:3,15\r" not in d.tap.sent
         asked = time.monotonic()
         await d.until(lambda _: time.monotonic() > asked + 0.5, "the guard time to pass")

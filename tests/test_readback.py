@@ -16,11 +16,10 @@ from rac_console.commands.language import Put, VarRef
 from rac_console.commands.outcome import ExitStatus, Outcome
 from rac_console.commands.policy import AllowRange, WritePolicy, Writes, parse_allow
 from rac_console.commands.readback import same_value
-from rac_console.engine import ConfirmWrite, Engine, Result
+from rac_console.engine import ConfirmWrite, Engine
 from rac_console.present.render import outcome_text
 from rac_console.protocol import Variant, kind_of
 from rac_console.protocol.vartypes import VT
-from rac_console.session import Frame
 from tests.support.drivers import Front, cli, one_error_line
 from tests.support.servers import RecordingServer
 
@@ -167,20 +166,12 @@ class AnsweringFront(Front):
         self.answer = answer
         self.asked: list[ConfirmWrite] = []
 
-    def drain(self) -> None:
-        batch = self.engine.outbox.drain()
-        self.status = batch.status or self.status
-        for event in batch.events:
-            if isinstance(event, ConfirmWrite):
-                self.asked.append(event)
-                if self.answer is None:
-                    self.engine.cancel(queued=True)
-                else:
-                    self.engine.answer_confirm(event.seq, self.answer)
-            elif isinstance(event, Result):
-                self.results[event.seq] = event
-            elif isinstance(event, Frame):
-                self.frames.append(event)
+    def take_confirm(self, target: str | None, question: ConfirmWrite) -> None:
+        self.asked.append(question)
+        if self.answer is None:
+            self.engine.cancel(queued=True)
+        else:
+            self.engine.answer_confirm(question.seq, self.answer)
 
 
 @pytest.mark.parametrize("answer", [False, None], ids=["no", "esc"])
@@ -353,29 +344,21 @@ class ChangingFront(AnsweringFront):
         self.value = value
         self.step = 0  # added to the value after each question
 
-    def drain(self) -> None:
+    def take_confirm(self, target: str | None, question: ConfirmWrite) -> None:
         from rac_console.session import Session
 
-        batch = self.engine.outbox.drain()
-        self.status = batch.status or self.status
-        for event in batch.events:
-            if isinstance(event, ConfirmWrite):
-                self.asked.append(event)
-                status = self.status
-                assert status is not None and status.host is not None
-                other = Session(status.host, status.port, timeout=2)
-                try:
-                    text = f"3,{self.value}"
-                    put = Put.of(VarRef(kind_of("I"), 10), Variant(VT.I4, self.value), text)
-                    other.exchange(put.request)
-                    self.value += self.step
-                finally:
-                    other.close()
-                self.engine.answer_confirm(event.seq, True)
-            elif isinstance(event, Result):
-                self.results[event.seq] = event
-            elif isinstance(event, Frame):
-                self.frames.append(event)
+        self.asked.append(question)
+        status = self.status
+        assert status is not None and status.host is not None
+        other = Session(status.host, status.port, timeout=2)
+        try:
+            text = f"3,{self.value}"
+            put = Put.of(VarRef(kind_of("I"), 10), Variant(VT.I4, self.value), text)
+            other.exchange(put.request)
+            self.value += self.step
+        finally:
+            other.close()
+        self.engine.answer_confirm(question.seq, True)
 
 
 def test_a_value_that_changed_while_the_question_was_open_is_asked_about_again() -> None:

@@ -38,7 +38,16 @@ from rac_console.engine.settings import SettingsFile
 from rac_console.protocol import InputError, Variant
 from rac_console.tui import app as app_module
 from rac_console.tui.app import RacConsoleApp
-from tests.support.drivers import make_app, results_text, stage, type_line, until, watch_then_pause
+from tests.support.drivers import (
+    make_app,
+    pause_polling,
+    results_text,
+    rows_read,
+    stage,
+    type_line,
+    until,
+    watch_then_pause,
+)
 
 SOURCE = "/home/op/.config/rac-console/config.toml"
 
@@ -618,20 +627,8 @@ async def changed_just_now(pilot, rows: int) -> None:
     """Polling paused, every row stamped as changed (a minute ahead: highlighted for as
     long as the test needs, whatever the machine's speed)."""
     app = pilot.app
-    await until(
-        pilot,
-        lambda: (
-            len(app.main_screen.members.rows) == rows
-            and all(v.status == "OK" for v in app.main_screen.members.rows.values())
-        ),
-        "every row's first value",
-    )
-    await type_line(pilot, "pause")
-    await until(
-        pilot,
-        lambda: app.main_screen.status is not None and app.main_screen.status.paused,
-        "the pause",
-    )
+    await rows_read(pilot, rows)
+    await pause_polling(pilot)
     ahead = time.monotonic() + 60
     for var, view in list(app.main_screen.members.rows.items()):
         app.main_screen.members.rows[var] = replace(view, changed_at=ahead)

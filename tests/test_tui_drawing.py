@@ -15,7 +15,7 @@ from rac_console.session import Frame
 from rac_console.tui.app import RacConsoleApp
 from rac_console.tui.frame_lines import HEX_SEPARATOR
 from rac_console.tui.frame_log import KEPT, FrameLog
-from tests.support.drivers import make_app, results_text, type_line, until
+from tests.support.drivers import make_app, results_text, rows_read, type_line, until
 
 REPLY = parse_response("0,3,1")
 I1 = parse_request(b"GET:RC8:1:I:\r")
@@ -133,14 +133,7 @@ async def watch_rows(pilot: Pilot, lines: tuple[str, ...], rows: int) -> None:
     assert isinstance(app, RacConsoleApp)
     for line in lines:
         await type_line(pilot, line)
-    await until(
-        pilot,
-        lambda: (
-            len(app.main_screen.members.rows) == rows
-            and all(v.status == "OK" for v in app.main_screen.members.rows.values())
-        ),
-        "every row's first value",
-    )
+    await rows_read(pilot, rows)
 
 
 def table_cut(app: RacConsoleApp) -> bool:

@@ -5,8 +5,7 @@ poller reads the variables on its schedule, its CSV log writes ``--log-csv``, an
 poll cycle comes back as a :class:`~rac_console.engine.Cycle` that becomes a line. Every
 line is flushed as it is written, so ``| grep --line-buffered`` sees it at once; a
 reader that goes away (``| head -3``) ends the command quietly. The exit status is the
-worst one seen, as for ``run``; only that worst is kept, so a watch left running for
-days holds no more memory than after its first minute.
+worst seen, as for ``run``, and only it is kept (days of watching hold no more memory).
 """
 
 from __future__ import annotations

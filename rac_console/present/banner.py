@@ -76,3 +76,25 @@ def welcome_lines(
     begin = f"rac-console {version}: type help, or try watch P 0, watch IO 0-7, get S 1"
     lines.append(Text(begin, style="dim"))
     return lines
+
+
+def repl_banner(names: Sequence[str], status: Status | None) -> Text | None:
+    """The REPL's first line: the cell, the simulator, or the live controller with its
+    profile and write rules; then how to get help and out (None: no session yet)."""
+    from ..engine import SIMULATOR_NOTICE
+
+    if len(names) > 1:
+        return Text.assemble(
+            ("cell", "bold"),
+            f" of {len(names)} targets: {', '.join(names)}. Lines run "
+            "on the one the prompt names; @NAME LINE runs one elsewhere, use NAME changes "
+            "it. help lists the commands; Ctrl-D leaves.",
+        )
+    if status is None or not status.has_session:
+        return None
+    if status.is_simulator:
+        return Text.assemble(
+            ("sim", "bold yellow"),
+            f": {SIMULATOR_NOTICE}. help lists the commands; Ctrl-D leaves.",
+        )
+    return Text.assemble(live_banner(status), " help lists the commands; Ctrl-D leaves.")

@@ -2,16 +2,21 @@
 
 from __future__ import annotations
 
+import time
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 from rich.text import Text
 
 from ..engine.status import OK, WAITING
-from ..protocol.text import scalar_text
+from ..protocol.text import scalar_text, terminal_safe
 from ..protocol.vartypes import vt_name
 
 if TYPE_CHECKING:
+    from rich.table import Table
+
+    from ..commands.language import VarRef
     from ..engine.events import RowView
     from ..protocol.variant import Variant
 
@@ -122,3 +127,33 @@ def age_text(row: RowView, now: float) -> str:
     if age < 3600:
         return f"{int(age // 60)}m{int(age % 60):02d}s"
     return f"{int(age // 3600)}h{int(age % 3600 // 60):02d}m"
+
+
+def watch_table(
+    variables: Sequence[VarRef],
+    rows: Mapping[VarRef, RowView],
+    paused: bool,
+    title: str | None = None,
+) -> Table:
+    """The REPL's live watch: the watched rows; while polling is paused each says so (a
+    row never read says "not polled", not a blank that never fills)."""
+    from rich.table import Table
+
+    table = Table(box=None, pad_edge=False, header_style="bold", title=title)
+    for heading in ("Variable", "Label", "Status", "Changed", "Value"):
+        table.add_column(heading)
+    now = time.monotonic()
+    for var in variables:
+        row = rows.get(var)
+        if row is not None:
+            value = value_cell(row, now)
+            if paused and row.variant is None:
+                value = Text("not polled", style="dim italic")
+            table.add_row(
+                str(var),
+                Text(terminal_safe(row.label)),
+                Text("paused", style="bold yellow") if paused else status_cell(row),
+                age_text(row, now),
+                value,
+            )
+    return table

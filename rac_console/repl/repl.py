@@ -5,7 +5,6 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import signal
-import time
 from collections.abc import Callable
 from typing import Any
 
@@ -13,7 +12,6 @@ from prompt_toolkit import PromptSession
 from prompt_toolkit.application import get_app_or_none, run_in_terminal
 from prompt_toolkit.formatted_text import FormattedText
 from prompt_toolkit.input import Input
-from prompt_toolkit.input.typeahead import clear_typeahead
 from prompt_toolkit.keys import Keys
 from prompt_toolkit.output import Output
 from rich.console import Console, RenderableType
@@ -24,8 +22,6 @@ from rich.text import Text
 from ..commands.language import Unwatch, VarRef, Watch
 from ..commands.outcome import ExitStatus, Outcome
 from ..engine import (
-    CONFIRM_GUARD_SECONDS,
-    SIMULATOR_NOTICE,
     Alert,
     Batch,
     ConfirmWrite,
@@ -38,19 +34,18 @@ from ..engine import (
     UiStep,
 )
 from ..engine.cell import Cell
-from ..engine.events import Event
-from ..present.banner import live_banner
+from ..present.banner import repl_banner
 from ..present.batches import BatchReader
 from ..present.cell_view import by_target, cell_targets
-from ..present.cells import age_text, status_cell, value_cell
+from ..present.cells import watch_table
 from ..present.completion import WHOLE_LIST, hint
 from ..present.frames import frame_line
 from ..present.heap import keep_full_collections_rare
 from ..present.history import History, is_refused
 from ..present.render import error_text, make_console, notice_text, outcome_text
 from ..present.status import connect_targets
-from ..protocol.text import terminal_safe
 from ..session import Frame
+from .asking import ask_write
 from .prompt_parts import (
     STYLE,
     HintProcessor,
@@ -59,7 +54,6 @@ from .prompt_parts import (
     SharedHistory,
     SharedSuggest,
     cell_toolbar_fragments,
-    confirm_message,
     prompt_fragments,
     toolbar_fragments,
 )
@@ -206,20 +200,28 @@ class Repl(BatchReader):
         self._questions.add(task)
         task.add_done_callback(self._questions.discard)
 
+    # Named by their target when several are open: an alert (a recording stopped)
+    # always; with ``frames on``, every typed frame, dimmed, and the log's marks.
+
     def take_alert(self, target: str | None, alert: Alert) -> None:
-        self._echo(alert, target)
+        self._print(self._by(target, notice_text(alert.text, error=alert.local_failure)))
 
     def take_note(self, target: str | None, note: Note) -> None:
-        self._echo(note, target)
+        if self.frames:  # a gap or a failed request, marked
+            text = notice_text(f"── {note.text} ──", style="dim")
+            self._print(self._by(target, text), soft_wrap=True)
 
     def take_frame(self, target: str | None, frame: Frame) -> None:
-        self._echo(frame, target)
+        if self.frames and not frame.poll:
+            text = Text(frame_line(frame), style="dim")
+            self._print(self._by(target, text), soft_wrap=True)
+
+    def _by(self, target: str | None, text: Text) -> Text:
+        return by_target(None if self.cell.single else target, text)
 
     async def confirm(self, question: ConfirmWrite, target: str | None = None) -> None:
-        """A write on a ``confirm`` target: ``Write I10: 14 → 15 on Cell 3? [y/N]``; only
-        y or yes writes. Keys typed ahead before the question are dropped, not taken as
-        its answer; Ctrl-C or Ctrl-D is a No. (Without a terminal, ``run`` refuses.) In a
-        cell, ``target`` (the one the write goes to) leads the target's label."""
+        """A write on a ``confirm`` target asks first (see :func:`ask_write`); in a cell,
+        ``target`` (the one the write goes to) leads the target's label."""
         if self._confirm_prompt is None:
             self._confirm_prompt = PromptSession(
                 style=STYLE, input=self.prompt.input, output=self.prompt.output
@@ -227,22 +229,7 @@ class Repl(BatchReader):
         self.asking = question
         yes = False
         try:
-            while True:
-                clear_typeahead(self.prompt.input)
-                asked_at = time.monotonic()
-                answer = await self._confirm_prompt.prompt_async(confirm_message(question, target))
-                yes = answer.strip().lower() in ("y", "yes")
-                if not yes or time.monotonic() - asked_at >= CONFIRM_GUARD_SECONDS:
-                    break
-                self._print(
-                    notice_text(
-                        f"answered within {CONFIRM_GUARD_SECONDS:g} s of the question, as keys "
-                        "typed ahead would be: answer again",
-                        error=True,
-                    )
-                )
-        except (KeyboardInterrupt, EOFError):
-            yes = False
+            yes = await ask_write(self._confirm_prompt, question, target, self._print)
         finally:
             self.asking = None
             self.cell.answer_confirm(question.seq, yes)
@@ -318,24 +305,9 @@ class Repl(BatchReader):
         return 0
 
     def banner(self) -> Text | None:
-        """The first line: the simulator, or the live controller with its profile and
-        write rules (as the console's welcome says it), then how to get help and out."""
-        status = self.status
-        if not self.cell.single:
-            return Text.assemble(
-                ("cell", "bold"),
-                f" of {len(self.cell.members)} targets: {', '.join(self.cell.names)}. Lines run "
-                "on the one the prompt names; @NAME LINE runs one elsewhere, use NAME changes "
-                "it. help lists the commands; Ctrl-D leaves.",
-            )
-        if status is None or not status.has_session:
-            return None
-        if status.is_simulator:
-            return Text.assemble(
-                ("sim", "bold yellow"),
-                f": {SIMULATOR_NOTICE}. help lists the commands; Ctrl-D leaves.",
-            )
-        return Text.assemble(live_banner(status), " help lists the commands; Ctrl-D leaves.")
+        """The first line: the cell, the simulator, or the live controller with its
+        profile and write rules (as the console's welcome says it)."""
+        return repl_banner(self.cell.names, self.status)
 
     def exit_status(self, status: int) -> int:
         for known in self.statuses.values():
@@ -400,18 +372,6 @@ class Repl(BatchReader):
         else:
             self._print(by_target(by, notice_text(error_text(outcome), error=True)), soft_wrap=True)
 
-    def _echo(self, event: Event, name: str | None = None) -> None:
-        """``frames on``: every frame, dimmed, as it crosses the wire (not during a watch);
-        an alert (a recording stopped) always. Named by its target when several are open."""
-        by = None if self.cell.single else name
-        if isinstance(event, Alert):
-            self._print(by_target(by, notice_text(event.text, error=event.local_failure)))
-        elif self.frames and isinstance(event, Note):  # a gap or a failed request, marked
-            text = notice_text(f"── {event.text} ──", style="dim")
-            self._print(by_target(by, text), soft_wrap=True)
-        elif self.frames and isinstance(event, Frame) and not event.poll:
-            self._print(by_target(by, Text(frame_line(event), style="dim")), soft_wrap=True)
-
     # ------------------------------------------------------------- watch
 
     async def live_watch(self, command: Watch, name: str, watched_before: set[VarRef]) -> None:
@@ -468,30 +428,8 @@ class Repl(BatchReader):
         return status is not None and status.paused
 
     def _watch_table(self, command: Watch, name: str) -> Table:
-        """The watched rows; while polling is paused each says so (a row never read
-        says "not polled", not a blank that never fills)."""
-        table = Table(box=None, pad_edge=False, header_style="bold")
-        for title in ("Variable", "Label", "Status", "Changed", "Value"):
-            table.add_column(title)
-        now = time.monotonic()
-        paused = self._paused(name)
-        rows = self.rows_of[name]
-        if not self.cell.single:
-            table.title = name
-        for var in command.vars:
-            row = rows.get(var)
-            if row is not None:
-                value = value_cell(row, now)
-                if paused and row.variant is None:
-                    value = Text("not polled", style="dim italic")
-                table.add_row(
-                    str(var),
-                    Text(terminal_safe(row.label)),
-                    Text("paused", style="bold yellow") if paused else status_cell(row),
-                    age_text(row, now),
-                    value,
-                )
-        return table
+        title = None if self.cell.single else name
+        return watch_table(command.vars, self.rows_of[name], self._paused(name), title)
 
 
 def _failed(result: Result) -> bool:

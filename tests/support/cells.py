@@ -14,6 +14,7 @@ from rac_console.engine.cell import Cell
 from rac_console.engine.options import EngineOptions
 from rac_console.engine.outbox import Batch
 from rac_console.engine.registry import Where
+from rac_console.present.batches import BatchReader
 from rac_console.present.history import History
 from rac_console.sim.cell import SimulatedCellThread
 from rac_console.tui.app import RacConsoleApp
@@ -64,9 +65,10 @@ DEADLINE = 10.0
 RECHECK = 0.5
 
 
-class CellFront:
+class CellFront(BatchReader):
     """A front end in miniature for a cell: woken by the cell's notify, as the console
-    and the REPL are; keeps what it published. Every wait has a deadline."""
+    and the REPL are; keeps what it published (read as every front end reads it).
+    Every wait has a deadline."""
 
     def __init__(self, cell: Cell) -> None:
         self.cell = cell
@@ -79,11 +81,13 @@ class CellFront:
     def drain(self) -> None:
         for name, batch in self.cell.drain():
             self.batches.setdefault(name, []).append(batch)
-            for event in batch.events:
-                if isinstance(event, Result):
-                    self.results[event.seq] = (name, event)
-                elif isinstance(event, Alert):
-                    self.alerts.append((name, event.text))
+            self.read(name, batch)
+
+    def take_result(self, target: str | None, result: Result) -> None:
+        self.results[result.seq] = (target, result)
+
+    def take_alert(self, target: str | None, alert: Alert) -> None:
+        self.alerts.append((target, alert.text))
 
     def until(self, holds: Callable[[], bool], what: str, timeout: float = DEADLINE) -> None:
         deadline = time.monotonic() + timeout

@@ -46,6 +46,8 @@ from textual.widgets import RichLog
 import rac_console.tui.panes as panes_module
 from rac_console.commands.policy import TargetProfile, WritePolicy, Writes, parse_allow
 from rac_console.engine import Alert, Cycle, Engine, Message, Note, Result, RowView, Status
+from rac_console.engine.outbox import Batch
+from rac_console.present.batches import BatchReader
 from rac_console.present.history import History
 from rac_console.present.render import make_console
 from rac_console.repl.repl import Repl
@@ -227,9 +229,15 @@ STAGED_FRAMES: list[tuple[Literal["tx", "rx"], bytes, float | None]] = [
 
 async def watch_then_pause(pilot: Pilot[Any], lines: tuple[str, ...], rows: int) -> None:
     """Watch, wait for every row's first value from the simulator, then pause."""
-    app = cast(RacConsoleApp, pilot.app)
     for line in lines:
         await type_line(pilot, line)
+    await rows_read(pilot, rows)
+    await pause_polling(pilot)
+
+
+async def rows_read(pilot: Pilot[Any], rows: int) -> None:
+    """Wait until the table holds ``rows`` rows, each with its first value read."""
+    app = cast(RacConsoleApp, pilot.app)
     await until(
         pilot,
         lambda: (
@@ -238,6 +246,11 @@ async def watch_then_pause(pilot: Pilot[Any], lines: tuple[str, ...], rows: int)
         ),
         "every row's first value",
     )
+
+
+async def pause_polling(pilot: Pilot[Any]) -> None:
+    """Type ``pause`` and wait until the status says polling is paused."""
+    app = cast(RacConsoleApp, pilot.app)
     await type_line(pilot, "pause")
     await until(
         pilot,
@@ -480,8 +493,9 @@ class Screen:
 FRONT_DEADLINE = 10.0
 
 
-class Front:
-    """A front end in miniature: drains the outbox and keeps what a screen would show."""
+class Front(BatchReader):
+    """A front end in miniature: drains the outbox and keeps what a screen would show
+    (read as every front end reads it)."""
 
     def __init__(self, engine: Engine) -> None:
         self.engine = engine
@@ -493,20 +507,27 @@ class Front:
         self.status: Status | None = None
 
     def drain(self) -> None:
-        batch = self.engine.outbox.drain()
-        self.status = batch.status or self.status
+        self.read("engine", self.engine.outbox.drain())
+
+    def take_status(self, target: str, status: Status) -> None:
+        self.status = status
+
+    def take_rows(self, target: str, batch: Batch) -> None:
         for var in batch.removed:
             self.rows.pop(str(var), None)
         self.rows.update({str(var): view for var, view in batch.rows.items()})
-        for event in batch.events:
-            if isinstance(event, Result):
-                self.results[event.seq] = event
-            elif isinstance(event, Frame):
-                self.frames.append(event)
-            elif isinstance(event, Note):
-                self.notes.append(event.text)
-            elif isinstance(event, Alert):
-                self.alerts.append(event.text)
+
+    def take_result(self, target: str | None, result: Result) -> None:
+        self.results[result.seq] = result
+
+    def take_frame(self, target: str | None, frame: Frame) -> None:
+        self.frames.append(frame)
+
+    def take_note(self, target: str | None, note: Note) -> None:
+        self.notes.append(note.text)
+
+    def take_alert(self, target: str | None, alert: Alert) -> None:
+        self.alerts.append(alert.text)
 
     def until(self, predicate: Callable[[], bool], what: str) -> None:
         deadline = time.monotonic() + FRONT_DEADLINE
