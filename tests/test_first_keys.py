@@ -46,3 +46,15 @@ def test_the_demo_cell_opens_watching_its_handshake_and_says_its_targets_are_sim
         time.sleep(0.1)  # between looks at the screen, until the deadline
     table = screen.split("Frames")[0]
     assert "IO128" in table and "part placed" in table and "IO64" in table
+
+
+def test_a_line_and_its_enter_typed_before_the_console_has_started_run(
+    terminal: Terminal,
+) -> None:
+    """Keys typed while the console is still starting reach it through the terminal's
+    cooked mode, where Enter arrives as a line feed (Ctrl+J): it runs the line as Enter
+    does, not left on the command line."""
+    terminal.start(ascii_mode=False)
+    terminal.tmux("send-keys", "-t", "t", "get I 4", "Enter")  # at once: before raw mode
+    screen = terminal.until("I4 = ")
+    assert "› get I 4" in screen, screen

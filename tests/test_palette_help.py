@@ -352,6 +352,45 @@ async def test_f1_in_the_help_closes_it(tmp_path: Path) -> None:
 
 
 @pytest.mark.slow
+async def test_the_palette_over_the_help_lists_the_consoles_commands(tmp_path: Path) -> None:
+    """Ctrl+P works over every screen (the help's footer offers it): its commands are
+    the console's, whatever screen the palette opened over."""
+    app = make_app(tmp_path)
+    async with app.run_test(size=(100, 40)) as pilot:
+        await pilot.press("f1")
+        await until(pilot, lambda: isinstance(app.screen, HelpScreen), "the help screen")
+        await open_palette(pilot, "pause")
+        assert palette_prompts(app)[0].startswith("Pause polling")
+        await pilot.press("enter")
+        await until(
+            pilot,
+            lambda: app.main_screen.status is not None and app.main_screen.status.paused,
+            "the pause",
+        )
+
+
+@pytest.mark.slow
+async def test_the_consoles_keys_wait_for_the_help_to_close(tmp_path: Path) -> None:
+    """Over the help, F1 and Esc close it and Ctrl+P, Ctrl+C and Ctrl+Q work; the
+    console's other keys (F2 to F8, Ctrl+L) act on the console once it is back, where
+    what they change can be seen, not on a screen hidden behind the help."""
+    app = make_app(tmp_path)
+    async with app.run_test(size=(100, 40)) as pilot:
+        await until(pilot, lambda: app.main_screen.status is not None, "the first status")
+        await pilot.press("f1")
+        await until(pilot, lambda: isinstance(app.screen, HelpScreen), "the help screen")
+        await pilot.press("f5", "f2")
+        await pilot.press("escape")
+        await until(pilot, lambda: not isinstance(app.screen, HelpScreen), "the help to close")
+        await pilot.press("f5")  # the next key on the console: the grid opens now
+        await until(pilot, lambda: app.main_screen.panes.io_panel.display, "the I/O grid")
+        await type_line(pilot, "get I 1")  # run after any pause F2 might have sent
+        await until(pilot, lambda: "› get I 1" in results_text(app), "the line's answer")
+        status = app.main_screen.status
+        assert status is not None and not status.paused  # F2 over the help paused nothing
+
+
+@pytest.mark.slow
 def test_help_screen_80x24(snap_compare, tmp_path: Path) -> None:
     app = make_app(tmp_path)
 

@@ -143,3 +143,29 @@ async def test_keys_typed_after_space_on_a_row_do_not_reach_the_command_line(
         results = results_text(app)
         assert "› y" not in results and "unknown command" not in results, results
         assert app.main_screen.panes.command_line.value == ""
+
+
+async def test_the_keys_dropped_are_said_after_the_answer_of_the_line_they_were_typed_behind(
+    tmp_path: Path, cell: SimulatorThread
+) -> None:
+    """The notice belongs to the write whose question dropped the keys: it comes after
+    that line's echo and answer, never before them (where it would read as the previous
+    line's)."""
+    app = confirm_console(tmp_path, cell)
+    async with app.run_test(size=(100, 30)) as pilot:
+        await connected(pilot, app)
+        burst(app, "put IO 67 on\ry\r")
+        await until(pilot, lambda: modal(app) is not None, "the question")
+        screen = modal(app)
+        assert screen is not None
+        await until(pilot, lambda: screen.accepting, "the end of the guard time")
+        await pilot.press("n")
+        notice = "2 keys typed ahead of the question were ignored"
+        await until(
+            pilot,
+            lambda: "not confirmed" in results_text(app) and notice in results_text(app),
+            "the answer and the notice",
+        )
+        results = results_text(app)
+        echo = results.index("› put IO 67 on")
+        assert echo < results.index("not confirmed") < results.index(notice), results

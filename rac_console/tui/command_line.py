@@ -55,15 +55,15 @@ class CommandLine(Input):
     On a ``confirm`` target a write stops to ask, and a ``y`` and an Enter typed right
     after its Enter (muscle memory, a slow link) must neither answer the question nor run
     as a command once it is answered. So the keys that follow the Enter of a line that
-    may ask are held here, in the order typed, until the app says how the line went
+    may ask are held here, in the order typed, until the console says how the line went
     (messages, so they are handled in their place among the keys): it asked
     (:class:`Asked`: the keys held are dropped, and the ones still coming until the
     question is answered), the question was answered (:class:`Answered`: keys are held
     again, for a question asked once more), or the line ended (:class:`Release`: the
-    keys held are typed in as if they came now). Esc and the app's keys pass.
+    keys held are typed in as if they came now). Esc and the console's keys pass.
     """
 
-    #: What ``connect`` completes to besides sim: (profile name, its label), set by the app.
+    #: What ``connect`` completes to besides sim: (profile name, its label), set by the console.
     targets: tuple[tuple[str, str], ...] = ()
     #: A cell's targets (name, label): ``use NAME`` and ``@NAME`` complete to them.
     cell: tuple[tuple[str, str], ...] = ()
@@ -71,7 +71,7 @@ class CommandLine(Input):
 
     class Entered(Message):
         """A line the user entered, taken out of the line the moment Enter was read;
-        ``held``: the keys typed after it are held until the app releases them."""
+        ``held``: the keys typed after it are held until the console releases them."""
 
         def __init__(self, line: str, held: bool = False) -> None:
             super().__init__()
@@ -87,26 +87,26 @@ class CommandLine(Input):
             self.text = text
 
     class HelpRequested(Message):
-        """``?`` typed on an empty line: the app opens the help."""
+        """``?`` typed on an empty line: the console opens the help."""
 
     class Completions(Message):
-        """Several candidates fit: the app lists them with their help."""
+        """Several candidates fit: the console lists them with their help."""
 
         def __init__(self, candidates: list[Candidate]) -> None:
             super().__init__()
             self.candidates = candidates
 
     class Asked(Message):
-        """(app → line) The held line asked: drop the keys typed ahead of its question."""
+        """(console → line) The held line asked: drop the keys typed ahead of its question."""
 
     class Answered(Message):
-        """(app → line) Its question was answered: hold keys again until it ends."""
+        """(console → line) Its question was answered: hold keys again until it ends."""
 
     class Release(Message):
-        """(app → line) The held line ended: type in the keys held, stop holding."""
+        """(console → line) The held line ended: type in the keys held, stop holding."""
 
     class Dropped(Message):
-        """(line → app) Keys typed ahead of a question were dropped: say how many."""
+        """(line → console) Keys typed ahead of a question were dropped: say how many."""
 
         def __init__(self, count: int) -> None:
             super().__init__()
@@ -123,7 +123,7 @@ class CommandLine(Input):
         self._seen = seen
         self._position: int | None = None
         self._draft = ""
-        #: Whether a line may stop to ask before it writes (set by the app): the keys
+        #: Whether a line may stop to ask before it writes (set by the console): the keys
         #: typed after its Enter are then held.
         self.may_ask: Callable[[str], bool] = lambda line: False
         self._held: list[events.Key | events.Paste] | None = None  # None: not holding
@@ -143,7 +143,7 @@ class CommandLine(Input):
         if isinstance(event, events.Key) and not (
             event.is_printable or bool(key_bindings(self, event.key))
         ):
-            return False  # Esc, F-keys: the app's, at once
+            return False  # Esc, F-keys: the console's, at once
         if self._dropping:
             self._dropped += 1
         else:
@@ -296,7 +296,7 @@ class CommandLine(Input):
             self.post_message(self.Completions(candidates))  # after the Changed it caused
 
     def remember(self, line: str) -> None:
-        """Up recalls the line at once; the app settles it by its result (a refused
+        """Up recalls the line at once; the console settles it by its result (a refused
         line is never suggested nor written)."""
         self.history.enter(line)
 

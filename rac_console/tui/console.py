@@ -93,7 +93,7 @@ class ConsoleScreen(Screen[None]):
             ask=self.confirm_write,
             close_question=self._close_question,
             mark_target=self.show_target,
-            title=self._titled,
+            subtitle=self._subtitled,
             refresh=self.refresh_table,
             quit=lambda: self.app.exit(0),
         )
@@ -113,8 +113,8 @@ class ConsoleScreen(Screen[None]):
     def mount_hidden_panes(self) -> None:
         self.panes.mount_hidden(self)
 
-    def _titled(self, title: str) -> None:
-        self.app.sub_title = title
+    def _subtitled(self, subtitle: str) -> None:
+        self.app.sub_title = subtitle
 
     def _used(self) -> frozenset[tuple[str, int]]:
         """Indices used or watched (the engine counts watched ones as used)."""
@@ -197,8 +197,8 @@ class ConsoleScreen(Screen[None]):
         toggled = toggle_command(row.var, row.variant)
         paused = state.status is not None and state.status.paused
         refusal = toggle_refusal(row.var, toggled, state.toggles.busy(row.var), paused)
-        if refusal is not None or toggled is None:
-            self.show(Message(refusal or ""))
+        if refusal is not None or toggled is None:  # no toggle: the refusal says why
+            self.show(Message(refusal or "nothing to toggle"))
             return
         command, line = toggled
         line = row_keys.addressed(self.cell_mode, target, line)
@@ -238,7 +238,8 @@ class ConsoleScreen(Screen[None]):
 
     @on(CommandLine.Dropped)
     def keys_dropped(self, event: CommandLine.Dropped) -> None:
-        self.show(Message(dropped_text(event.count)))
+        if not self.lines.dropped(event.count):  # else said after the line's answer
+            self.show(Message(dropped_text(event.count)))
 
     @on(CommandLine.Completions)
     def list_completions(self, event: CommandLine.Completions) -> None:
@@ -293,7 +294,7 @@ class ConsoleScreen(Screen[None]):
             line = f"unwatch {row.var.kind.code} {row.var.index}"
             shown = row_keys.addressed(self.cell_mode, target, line)
             self.submit_line(shown, Unwatch((row.var,)), target or None)
-        elif not has_trend(row.var.kind):
+        elif event.action in ("trend", "overlay") and not has_trend(row.var.kind):
             self.show(Message(f"{row.var} has no trend: t draws numbers, IO bits and positions"))
         elif event.action == "trend":
             self.mount_hidden_panes()

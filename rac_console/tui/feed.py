@@ -17,6 +17,7 @@ from ..present.history import is_refused
 from ..present.status import placeholder_for
 from ..protocol.text import counted, terminal_safe
 from . import row_keys
+from .command_line import dropped_text
 
 if TYPE_CHECKING:
     from ..engine.events import Alert, ConfirmWrite, Cycle, Feedback, Note, Result
@@ -33,7 +34,7 @@ if TYPE_CHECKING:
 class ConsoleFeed(BatchReader):
     """The engines' batches, taken into the console's members and panes. What only the
     screen can do is handed in: ``ask`` a write's question, ``close_question`` when its
-    line ended first, ``mark_target`` (the border), ``title``, ``refresh`` the table
+    line ended first, ``mark_target`` (the border), ``subtitle`` (the app's), ``refresh`` the table
     and ``quit``."""
 
     def __init__(
@@ -47,7 +48,7 @@ class ConsoleFeed(BatchReader):
         ask: Callable[[ConfirmWrite, str | None], None],
         close_question: Callable[[int], None],
         mark_target: Callable[[Status], None],
-        title: Callable[[str], None],
+        subtitle: Callable[[str], None],
         refresh: Callable[[], None],
         quit: Callable[[], None],
     ) -> None:
@@ -60,7 +61,7 @@ class ConsoleFeed(BatchReader):
         self.ask = ask
         self.close_question = close_question
         self.mark_target = mark_target
-        self.title = title
+        self.subtitle = subtitle
         self.refresh_table = refresh
         self.quit = quit
 
@@ -79,10 +80,10 @@ class ConsoleFeed(BatchReader):
         log.slow_after = max(s.timeout for s in statuses) / 2  # a slow reply stands out
         if self.cell_mode:
             if old is None:
-                self.title(terminal_safe(f"cell: {', '.join(self.members.cell.names)}"))
+                self.subtitle(terminal_safe(f"cell: {', '.join(self.members.cell.names)}"))
             return
         if old is None or status.target != old.target:
-            self.title(terminal_safe(status.target))
+            self.subtitle(terminal_safe(status.target))
         if old is None or shown_target(status) != shown_target(old):
             self.mark_target(status)
         self.panes.command_line.placeholder = placeholder_for(status)
@@ -98,7 +99,7 @@ class ConsoleFeed(BatchReader):
         if result.line is not None:  # a typed line: kept by the history unless refused
             self.files.run(partial(self.history.settle, result.line, refused=is_refused(result)))
         self.close_question(result.seq)
-        self.lines.answered(result.seq)
+        dropped = self.lines.answered(result.seq)
         if self.members.state_of(target).toggles.result(result):
             self.refresh_table()
         from ..present.render import echo_text
@@ -107,6 +108,8 @@ class ConsoleFeed(BatchReader):
             self.panes.results.write(echo_text(result.line, self._named(target)))
         for feedback in result.feedback:
             self.show(feedback)
+        if dropped:  # the keys its question dropped, said after its answer
+            self.show(Message(dropped_text(dropped)))
 
     def take_cycle(self, target: str | None, cycle: Cycle) -> None:
         """A poll cycle: its values go to its target's trends (not an earlier target's,

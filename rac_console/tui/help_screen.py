@@ -116,9 +116,10 @@ APP_KEYS = (
 
 
 def console_key_groups(app_class: type[App[int]], cell: bool = False) -> list[KeyGroup]:
-    """The console's keys, read from the bindings of the app and its panes, labelled
+    """The console's keys, read from :mod:`.keys` and its panes' bindings, labelled
     as on the keyboard: the command line's first, then the table's, the other panes',
-    and last the keys that work anywhere (a cell's own keys only in a cell)."""
+    and last the keys that work anywhere (a cell's own keys only in a cell); ``app_class``
+    gives the palette's key."""
     without = frozenset() if cell else CELL_KEYS
     pane = key_of(keys.CONSOLE, "focus_pane(1)") or "F6"
     grid = key_of(keys.CONSOLE, "toggle_io_grid") or "F5"
@@ -131,7 +132,7 @@ def console_key_groups(app_class: type[App[int]], cell: bool = False) -> list[Ke
             "command line",
             [
                 ("Enter", "Run the line"),
-                *_pairs(CommandLine),
+                *_pairs(CommandLine, without=frozenset({"submit-line-feed"})),  # Enter's
                 ("Right", "Accept the grey suggestion from history (at the end of the line)"),
                 ("?", "Help (on an empty line)"),
                 *_pairs(keys.CONSOLE, ("cancel-command",)),
@@ -208,7 +209,7 @@ class HelpScreen(Screen[None]):
 
     @on(Input.Changed, "#help-search")
     def _search(self, event: Input.Changed) -> None:
-        event.stop()  # the command line's handlers in the app are not for this input
+        event.stop()  # the console's command-line handlers are not for this input
         self._show(event.value)
 
     @on(Input.Submitted, "#help-search")

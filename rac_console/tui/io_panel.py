@@ -1,8 +1,8 @@
 """The I/O panel: watched IO bits as a grid (F5), beside the table or under it.
 
 The grid is built by :mod:`rac_console.present.iogrid`; this widget only draws it when
-its text changed, at the table's refresh rate. Its cursor's Space asks the app to write
-the opposite of the bit shown, which the app does as for a table row: through
+its text changed, at the table's refresh rate. Its cursor's Space asks the console to write
+the opposite of the bit shown, which it does as for a table row: through
 :meth:`Engine.submit`, like a typed line, with one write per bit in flight.
 """
 
@@ -106,7 +106,7 @@ class IoPanel(VerticalScroll, can_focus=True):
     BINDINGS: ClassVar[list[BindingType]] = keys.IO_PANEL
 
     class Toggle(Message):
-        """Space on a watched bit: the app writes its opposite (as a typed line)."""
+        """Space on a watched bit: the console writes its opposite (as a typed line)."""
 
         def __init__(self, row: RowView) -> None:
             super().__init__()
@@ -227,7 +227,7 @@ class IoPanel(VerticalScroll, can_focus=True):
         self.scroll_to_region(Region(0, row, 1, 1), animate=False, immediate=True)
 
     def action_toggle_bit(self) -> None:
-        """Space: hand the bit under the cursor to the app, which refuses while its last
+        """Space: hand the bit under the cursor to the console, which refuses while its last
         toggle is in flight (a burst of Space must not write a value nobody meant)."""
         index = self.cursor
         if index is None or not self.has_focus:

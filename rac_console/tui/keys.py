@@ -136,6 +136,9 @@ APP: list[BindingType] = [
 
 #: The command line's keys.
 COMMAND_LINE: list[BindingType] = [
+    # Enter typed while the console starts, before the terminal is in raw mode, comes as
+    # a line feed: it runs the line as Enter does.
+    Binding("ctrl+j", "submit", "Run the line", show=False, id="submit-line-feed"),
     # The tooltip is the help screen's line (Up and Down share one).
     Binding(
         "tab",

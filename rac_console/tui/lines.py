@@ -39,6 +39,8 @@ class Lines:
         self.pending: dict[int, tuple[str, float]] = {}
         #: The line whose question keys typed ahead must not answer.
         self.held_seq: int | None = None
+        #: Keys its question dropped, said after its answer (not before its echo).
+        self._dropped = 0
 
     def submit(self, line: str, command: Command | None = None, target: str | None = None) -> int:
         """Every line the console hands the cell (typed, or made by a key on a row:
@@ -63,12 +65,24 @@ class Lines:
         if held:
             self.hold_keys(seq, queued)
 
-    def answered(self, seq: int) -> None:
-        """Line ``seq`` has its result: the keys it held go on."""
+    def answered(self, seq: int) -> int:
+        """Line ``seq`` has its result: the keys it held go on. Returns how many keys its
+        question dropped, to be said after its answer."""
+        dropped = 0
         if seq == self.held_seq:
             self.held_seq = None
+            dropped, self._dropped = self._dropped, 0
             self.command_line.post_message(CommandLine.Release())
         self.pending.pop(seq, None)
+        return dropped
+
+    def dropped(self, count: int) -> bool:
+        """``count`` keys typed ahead of a question were dropped: kept to be said after
+        the held line's answer (True), or to be said now when it has ended (False)."""
+        if self.held_seq is None:
+            return False
+        self._dropped += count
+        return True
 
     def may_ask(self, line: str) -> bool:
         """Whether this line, run now, may stop to ask before it writes: a write on a

@@ -11,7 +11,7 @@ text, never markup.
 the screen's loop.
 
 The commands (:mod:`.palette_commands`), the help and their texts are imported when the
-palette or the help first opens: the app's class needs only the two classes here.
+palette or the help first opens: the app needs only the provider and the screenshot here.
 """
 
 from __future__ import annotations
@@ -47,10 +47,11 @@ class ConsoleCommands(Provider):
     def _commands(self) -> list[PaletteCommand]:
         from .palette_commands import console_commands, textual_commands
 
-        screen = self.screen
-        if not isinstance(screen, ConsoleScreen):
+        # The console's, over whichever screen the palette opened (the help, a question).
+        consoles = [s for s in self.app.screen_stack if isinstance(s, ConsoleScreen)]
+        if not consoles:
             return []
-        return [*console_commands(screen), *textual_commands(screen)]
+        return [*console_commands(consoles[0]), *textual_commands(consoles[0])]
 
     async def discover(self) -> Hits:
         for command in self._commands():

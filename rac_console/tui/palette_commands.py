@@ -44,104 +44,107 @@ class PaletteCommand:
         return content
 
 
-def console_commands(app: ConsoleScreen) -> Iterator[PaletteCommand]:
+def console_commands(console: ConsoleScreen) -> Iterator[PaletteCommand]:
     """The console's commands, titled for the state they would change."""
-    paused = app.status is not None and app.status.paused
+    paused = console.status is not None and console.status.paused
     yield PaletteCommand(
         "Resume polling" if paused else "Pause polling",
-        app.action_toggle_polling,
+        console.action_toggle_polling,
         "poll the watched variables again" if paused else "stop polling the watched variables",
         keys.key_for("toggle_polling"),
     )
-    polls = app.panes.frame_log.show_polls
+    polls = console.panes.frame_log.show_polls
     yield PaletteCommand(
         "Hide poll frames" if polls else "Show poll frames",
-        app.action_toggle_poll_frames,
+        console.action_toggle_poll_frames,
         "the frame log shows typed exchanges only" if polls else "the frame log shows polls too",
         keys.key_for("toggle_poll_frames"),
     )
-    following = app.panes.frame_log.auto_scroll
+    following = console.panes.frame_log.auto_scroll
     yield PaletteCommand(
         "Freeze log" if following else "Follow log",
-        app.action_toggle_scroll,
+        console.action_toggle_scroll,
         "stop the frame log scrolling" if following else "scroll the frame log with new frames",
         keys.key_for("toggle_scroll"),
     )
     yield PaletteCommand(
-        "Clear log", app.action_clear_log, "empty the frame log", keys.key_for("clear_log")
+        "Clear log", console.action_clear_log, "empty the frame log", keys.key_for("clear_log")
     )
-    grid = app.panes.io_panel.display
+    grid = console.panes.io_panel.display
     yield PaletteCommand(
         "Hide I/O grid" if grid else "Show I/O grid",
-        app.action_toggle_io_grid,
+        console.action_toggle_io_grid,
         "watched IO bits as rows of the table" if grid else "watched IO bits as a grid of words",
         keys.key_for("toggle_io_grid"),
     )
     yield PaletteCommand(
         "Hex view of frames",
-        app.action_toggle_hex,
+        console.action_toggle_hex,
         "show or hide each frame's bytes in hex",
         keys.key_for("toggle_hex"),
     )
-    detail = app.panes.row_detail.is_open
+    detail = console.panes.row_detail.is_open
     yield PaletteCommand(
         "Hide row details" if detail else "Show row details",
-        app.action_toggle_detail,
+        console.action_toggle_detail,
         "the frame log again"
         if detail
         else "the row under the table's cursor in full, a field a line",
         f"{keys.key_for('screen.toggle_detail', keys.WATCH_TABLE)} in the table",
     )
     yield PaletteCommand(
-        "Help", app.action_help, "keys, commands, what the status line says", keys.key_for("help")
+        "Help",
+        console.action_help,
+        "keys, commands, what the status line says",
+        keys.key_for("help"),
     )
-    status = app.status
+    status = console.status
     on_sim = status is not None and status.is_simulator
     yield PaletteCommand(
         "connect sim",
-        lambda: app.submit_line("connect sim", Connect(None, DEFAULT_PORT)),
+        lambda: console.submit_line("connect sim", Connect(None, DEFAULT_PORT)),
         "the built-in simulator · writes open" + (" · connected now" if on_sim else ""),
     )
-    for name in app.profile_names:
+    for name in console.profile_names:
         line = f"connect {name}"
-        profile = app.profiles.get(name)
+        profile = console.profiles.get(name)
         label = f"  ({label_text(profile.label)})" if profile and profile.label else ""
         current = status is not None and status.profile == name
         yield PaletteCommand(
             terminal_safe(line) + label,
-            partial(app.submit_line, line, Connect(name, DEFAULT_PORT)),
+            partial(console.submit_line, line, Connect(name, DEFAULT_PORT)),
             profile_help(profile, current),
         )
     yield PaletteCommand(
         "load FILE…",
-        lambda: put_on_command_line(app.panes, "load "),
+        lambda: put_on_command_line(console.panes, "load "),
         "add a saved watch list: type its file name",
     )
     yield PaletteCommand(
         "save FILE…",
-        lambda: put_on_command_line(app.panes, "save "),
+        lambda: put_on_command_line(console.panes, "save "),
         "save the watch list as TOML: type a file name",
     )
-    if app.status is not None and app.status.csv_log is not None:
+    if console.status is not None and console.status.csv_log is not None:
         yield PaletteCommand(
             "log stop",
-            lambda: app.submit_line("log stop", CsvLog(None, stop=True)),
+            lambda: console.submit_line("log stop", CsvLog(None, stop=True)),
             "stop logging to the CSV file",
         )
     else:
         yield PaletteCommand(
             "log FILE.csv…",
-            lambda: put_on_command_line(app.panes, "log "),
+            lambda: put_on_command_line(console.panes, "log "),
             "log the watched values to a CSV file: type its name",
         )
-    yield from frame_file_commands(app)
+    yield from frame_file_commands(console)
 
 
-def frame_file_commands(app: ConsoleScreen) -> Iterator[PaletteCommand]:
+def frame_file_commands(console: ConsoleScreen) -> Iterator[PaletteCommand]:
     """``record`` and ``transcript`` from now on, or their stop: the moment worth keeping
     is rarely foreseen when the console starts."""
 
-    status = app.status
+    status = console.status
     kinds: tuple[tuple[Literal["record", "transcript"], str | None, str], ...] = (
         ("record", status.recording if status else None, "every frame as JSON lines"),
         ("transcript", status.transcribing if status else None, "a plain transcript"),
@@ -150,13 +153,13 @@ def frame_file_commands(app: ConsoleScreen) -> Iterator[PaletteCommand]:
         if running is not None:
             yield PaletteCommand(
                 f"{word} stop",
-                partial(app.submit_line, f"{word} stop", FrameFile(word, None, stop=True)),
+                partial(console.submit_line, f"{word} stop", FrameFile(word, None, stop=True)),
                 f"stop writing {what} to {terminal_safe(running)}",
             )
         else:
             yield PaletteCommand(
                 f"{word} FILE…",
-                partial(put_on_command_line, app.panes, f"{word} "),
+                partial(put_on_command_line, console.panes, f"{word} "),
                 f"write {what} to a file from now on: type its name",
             )
 

@@ -27,7 +27,7 @@ SUBTITLE = "d closes · ↑↓ in the table: another row"
 
 
 class RowDetail(Static):
-    """Shown while open (the app adds ``-open``); the app calls :meth:`show_row` with the
+    """Shown while open (the console adds ``-open``) and calls :meth:`show_row` with the
     row under the cursor at the table's refresh rate and when the cursor moves."""
 
     def __init__(self, **kwargs: str | None) -> None:
