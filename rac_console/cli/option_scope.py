@@ -8,7 +8,6 @@ from __future__ import annotations
 import argparse
 import sys
 
-from ..present.served import served
 from .parser import POLLING_COMMANDS
 
 #: Interval words: the top-level --interval, taken over by each command's own option.
@@ -52,8 +51,7 @@ def refusal(args: argparse.Namespace) -> str | None:
         if getattr(args, own, None) is not None:
             return f"the interval is given twice (--interval before {command}, and after it)"
         setattr(args, own, interval)
-    # else: "needs a terminal" (a console served to a browser is as one at a terminal)
-    interactive = (sys.stdin.isatty() and sys.stdout.isatty()) or served()
+    interactive = sys.stdin.isatty() and sys.stdout.isatty()  # else: "needs a terminal"
     if args.json and command in (None, "repl") and interactive:
         return (
             "--json prints results for scripts: get, put, send, run, watch, latency and "
