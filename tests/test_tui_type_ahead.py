@@ -13,11 +13,13 @@ from __future__ import annotations
 
 from collections.abc import Iterator
 from pathlib import Path
+from typing import Any
 
 import pytest
 
 from rac_console.present.type_ahead import may_ask
 from rac_console.sim.thread import SimulatorThread
+from rac_console.tui.app import RacConsoleApp
 from tests.support.drivers import (
     FrameTap,
     burst,
@@ -37,6 +39,17 @@ def cell() -> Iterator[SimulatorThread]:
         yield simulator
 
 
+async def declined_with_keys_typed_ahead(pilot: Any, app: RacConsoleApp) -> None:
+    """``put IO 67 on``, Enter, ``y``, Enter in one burst; the question answered No once
+    its guard time is over (the ``y`` and Enter were typed ahead of it)."""
+    burst(app, "put IO 67 on\ry\r")
+    await until(pilot, lambda: modal(app) is not None, "the question")
+    screen = modal(app)
+    assert screen is not None
+    await until(pilot, lambda: screen.accepting, "the end of the guard time")
+    await pilot.press("n")
+
+
 async def test_keys_typed_before_the_question_never_reach_the_command_line(
     tmp_path: Path, cell: SimulatorThread
 ) -> None:
@@ -44,12 +57,7 @@ async def test_keys_typed_before_the_question_never_reach_the_command_line(
     tap = FrameTap(tmp_path)
     async with app.run_test(size=(100, 30)) as pilot:
         await connected(pilot, app)
-        burst(app, "put IO 67 on\ry\r")
-        await until(pilot, lambda: modal(app) is not None, "the question")
-        screen = modal(app)
-        assert screen is not None
-        await until(pilot, lambda: screen.accepting, "the end of the guard time")
-        await pilot.press("n")
+        await declined_with_keys_typed_ahead(pilot, app)
         await until(pilot, lambda: "not confirmed" in results_text(app), "the answer's result")
         await pilot.pause(0.3)  # anything typed ahead would have run by now
         results = results_text(app)
@@ -154,12 +162,7 @@ async def test_the_keys_dropped_are_said_after_the_answer_of_the_line_they_were_
     app = confirm_console(tmp_path, cell)
     async with app.run_test(size=(100, 30)) as pilot:
         await connected(pilot, app)
-        burst(app, "put IO 67 on\ry\r")
-        await until(pilot, lambda: modal(app) is not None, "the question")
-        screen = modal(app)
-        assert screen is not None
-        await until(pilot, lambda: screen.accepting, "the end of the guard time")
-        await pilot.press("n")
+        await declined_with_keys_typed_ahead(pilot, app)
         notice = "2 keys typed ahead of the question were ignored"
         await until(
             pilot,

@@ -64,9 +64,8 @@ def key_of(source: KeySource, action: str) -> str | None:
     """The key bound to ``action`` on ``source``, as printed on the keyboard (``F2``,
     ``Ctrl+L``); None when no key runs it."""
     for part in _sources(source):
-        for binding in bindings_of(part):
-            if binding.action == action:
-                return key_label(binding.key_display or binding.key)
+        if (key := keys.key_for(action, list(bindings_of(part)))) is not None:
+            return key
     return None
 
 
