@@ -60,6 +60,10 @@ def _dispatch(args: argparse.Namespace) -> int:
         from .paths import paths
 
         return paths()
+    if args.command == "serve":
+        from .serve import serve_console
+
+        return serve_console(args)
     if args.command != "sim":
         in_cell = settle_targets(args)
         if in_cell is False:
@@ -186,7 +190,9 @@ def _interactive(args: argparse.Namespace) -> int:
         except InputError as exc:
             print(f"rac-console: {terminal_safe(str(exc))}", file=sys.stderr)
             return 2
-    if not (sys.stdin.isatty() and sys.stdout.isatty()):
+    from ..present.served import served
+
+    if not (sys.stdin.isatty() and sys.stdout.isatty()) and not served():
         print(
             "rac-console: the console needs a terminal; for scripts use "
             "'rac-console run -' (or get, put, send with --json)",

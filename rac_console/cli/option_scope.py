@@ -8,6 +8,7 @@ from __future__ import annotations
 import argparse
 import sys
 
+from ..present.served import served
 from .parser import POLLING_COMMANDS
 
 #: Interval words: the top-level --interval, taken over by each command's own option.
@@ -51,7 +52,8 @@ def refusal(args: argparse.Namespace) -> str | None:
         if getattr(args, own, None) is not None:
             return f"the interval is given twice (--interval before {command}, and after it)"
         setattr(args, own, interval)
-    interactive = sys.stdin.isatty() and sys.stdout.isatty()  # else: "needs a terminal"
+    # else: "needs a terminal" (a console served to a browser is as one at a terminal)
+    interactive = (sys.stdin.isatty() and sys.stdout.isatty()) or served()
     if args.json and command in (None, "repl") and interactive:
         return (
             "--json prints results for scripts: get, put, send, run, watch, latency and "

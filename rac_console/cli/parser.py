@@ -30,6 +30,7 @@ from .options import (
     watch_options,
 )
 from .parse_errors import RacParser
+from .serve import SERVE_EPILOG, SERVE_HELP, serve_options
 
 __all__ = ["ONE_SHOT", "CliParser", "build_cli", "build_parser"]
 
@@ -208,6 +209,14 @@ def build_cli(commands: bool = True) -> CliParser:
         help="log the watched values to FILE, one CSV row per poll cycle",
     )
     plant_options(repl, suppress=True)
+    serve = subparsers.add_parser(
+        "serve",
+        help=SERVE_HELP,
+        description=SERVE_HELP,
+        epilog=SERVE_EPILOG,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    serve_options(serve)
     sim = subparsers.add_parser(
         "sim",
         help="run the RC8 simulator as a server",

@@ -10,6 +10,7 @@ from textual import events
 from textual.widgets import Static
 
 from ..present.cell_status import Badge, cell_status_text
+from ..present.served import SERVED_BADGE
 from ..present.status import status_text
 
 if TYPE_CHECKING:
@@ -19,8 +20,10 @@ if TYPE_CHECKING:
 class StatusBar(Static):
     """One line; :meth:`show` builds it from the figures for the width it has."""
 
-    def __init__(self, *, id: str | None = None) -> None:
+    def __init__(self, *, id: str | None = None, served: bool = False) -> None:
         super().__init__(id=id)
+        #: Served to a browser (``rac-console serve``): the line starts by saying so.
+        self.lead = SERVED_BADGE if served else Text()
         self._figures: tuple[Status, float | None, float, tuple[str, float, int] | None] | None
         self._figures = None
         self._badges: list[Badge] = []
@@ -37,8 +40,8 @@ class StatusBar(Static):
         """Build the line for ``status`` (see :func:`.status_text`) to fit this widget;
         repaint only when it changed. Returns the line."""
         self._figures = (status, waiting_since, frames_per_second, running)
-        width = self.content_size.width
-        line = status_text(
+        width = self.content_size.width - len(self.lead)
+        line = self.lead + status_text(
             status, waiting_since, frames_per_second, running, width=width if width > 0 else None
         )
         if line != self.line:  # an unchanged line costs no repaint
@@ -51,8 +54,8 @@ class StatusBar(Static):
     def show_cell(self, badges: list[Badge], running: tuple[str, float, int] | None = None) -> Text:
         """A cell's line: one badge per target (see :func:`.cell_status_text`)."""
         self._badges, self._cell_running = badges, running
-        width = self.content_size.width
-        line = cell_status_text(badges, width if width > 0 else None, running=running)
+        width = self.content_size.width - len(self.lead)
+        line = self.lead + cell_status_text(badges, width if width > 0 else None, running=running)
         if line != self.line:
             self.line = line
             self.refresh()

@@ -1,0 +1,223 @@
+"""Who may come in: the decisions of ``rac-console serve``, without I/O.
+
+Every request is judged in this order, and the first refusal answers it:
+
+1. **Host** (421 Misdirected Request): the Host header must name this server: the
+   address it was bound to as written (``--bind cell-pc.local``), the address the
+   connection reached (an IP literal), ``localhost`` on a loopback connection, and on a
+   wildcard bind (``0.0.0.0``, ``::``) this machine's names; with the server's port. A
+   page whose name was rebound to this machine's address (DNS rebinding) sends its own
+   name: refused before anything else is looked at.
+2. **The token, once** (303 to ``/``, or 403): ``/?token=T`` with the token printed at
+   start sets the session cookie and redirects to ``/``, so the token leaves the address
+   bar; it is then spent. A browser that already holds a good cookie is just redirected.
+3. **The cookie** (403): every other request, pages, files and the WebSocket, needs
+   the cookie (HttpOnly, SameSite=Strict). 403, not 401: a cookie is no HTTP
+   authentication scheme, there is no challenge to send; the page says what to do.
+4. **Origin** (403, the WebSocket only): exactly this server's own origin
+   (``http://`` + the Host just checked). A page from another origin on the same host
+   (another port) holds the cookie too, since cookies know no ports: Origin is what
+   keeps its scripts off the socket. No Origin, or ``null``, is refused as well.
+5. **A session slot** (503, with a page): at most ``max_sessions`` consoles at once.
+"""
+
+from __future__ import annotations
+
+import hmac
+import ipaddress
+import secrets
+from collections.abc import Iterable
+from dataclasses import dataclass
+
+#: The statuses, as the README gives them.
+MISDIRECTED = 421
+FORBIDDEN = 403
+BUSY = 503
+NOT_FOUND = 404
+
+#: How many random bytes a token and a cookie hold.
+SECRET_BYTES = 32
+
+WILDCARDS = frozenset({"0.0.0.0", "::", ""})
+
+
+@dataclass(frozen=True)
+class Refusal:
+    """A request turned away: its status and one sentence for the page."""
+
+    status: int
+    reason: str
+
+
+def new_secret() -> str:
+    return secrets.token_urlsafe(SECRET_BYTES)
+
+
+def cookie_name(port: int) -> str:
+    """The cookie's name carries the port: browsers keep cookies per host, not per
+    port, and two servers on one host must not overwrite each other's."""
+    return f"rac_console_{port}"
+
+
+def split_host(header: str) -> tuple[str, int | None] | None:
+    """``name:port``, ``[v6]:port``, ``name`` → (name lowercased without brackets nor a
+    final dot, port or None); None when it cannot be a Host."""
+    text = header.strip().lower()
+    if not text or any(c.isspace() or c in "/\\@?#" for c in text):
+        return None
+    if text.startswith("["):
+        end = text.find("]")
+        if end < 0:
+            return None
+        name, rest = text[1:end], text[end + 1 :]
+        if rest and not rest.startswith(":"):
+            return None
+        port_text = rest[1:] if rest else None
+    else:
+        name, colon, port_text_or_empty = text.rpartition(":")
+        if not colon:
+            name, port_text = text, None
+        elif ":" in name:  # a bare IPv6 address is no Host
+            return None
+        else:
+            port_text = port_text_or_empty
+    if port_text is not None and not (
+        port_text.isascii() and port_text.isdigit() and 0 < int(port_text) < 65536
+    ):
+        return None
+    name = name.rstrip(".")
+    if not name:
+        return None
+    return name, None if port_text is None else int(port_text)
+
+
+def plain_address(address: str) -> str:
+    """An address as the Host header writes it: an IPv4-mapped IPv6 address as IPv4."""
+    try:
+        parsed = ipaddress.ip_address(address.split("%", 1)[0])
+    except ValueError:
+        return address.lower()
+    if isinstance(parsed, ipaddress.IPv6Address) and parsed.ipv4_mapped is not None:
+        return str(parsed.ipv4_mapped)
+    return str(parsed)
+
+
+def is_loopback(address: str) -> bool:
+    try:
+        return ipaddress.ip_address(plain_address(address)).is_loopback
+    except ValueError:
+        return address.lower() == "localhost"
+
+
+def url_host(name: str) -> str:
+    """A name or address as it goes in a URL: an IPv6 address in brackets."""
+    return f"[{name}]" if ":" in name else name
+
+
+class Slots:
+    """How many sessions run, and how many may."""
+
+    def __init__(self, most: int) -> None:
+        if most < 1:
+            raise ValueError("at least one session")
+        self.most = most
+        self.taken = 0
+
+    @property
+    def full(self) -> bool:
+        return self.taken >= self.most
+
+    def take(self) -> bool:
+        if self.full:
+            return False
+        self.taken += 1
+        return True
+
+    def give_back(self) -> None:
+        self.taken = max(0, self.taken - 1)
+
+
+class Guard:
+    """The token (spent on first use), the cookies it bought, the names this server
+    answers to and its session slots."""
+
+    def __init__(
+        self,
+        port: int,
+        names: Iterable[str],
+        max_sessions: int = 1,
+        token: str | None = None,
+    ) -> None:
+        self.port = port
+        self.names = frozenset(plain_address(n.strip("[]")).rstrip(".").lower() for n in names)
+        self.token = token or new_secret()
+        self.cookie_name = cookie_name(port)
+        self.slots = Slots(max_sessions)
+        self._token_spent = False
+        self._cookies: set[str] = set()
+
+    # ------------------------------------------------------------------ Host, Origin
+
+    def check_host(self, header: str | None, local_address: str | None) -> Refusal | None:
+        """None when ``header`` names this server (see the module's docstring)."""
+        parts = split_host(header or "")
+        if parts is None:
+            return Refusal(MISDIRECTED, "this request has no Host this server answers to")
+        name, port = parts
+        if (port if port is not None else 80) != self.port:
+            return Refusal(MISDIRECTED, f"this server listens on port {self.port}")
+        allowed = set(self.names)
+        if local_address:
+            local = plain_address(local_address)
+            allowed.add(local)
+            if is_loopback(local):
+                allowed.add("localhost")
+        if plain_address(name) not in allowed:
+            return Refusal(
+                MISDIRECTED,
+                f"{name!r} is not a name of this server: open the address rac-console "
+                "serve printed",
+            )
+        return None
+
+    def check_origin(self, origin: str | None, host_header: str) -> Refusal | None:
+        """None when ``origin`` is this server's own: ``http://`` and the Host the
+        request came with (checked before)."""
+        refused = Refusal(FORBIDDEN, "the console's socket is opened only by its own page")
+        if not origin or not origin.lower().startswith("http://"):  # "null" too
+            return refused
+        theirs = split_host(origin[len("http://") :])
+        ours = split_host(host_header)
+        if theirs is None or ours is None:
+            return refused
+        if (plain_address(theirs[0]), theirs[1] or 80) != (plain_address(ours[0]), ours[1] or 80):
+            return refused
+        return None
+
+    # --------------------------------------------------------------- token, cookie
+
+    def has_cookie(self, value: str | None) -> bool:
+        if not value:
+            return False
+        return any(hmac.compare_digest(value, kept) for kept in self._cookies)
+
+    def exchange(self, token: str) -> str | Refusal:
+        """The token printed at start, the first time: a new cookie value. Spent after."""
+        if self._token_spent or not hmac.compare_digest(token, self.token):
+            return Refusal(
+                FORBIDDEN,
+                "this link is not valid (each link opens once): start rac-console serve "
+                "again for a new one",
+            )
+        self._token_spent = True
+        cookie = new_secret()
+        self._cookies.add(cookie)
+        return cookie
+
+    def check_cookie(self, value: str | None) -> Refusal | None:
+        if self.has_cookie(value):
+            return None
+        return Refusal(
+            FORBIDDEN,
+            "open the link rac-console serve printed (with its token) in this browser first",
+        )

@@ -1,0 +1,249 @@
+"""``rac-console serve`` put together: the listening socket, the guard's middleware over
+textual-serve's routes, the headers every answer carries, and the URL printed once.
+
+The decisions are :mod:`.guard`'s; what is borrowed from textual-serve is
+:mod:`.textual_serve_parts`'s; this module only wires them to aiohttp.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import html
+import platform
+import signal
+import sys
+from collections.abc import Awaitable, Callable, Sequence
+from dataclasses import dataclass, field
+
+from aiohttp import web
+from aiohttp.typedefs import Middleware
+
+from .guard import BUSY, WILDCARDS, Guard, Refusal, is_loopback, url_host
+from .textual_serve_parts import GuardedServer
+
+#: The port ``serve`` listens on unless told another.
+DEFAULT_PORT = 8006
+
+#: Sent with every answer: no address (the token's, once) leaves in a Referer; nothing
+#: is loaded from or sent to anywhere else (textual-serve's page asks Google for a font:
+#: refused here, the console falls back to a local monospace); no page may frame it (a
+#: frame would get the cookie and the socket, and the keys of whoever clicks in it).
+HEADERS = {
+    "Referrer-Policy": "no-referrer",
+    "X-Content-Type-Options": "nosniff",
+    "X-Frame-Options": "DENY",
+    "Cache-Control": "no-store",
+    "Content-Security-Policy": (
+        "default-src 'self'; script-src 'self' 'unsafe-inline'; "
+        "style-src 'self' 'unsafe-inline'; img-src 'self' data:; font-src 'self' data:; "
+        "connect-src 'self'; base-uri 'none'; form-action 'none'; frame-ancestors 'none'"
+    ),
+}
+
+#: How often the "already open" page asks again.
+RETRY_SECONDS = 5
+
+
+@dataclass(frozen=True)
+class ServeOptions:
+    """What ``rac-console serve`` was asked for."""
+
+    argv: Sequence[str]  # each session's command (command.session_argv)
+    environment: dict[str, str] = field(default_factory=dict)  # added to each session's
+    bind: str = "127.0.0.1"
+    port: int = DEFAULT_PORT
+    max_sessions: int = 1
+    allow_writes: bool = False
+    title: str = "rac-console"
+
+
+def page(status: int, title: str, text: str, extra_head: str = "") -> web.Response:
+    body = (
+        "<!DOCTYPE html><html><head><meta charset='utf-8'>"
+        f"<title>{html.escape(title)}</title>{extra_head}</head>"
+        f"<body><h1>{html.escape(title)}</h1><p>{html.escape(text)}</p></body></html>"
+    )
+    return web.Response(status=status, text=body, content_type="text/html")
+
+
+def refusal_page(refusal: Refusal) -> web.Response:
+    titles = {421: "Misdirected request", 403: "Not allowed", 503: "Already open"}
+    return page(refusal.status, titles.get(refusal.status, "Refused"), refusal.reason)
+
+
+def busy_page(slots: int) -> web.Response:
+    sessions = "1 session" if slots == 1 else f"{slots} sessions"
+    response = page(
+        BUSY,
+        "Already open",
+        f"The console is already open in {sessions}, as many as this server allows "
+        f"(rac-console serve --max-sessions N). This page tries again every "
+        f"{RETRY_SECONDS} seconds.",
+        extra_head=f"<meta http-equiv='refresh' content='{RETRY_SECONDS}'>",
+    )
+    response.headers["Retry-After"] = str(RETRY_SECONDS)
+    return response
+
+
+def local_address(request: web.Request) -> str | None:
+    """The address the connection reached on this machine."""
+    transport = request.transport
+    sockname = transport.get_extra_info("sockname") if transport is not None else None
+    if isinstance(sockname, tuple) and sockname:
+        return str(sockname[0])
+    return None
+
+
+Handler = Callable[[web.Request], Awaitable[web.StreamResponse]]
+
+
+def make_middleware(server: ConsoleServer) -> Middleware:
+    """Host, then the token or the cookie, then (the page) a free slot."""
+
+    @web.middleware
+    async def middleware(request: web.Request, handler: Handler) -> web.StreamResponse:
+        guard = server.guard
+        if guard is None:  # listening, the link not made yet: nobody can hold it
+            return page(BUSY, "Starting", "The server is starting: try again.")
+        refused = guard.check_host(request.headers.get("Host"), local_address(request))
+        if refused is not None:
+            return refusal_page(refused)
+        cookie = request.cookies.get(guard.cookie_name)
+        if request.path == "/" and "token" in request.query:
+            if guard.has_cookie(cookie):
+                return web.Response(status=303, headers={"Location": "/"})
+            bought = guard.exchange(request.query["token"])
+            if isinstance(bought, Refusal):
+                return refusal_page(bought)
+            response = web.Response(status=303, headers={"Location": "/"})
+            response.set_cookie(
+                guard.cookie_name, bought, httponly=True, samesite="Strict", path="/"
+            )
+            return response
+        refused = guard.check_cookie(cookie)
+        if refused is not None:
+            return refusal_page(refused)
+        if request.path == "/" and guard.slots.full:
+            return busy_page(guard.slots.most)
+        return await handler(request)
+
+    return middleware
+
+
+async def add_headers(_: web.Request, response: web.StreamResponse) -> None:
+    for name, value in HEADERS.items():
+        response.headers.setdefault(name, value)
+
+
+def own_names(bind: str) -> tuple[str, list[str]]:
+    """The name the URL shows, and the names the Host header may use besides the
+    address each connection reached (and ``localhost`` on loopback)."""
+    if bind in WILDCARDS:
+        shown = platform.node() or "localhost"
+        return shown, [shown]
+    return bind.strip("[]"), [bind]
+
+
+class ConsoleServer:
+    """The server, started and stopped; ``url`` is the one to open (with its token)."""
+
+    def __init__(self, options: ServeOptions) -> None:
+        self.options = options
+        self.guard: Guard | None = None
+        self.url = ""
+        self._runner: web.AppRunner | None = None
+        self.textual: GuardedServer | None = None
+
+    @property
+    def port(self) -> int:
+        assert self.guard is not None
+        return self.guard.port
+
+    async def start(self) -> str:
+        """Listen (OSError when the address cannot be had); the link to open."""
+        options = self.options
+        textual = self.textual = GuardedServer(
+            options.argv,
+            options.environment,
+            make_middleware(self),
+            options.title,
+            add_headers,
+        )
+        textual.admit = self._admit
+        runner = self._runner = web.AppRunner(
+            await textual._make_app(), handle_signals=False, access_log=None
+        )
+        await runner.setup()
+        bind = None if options.bind in WILDCARDS else options.bind.strip("[]")
+        try:
+            await web.TCPSite(runner, bind, options.port, shutdown_timeout=2.0).start()
+        except BaseException:
+            await self.stop()
+            raise
+        port = int(runner.addresses[0][1])  # --port 0: the one taken
+        shown, names = own_names(options.bind)
+        guard = self.guard = Guard(port, names, options.max_sessions)
+        textual.session_ended = guard.slots.give_back
+        self.url = f"http://{url_host(shown)}:{port}/?token={guard.token}"
+        return self.url
+
+    def _admit(self, request: web.Request) -> web.StreamResponse | None:
+        """The socket's own checks, after the middleware's: its Origin, a free slot."""
+        guard = self.guard
+        assert guard is not None  # the middleware let the request through
+        refused = guard.check_origin(request.headers.get("Origin"), request.host)
+        if refused is not None:
+            return refusal_page(refused)
+        if not guard.slots.take():
+            return busy_page(guard.slots.most)
+        return None
+
+    async def stop(self) -> None:
+        if self._runner is not None:
+            await self._runner.cleanup()
+            self._runner = None
+
+
+def announce(options: ServeOptions, server: ConsoleServer, out: Callable[[str], None]) -> None:
+    """What the server says at start: where, what sessions may do, and the URL."""
+    writes = (
+        "writes allowed (the target's confirm rules apply)"
+        if options.allow_writes
+        else "read-only (--allow-writes lets writes through)"
+    )
+    most = options.max_sessions
+    sessions = "1 session" if most == 1 else f"{most} sessions"
+    out(f"rac-console serve: the console in a browser, {writes}, {sessions} at a time")
+    if not is_loopback(options.bind) and options.bind != "localhost":
+        out(
+            f"rac-console serve: listening on {options.bind}: reachable from the network, "
+            "without TLS (the token and the cookie cross it in clear)"
+        )
+    out("open this link once (it holds a one-time token); Ctrl-C stops the server:")
+    out(server.url)
+
+
+async def serve(options: ServeOptions) -> int:
+    """Serve until SIGINT or SIGTERM: 0, or 3 after one line when it cannot listen."""
+    server = ConsoleServer(options)
+    try:
+        await server.start()
+    except (OSError, OverflowError, UnicodeError, ValueError) as exc:
+        reason = getattr(exc, "strerror", None) or str(exc)
+        print(
+            f"rac-console: cannot listen on {options.bind}:{options.port}: {reason}",
+            file=sys.stderr,
+        )
+        return 3
+    stop = asyncio.Event()
+    loop = asyncio.get_running_loop()
+    for signum in (signal.SIGINT, signal.SIGTERM):
+        with contextlib.suppress(NotImplementedError, AttributeError, ValueError):
+            loop.add_signal_handler(signum, stop.set)
+    announce(options, server, lambda line: print(line, flush=True))
+    try:
+        await stop.wait()
+    finally:
+        await server.stop()
+    return 0

@@ -1,0 +1,221 @@
+"""The one module that touches textual-serve's private parts (checked against the
+versions of :data:`SUPPORTED`; ``tests/test_serve_http.py`` fails when one moves).
+
+What it changes, and why:
+
+- :class:`ExecAppService` starts each session's console with
+  ``asyncio.create_subprocess_exec(*argv)``, where textual-serve runs a shell over one
+  command string; it adds the served marker to the environment textual-serve builds,
+  and a stop that ends a console which does not quit when asked.
+- :class:`GuardedServer` keeps textual-serve's page (its template, its static files,
+  its message loop between the socket and the console, its downloads) and replaces
+  ``_make_app``: the routes it serves, a static route that never lists a folder, the
+  page's WebSocket address taken from the request's own Host, and a socket handler that
+  starts an :class:`ExecAppService`. The checks themselves live in :mod:`.guard` and
+  :mod:`.server`, which hand this module their middleware.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import logging
+from collections.abc import Awaitable, Callable, Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+import aiohttp_jinja2
+import jinja2
+from aiohttp import web
+from aiohttp.typedefs import Middleware
+from textual_serve.app_service import AppService
+from textual_serve.server import Server
+
+log = logging.getLogger("rac_console.serve")
+
+#: The versions of textual-serve this module was written against (pyproject's extra).
+SUPPORTED = "textual-serve>=1.1.3,<1.2"
+
+#: What of textual-serve this module relies on; ``tests/test_serve_http.py`` checks each.
+RELIES_ON = (
+    "textual_serve.app_service.AppService.__init__(command, *, write_bytes, write_str, "
+    "close, download_manager, debug)",
+    "textual_serve.app_service.AppService._open_app_process(width, height) -> Process",
+    "textual_serve.app_service.AppService._build_environment(width, height) -> dict",
+    "textual_serve.app_service.AppService._process, ._stdin, ._task",
+    "textual_serve.app_service.AppService.start, .stop, .run",
+    "textual_serve.server.Server.__init__(command, host, port, title, public_url)",
+    "textual_serve.server.Server._process_messages(websocket, app_service)",
+    "textual_serve.server.Server.handle_download, .download_manager, .debug",
+    "textual_serve.server.Server.statics_path, .templates_path",
+    "templates/app_index.html: font_size, app_websocket_url, config.static.url, application.name",
+    "static/js/textual.js, static/css/xterm.css",
+)
+
+#: How long a console has to quit once its socket closed before it is killed.
+QUIT_WAIT = 5.0
+
+
+class ExecAppService(AppService):
+    """One session's console, started from a list of arguments (no shell)."""
+
+    def __init__(self, argv: Sequence[str], environment: Mapping[str, str], **options: Any) -> None:
+        import shlex
+
+        super().__init__(shlex.join(argv), **options)  # the string is only shown
+        self.argv = tuple(argv)
+        self.extra_environment = dict(environment)
+
+    def _build_environment(self, width: int = 80, height: int = 24) -> dict[str, str]:
+        return super()._build_environment(width, height) | self.extra_environment
+
+    async def _open_app_process(self, width: int = 80, height: int = 24) -> Any:
+        environment = self._build_environment(width=width, height=height)
+        self._process = process = await asyncio.create_subprocess_exec(
+            *self.argv,
+            stdin=asyncio.subprocess.PIPE,
+            stdout=asyncio.subprocess.PIPE,
+            stderr=asyncio.subprocess.PIPE,
+            env=environment,
+        )
+        assert process.stdin is not None
+        self._stdin = process.stdin
+        return process
+
+    @property
+    def pid(self) -> int | None:
+        return None if self._process is None else self._process.pid
+
+    async def stop(self) -> None:
+        """Ask the console to quit; kill it if it has not within :data:`QUIT_WAIT`."""
+        with contextlib.suppress(Exception):  # gone already, or deaf: killed below
+            await asyncio.wait_for(super().stop(), QUIT_WAIT)
+        await self.end()
+
+    async def end(self) -> None:
+        """Kill the console if it still runs, and wait for it."""
+        process = self._process
+        if process is None:
+            return
+        if process.returncode is None:
+            with contextlib.suppress(ProcessLookupError):
+                process.kill()
+        with contextlib.suppress(TimeoutError):
+            await asyncio.wait_for(process.wait(), QUIT_WAIT)
+        if self._task is not None:
+            self._task.cancel()
+            with contextlib.suppress(asyncio.CancelledError, Exception):
+                await self._task
+            self._task = None
+
+
+class GuardedServer(Server):
+    """textual-serve's server with our routes: the page, its socket, its files and
+    downloads, behind ``middleware``."""
+
+    def __init__(
+        self,
+        argv: Sequence[str],
+        environment: Mapping[str, str],
+        middleware: Middleware,
+        title: str,
+        on_response_prepare: Callable[[web.Request, web.StreamResponse], Awaitable[None]],
+    ) -> None:
+        import shlex
+
+        super().__init__(shlex.join(argv), host="127.0.0.1", port=0, title=title)
+        self.argv = tuple(argv)
+        self.environment = dict(environment)
+        self.middleware = middleware
+        self.response_prepare = on_response_prepare
+        self.services: set[ExecAppService] = set()
+        #: Called with the socket's request before a session starts: a refusal, or None
+        #: when the session may start (it then holds a slot until ``session_ended``).
+        self.admit: Callable[[web.Request], web.StreamResponse | None] = lambda _: None
+        self.session_ended: Callable[[], None] = lambda: None
+
+    async def _make_app(self) -> web.Application:
+        app = web.Application(middlewares=[self.middleware])
+        aiohttp_jinja2.setup(app, loader=jinja2.FileSystemLoader(self.templates_path))
+        app.add_routes(
+            [
+                web.get("/", self.page, name="index"),
+                web.get("/ws", self.session, name="websocket"),
+                web.get("/download/{key}", self.handle_download, name="download"),
+                web.get("/static/{path:.*}", self.static_file, name="static"),
+            ]
+        )
+        app.on_response_prepare.append(self.response_prepare)
+        app.on_shutdown.append(self._end_sessions)
+        return app
+
+    async def page(self, request: web.Request) -> web.StreamResponse:
+        """textual-serve's page, its socket at the address the browser used (the Host
+        checked by the middleware), so the socket's Origin is the page's own."""
+        host = request.host
+        context = {
+            "font_size": 16,
+            "app_websocket_url": f"ws://{host}/ws",
+            "config": {"static": {"url": f"http://{host}/static/"}},
+            "application": {"name": self.title},
+        }
+        return aiohttp_jinja2.render_template("app_index.html", request, context)
+
+    async def static_file(self, request: web.Request) -> web.StreamResponse:
+        """A file of textual-serve's static folder; a folder, or anything outside it, is
+        not found (never a listing)."""
+        root = Path(self.statics_path).resolve()
+        wanted = (root / request.match_info["path"]).resolve()
+        if not wanted.is_relative_to(root) or not wanted.is_file():
+            raise web.HTTPNotFound(text="not found")
+        return web.FileResponse(wanted)
+
+    async def session(self, request: web.Request) -> web.StreamResponse:
+        """textual-serve's handle_websocket, starting an :class:`ExecAppService` once
+        ``admit`` let the session in."""
+        refused = self.admit(request)
+        if refused is not None:
+            return refused
+        try:
+            return await self._run_session(request)
+        finally:
+            self.session_ended()
+
+    async def _run_session(self, request: web.Request) -> web.WebSocketResponse:
+        websocket = web.WebSocketResponse(heartbeat=15)
+        width = _whole(request.query.get("width"), 80)
+        height = _whole(request.query.get("height"), 24)
+        service: ExecAppService | None = None
+        try:
+            await websocket.prepare(request)
+            service = ExecAppService(
+                self.argv,
+                self.environment,
+                write_bytes=websocket.send_bytes,
+                write_str=websocket.send_str,
+                close=websocket.close,
+                download_manager=self.download_manager,
+                debug=self.debug,
+            )
+            self.services.add(service)
+            await service.start(width, height)
+            await self._process_messages(websocket, service)
+        except asyncio.CancelledError:
+            await websocket.close()
+        except Exception as error:  # one session's failure ends that session alone
+            log.warning("session ended: %r", error)
+        finally:
+            if service is not None:
+                await service.stop()
+                self.services.discard(service)
+        return websocket
+
+    async def _end_sessions(self, _: web.Application) -> None:
+        await asyncio.gather(*(service.stop() for service in list(self.services)))
+
+
+def _whole(text: str | None, default: int) -> int:
+    """A size from the query, within what a screen can be."""
+    if text is None or not text.isdigit():
+        return default
+    return max(10, min(int(text), 1000))

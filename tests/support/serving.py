@@ -1,0 +1,202 @@
+"""``rac-console serve`` as the tests drive it: the server and a simulator as
+subprocesses (:class:`~tests.support.drivers.Running`), and plain HTTP and WebSocket
+handshakes over a socket of the test's own, every read under a deadline.
+
+- :func:`start_serve`: the server on 127.0.0.1 and a free port; its link, port, token;
+- :func:`start_sim`: ``rac-console sim`` on a free port;
+- :func:`request`: one HTTP/1.1 request, exactly the headers given (Host included);
+- :func:`handshake`: a WebSocket opening handshake; :class:`Handshake` keeps the socket
+  so that an accepted session stays open until closed;
+- :func:`sim_value`: a variable as ``rac-console get --json`` reads it from outside.
+"""
+
+from __future__ import annotations
+
+import base64
+import json
+import os
+import re
+import socket
+import subprocess
+import sys
+import time
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from urllib.parse import parse_qs, urlsplit
+
+from tests.support.drivers import Running
+
+#: How long a test waits for an answer, a line or a session: only a hang reaches it.
+DEADLINE = 20.0
+
+
+@dataclass
+class Served:
+    """A running ``rac-console serve``: its process and the link it printed."""
+
+    running: Running
+    url: str
+    port: int
+    token: str
+
+    @property
+    def origin(self) -> str:
+        return f"http://127.0.0.1:{self.port}"
+
+    @property
+    def host(self) -> str:
+        return f"127.0.0.1:{self.port}"
+
+    @property
+    def cookie_name(self) -> str:
+        return f"rac_console_{self.port}"
+
+
+def start_serve(
+    env: dict[str, str], running: list[Running], *args: str, before: tuple[str, ...] = ()
+) -> Served:
+    """``rac-console [BEFORE] serve --port 0 ARGS``, once it printed its link."""
+    run = Running(env, *before, "serve", "--port", "0", *args)
+    running.append(run)
+    run.wait_for("the link", lambda: any(line.startswith("http://") for line in run.out))
+    url = next(line for line in run.out if line.startswith("http://"))
+    parts = urlsplit(url)
+    assert parts.port is not None
+    return Served(run, url, parts.port, parse_qs(parts.query)["token"][0])
+
+
+def start_sim(env: dict[str, str], running: list[Running]) -> int:
+    """``rac-console sim`` on a free port; its port."""
+    run = Running(env, "sim", "--port", "0")
+    running.append(run)
+    found: list[int] = []
+
+    def listening() -> bool:
+        for line in run.out:
+            if match := re.search(r"listening on 127\.0\.0\.1:(\d+)", line):
+                found.append(int(match.group(1)))
+                return True
+        return False
+
+    run.wait_for("the simulator", listening)
+    return found[0]
+
+
+def sim_value(env: dict[str, str], port: int, variable: str) -> object:
+    """``rac-console get VARIABLE -H 127.0.0.1 -p PORT --json``: the value read."""
+    where = ("-H", "127.0.0.1", "-p", str(port), "--json")
+    result = subprocess.run(
+        [sys.executable, "-m", "rac_console", "get", *variable.split(), *where],
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=DEADLINE,
+    )
+    assert result.returncode == 0, result.stderr
+    return json.loads(result.stdout)["value"]
+
+
+@dataclass
+class Answer:
+    """An HTTP answer: status, headers (names lowercased; Set-Cookie may repeat), body."""
+
+    status: int
+    headers: list[tuple[str, str]] = field(default_factory=list)
+    body: bytes = b""
+
+    def header(self, name: str) -> str | None:
+        return next((v for k, v in self.headers if k == name.lower()), None)
+
+    @property
+    def text(self) -> str:
+        return self.body.decode("utf-8", "replace")
+
+
+def _read_head(sock: socket.socket) -> tuple[Answer, bytes]:
+    data = b""
+    deadline = time.monotonic() + DEADLINE
+    while b"\r\n\r\n" not in data:
+        sock.settimeout(max(0.01, deadline - time.monotonic()))
+        chunk = sock.recv(65536)
+        if not chunk:
+            break
+        data += chunk
+    head, _, rest = data.partition(b"\r\n\r\n")
+    lines = head.decode("latin-1").split("\r\n")
+    status = int(lines[0].split()[1])
+    headers = []
+    for line in lines[1:]:
+        name, _, value = line.partition(":")
+        headers.append((name.strip().lower(), value.strip()))
+    return Answer(status, headers), rest
+
+
+def _send(port: int, path: str, headers: Mapping[str, str]) -> socket.socket:
+    sock = socket.create_connection(("127.0.0.1", port), timeout=DEADLINE)
+    lines = [f"GET {path} HTTP/1.1", *(f"{k}: {v}" for k, v in headers.items())]
+    sock.sendall(("\r\n".join(lines) + "\r\n\r\n").encode("latin-1"))
+    return sock
+
+
+def request(port: int, path: str, headers: Mapping[str, str]) -> Answer:
+    """``GET PATH`` with exactly ``headers`` (no Host unless given), the connection
+    closed after it; the whole answer."""
+    with _send(port, path, {**headers, "Connection": "close"}) as sock:
+        answer, body = _read_head(sock)
+        length = int(answer.header("content-length") or 0)
+        deadline = time.monotonic() + DEADLINE
+        while len(body) < length:
+            sock.settimeout(max(0.01, deadline - time.monotonic()))
+            chunk = sock.recv(65536)
+            if not chunk:
+                break
+            body += chunk
+    answer.body = body
+    return answer
+
+
+class Handshake:
+    """A WebSocket opening handshake; the socket stays open (a 101 is a session)."""
+
+    def __init__(self, port: int, headers: Mapping[str, str], path: str = "/ws") -> None:
+        key = base64.b64encode(os.urandom(16)).decode()
+        upgrade = {
+            "Upgrade": "websocket",
+            "Connection": "Upgrade",
+            "Sec-WebSocket-Key": key,
+            "Sec-WebSocket-Version": "13",
+        }
+        self.sock = _send(port, path, {**headers, **upgrade})
+        self.answer, _ = _read_head(self.sock)
+
+    @property
+    def status(self) -> int:
+        return self.answer.status
+
+    def close(self) -> None:
+        self.sock.close()
+
+
+def handshake(port: int, headers: Mapping[str, str]) -> int:
+    """The status of a WebSocket handshake, its socket closed at once."""
+    made = Handshake(port, headers)
+    made.close()
+    return made.status
+
+
+def cookie_of(answer: Answer, name: str) -> tuple[str, list[str]]:
+    """The value of the cookie ``name`` an answer sets, and its attributes lowercased."""
+    for key, value in answer.headers:
+        if key == "set-cookie" and value.startswith(f"{name}="):
+            first, *attributes = (part.strip() for part in value.split(";"))
+            return first.partition("=")[2], [a.lower() for a in attributes]
+    raise AssertionError(f"no cookie {name}: {answer.headers}")
+
+
+def until(holds: Callable[[], bool], what: str, deadline: float = DEADLINE) -> None:
+    """Ask ``holds`` every 50 ms until it holds; fail naming ``what`` after ``deadline``."""
+    end = time.monotonic() + deadline
+    while not holds():
+        if time.monotonic() > end:
+            raise AssertionError(f"timed out after {deadline} s waiting for {what}")
+        time.sleep(0.05)

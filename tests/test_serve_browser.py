@@ -1,0 +1,220 @@
+"""``rac-console serve`` in a real browser: Debian's Chromium, driven by Playwright
+(``executable_path``: Playwright's own browser download is not used). Skipped where
+either is missing (``.ci/run`` installs both).
+
+What the page's terminal shows is read from what its own socket received: an init
+script (run before the page's scripts, outside its CSP) tees each message the page's
+WebSocket gets, and :class:`~tests.support.drivers.Screen` plays them as a terminal
+would. xterm.js draws on a canvas, so there is no text in the DOM to read.
+"""
+
+from __future__ import annotations
+
+import http.server
+import shutil
+import threading
+import time
+from collections.abc import Iterator
+from typing import Any
+
+import pytest
+
+from tests.support.drivers import Screen, profile
+from tests.support.serving import DEADLINE, Served, sim_value, start_serve, start_sim
+
+pytest.importorskip("textual_serve", reason="needs the extra web")
+playwright_api = pytest.importorskip("playwright.sync_api", reason="needs playwright")
+CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
+
+pytestmark = [
+    pytest.mark.slow,
+    pytest.mark.skipif(CHROMIUM is None, reason="needs Debian's chromium (.ci/run installs it)"),
+]
+
+#: Tees what the page's sockets receive into ``window.__racReceived`` (text), and
+#: counts the sockets that opened and that failed.
+TEE = """
+(() => {
+  const Real = window.WebSocket;
+  const decoder = new TextDecoder();
+  window.__racReceived = [];
+  window.__racOpened = 0;
+  class Tee extends Real {
+    constructor(...args) {
+      super(...args);
+      this.addEventListener("open", () => { window.__racOpened += 1; });
+      this.addEventListener("message", (event) => {
+        if (typeof event.data !== "string") {
+          window.__racReceived.push(decoder.decode(event.data, {stream: true}));
+        }
+      });
+    }
+  }
+  window.WebSocket = Tee;
+})();
+"""
+
+#: A page of another origin that tries the console's socket (the browser holds the
+#: cookie: cookies know no ports).
+FOREIGN_PAGE = """<!DOCTYPE html><html><body><script>
+window.result = "pending";
+const socket = new WebSocket("ws://127.0.0.1:PORT/ws?width=80&height=24");
+socket.onopen = () => { window.result = "open"; };
+socket.onerror = () => { window.result = "error"; };
+socket.onclose = (e) => { if (window.result === "pending") window.result = "closed " + e.code; };
+</script></body></html>"""
+
+
+#: Opens a socket from the page it runs in: "open" or "error".
+OPEN_SOCKET = """(url) => new Promise((resolve) => {
+  const socket = new WebSocket(url + "?width=80&height=24");
+  socket.onopen = () => { resolve("open"); socket.close(); };
+  socket.onerror = () => resolve("error");
+  setTimeout(() => resolve("neither opened nor failed"), 20000);
+})"""
+
+
+class ServedPage:
+    """The console's page in the browser, its terminal as text."""
+
+    def __init__(self, page: Any) -> None:
+        self.page = page
+        self.screen = Screen(1000)  # Textual moves the cursor absolutely: no wrapping
+
+    def text(self) -> str:
+        received = self.page.evaluate("window.__racReceived.splice(0)")
+        self.screen.feed("".join(received))
+        return "\n".join(self.screen.lines())
+
+    def until(self, *texts: str, timeout: float = DEADLINE) -> str:
+        end = time.monotonic() + timeout
+        while True:
+            shown = self.text()
+            if all(text in shown for text in texts):
+                return shown
+            if time.monotonic() > end:
+                raise AssertionError(f"timed out waiting for {texts} on the page:\n{shown}")
+            self.page.wait_for_timeout(50)
+
+    def type_line(self, line: str) -> None:
+        self.page.keyboard.type(line)
+        self.page.keyboard.press("Enter")
+
+
+@pytest.fixture
+def browser() -> Iterator[Any]:
+    with playwright_api.sync_playwright() as playwright:
+        launched = playwright.chromium.launch(executable_path=CHROMIUM, headless=True)
+        try:
+            yield launched
+        finally:
+            launched.close()
+
+
+def open_console(context: Any, served: Served) -> ServedPage:
+    """The printed link opened in ``context``; the console's first screen on it."""
+    page = context.new_page()
+    page.add_init_script(TEE)
+    page.goto(served.url, wait_until="domcontentloaded", timeout=DEADLINE * 1000)
+    console = ServedPage(page)
+    console.until("rac-console")
+    page.focus(".xterm-helper-textarea")  # the keys go to xterm, no click on a pane
+    return console
+
+
+class ForeignSite:
+    """Another origin on the same host: a page whose script tries the console's socket."""
+
+    def __init__(self, port: int) -> None:
+        body = FOREIGN_PAGE.replace("PORT", str(port)).encode()
+
+        class Handler(http.server.BaseHTTPRequestHandler):
+            def do_GET(self) -> None:
+                self.send_response(200)
+                self.send_header("Content-Type", "text/html")
+                self.send_header("Content-Length", str(len(body)))
+                self.end_headers()
+                self.wfile.write(body)
+
+            def log_message(self, *args: object) -> None:
+                pass
+
+        self.server = http.server.ThreadingHTTPServer(("127.0.0.1", 0), Handler)
+        self.port = self.server.server_address[1]
+        self.thread = threading.Thread(target=self.server.serve_forever, daemon=True)
+        self.thread.start()
+
+    def close(self) -> None:
+        self.server.shutdown()
+        self.server.server_close()
+
+
+def result_of(page: Any) -> str:
+    end = time.monotonic() + DEADLINE
+    while (result := page.evaluate("window.result")) == "pending":
+        if time.monotonic() > end:
+            raise AssertionError("the socket neither opened nor failed")
+        page.wait_for_timeout(50)
+    return str(result)
+
+
+def test_the_console_renders_and_takes_keys_through_the_link(env, running, browser, tmp_path):
+    served = start_serve(env, running)
+    context = browser.new_context(viewport={"width": 1400, "height": 900})
+    console = open_console(context, served)
+    page = console.page
+    assert page.url == served.origin + "/"  # the token left the address bar
+    assert page.evaluate("document.cookie") == ""  # HttpOnly: no script reads it
+    shown = console.until("SIMULATOR", "READ-ONLY")
+    assert "Watch" in shown
+    console.type_line("get I 1")
+    console.until("I1 = 1")
+    page.screenshot(path=str(tmp_path / "console.png"))
+    # The link opens once: a second browser with it gets nothing.
+    other = browser.new_context().new_page()
+    answer = other.goto(served.url, timeout=DEADLINE * 1000)
+    assert answer is not None and answer.status == 403
+
+
+def test_a_page_of_another_origin_holding_the_cookie_cannot_open_the_socket(env, running, browser):
+    served = start_serve(env, running, "--max-sessions", "2")
+    context = browser.new_context()
+    console = open_console(context, served)
+    foreign = ForeignSite(served.port)
+    try:
+        cookies = {c["name"]: c for c in context.cookies(f"http://127.0.0.1:{foreign.port}/")}
+        assert served.cookie_name in cookies  # the browser would send it along
+        page = context.new_page()
+        page.goto(f"http://127.0.0.1:{foreign.port}/", timeout=DEADLINE * 1000)
+        assert result_of(page) == "error"
+        # The same socket from the console's own page opens (a slot was free for both).
+        assert console.page.evaluate(OPEN_SOCKET, f"ws://{served.host}/ws") == "open"
+    finally:
+        foreign.close()
+
+
+def test_put_in_a_default_session_is_refused(env, running, browser):
+    sim_port = start_sim(env, running)
+    before = sim_value(env, sim_port, "I 10")
+    served = start_serve(env, running, before=("-H", "127.0.0.1", "-p", str(sim_port)))
+    console = open_console(browser.new_context(), served)
+    console.until("READ-ONLY")
+    console.type_line("put I 10 5")
+    console.until("read-only mode is on")
+    assert sim_value(env, sim_port, "I 10") == before != 5
+
+
+def test_with_allow_writes_a_confirmed_write_lands(env, running, browser, config):
+    sim_port = start_sim(env, running)
+    config(profile("cellsim", sim_port, 'writes = "confirm"'))
+    assert sim_value(env, sim_port, "I 10") != 5
+    served = start_serve(env, running, "-H", "cellsim", "--allow-writes")
+    console = open_console(browser.new_context(), served)
+    shown = console.until("cellsim")
+    assert "READ-ONLY" not in shown
+    console.type_line("put I 10 5")
+    console.until("[y/N]")
+    assert sim_value(env, sim_port, "I 10") != 5  # nothing written before the answer
+    console.page.keyboard.press("y")
+    console.until("read back 5")
+    assert sim_value(env, sim_port, "I 10") == 5
