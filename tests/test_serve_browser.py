@@ -20,7 +20,7 @@ from typing import Any
 import pytest
 
 from tests.support.drivers import Screen, profile
-from tests.support.serving import DEADLINE, Served, sim_value, start_serve, start_sim
+from tests.support.serving import DEADLINE, Served, sim_value, start_serve, start_sim, until
 
 pytest.importorskip("textual_serve", reason="needs the extra web")
 playwright_api = pytest.importorskip("playwright.sync_api", reason="needs playwright")
@@ -55,10 +55,10 @@ TEE = """
 """
 
 #: A page of another origin that tries the console's socket (the browser holds the
-#: cookie: cookies know no ports).
+#: cookie: cookies know no ports), even with the key (as if it had learnt it).
 FOREIGN_PAGE = """<!DOCTYPE html><html><body><script>
 window.result = "pending";
-const socket = new WebSocket("ws://127.0.0.1:PORT/ws?width=80&height=24");
+const socket = new WebSocket("ws://127.0.0.1:PORT/ws/KEY?width=80&height=24");
 socket.onopen = () => { window.result = "open"; };
 socket.onerror = () => { window.result = "error"; };
 socket.onclose = (e) => { if (window.result === "pending") window.result = "closed " + e.code; };
@@ -125,8 +125,8 @@ def open_console(context: Any, served: Served) -> ServedPage:
 class ForeignSite:
     """Another origin on the same host: a page whose script tries the console's socket."""
 
-    def __init__(self, port: int) -> None:
-        body = FOREIGN_PAGE.replace("PORT", str(port)).encode()
+    def __init__(self, port: int, key: str) -> None:
+        body = FOREIGN_PAGE.replace("PORT", str(port)).replace("KEY", key).encode()
 
         class Handler(http.server.BaseHTTPRequestHandler):
             def do_GET(self) -> None:
@@ -163,8 +163,9 @@ def test_the_console_renders_and_takes_keys_through_the_link(env, running, brows
     context = browser.new_context(viewport={"width": 1400, "height": 900})
     console = open_console(context, served)
     page = console.page
-    assert page.url == served.origin + "/"  # the token left the address bar
+    assert page.url == served.origin + "/"  # the token and the key left the address bar
     assert page.evaluate("document.cookie") == ""  # HttpOnly: no script reads it
+    assert len(page.evaluate("localStorage.getItem('rac-console-key')")) >= 40
     shown = console.until("SIMULATOR", "READ-ONLY")
     assert "Watch" in shown
     console.type_line("get I 1")
@@ -180,15 +181,25 @@ def test_a_page_of_another_origin_holding_the_cookie_cannot_open_the_socket(env,
     served = start_serve(env, running, "--max-sessions", "2")
     context = browser.new_context()
     console = open_console(context, served)
-    foreign = ForeignSite(served.port)
+    key = console.page.evaluate("localStorage.getItem('rac-console-key')")
+    foreign = ForeignSite(served.port, key)
     try:
         cookies = {c["name"]: c for c in context.cookies(f"http://127.0.0.1:{foreign.port}/")}
         assert served.cookie_name in cookies  # the browser would send it along
         page = context.new_page()
         page.goto(f"http://127.0.0.1:{foreign.port}/", timeout=DEADLINE * 1000)
         assert result_of(page) == "error"
+        # Turned away for its Origin (the cookie and the key were there), as the server says.
+        foreign_origin = f"http://127.0.0.1:{foreign.port}"
+        until(
+            lambda: any(
+                "refused" in line and f"Origin {foreign_origin!r}" in line
+                for line in served.running.err
+            ),
+            "the refusal of the foreign Origin on the server's stderr",
+        )
         # The same socket from the console's own page opens (a slot was free for both).
-        assert console.page.evaluate(OPEN_SOCKET, f"ws://{served.host}/ws") == "open"
+        assert console.page.evaluate(OPEN_SOCKET, f"ws://{served.host}/ws/{key}") == "open"
     finally:
         foreign.close()
 

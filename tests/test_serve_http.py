@@ -16,7 +16,7 @@ import pytest
 
 from rac_console.serve import guard as guard_module
 from rac_console.serve.command import SERVED_ENV, WEB_DRIVER, served, session_argv
-from rac_console.serve.guard import Guard, Refusal, Slots, split_host
+from rac_console.serve.guard import Guard, Login, Refusal, Slots, split_host
 from tests.support.drivers import cli, one_error_line, profile
 from tests.support.serving import (
     Handshake,
@@ -24,18 +24,12 @@ from tests.support.serving import (
     cookie_of,
     handshake,
     request,
+    spend_link,
     start_serve,
     until,
 )
 
 textual_serve = pytest.importorskip("textual_serve", reason="needs the extra web")
-
-
-def logged_in(served: Served) -> str:
-    """Spend the token; the cookie it bought."""
-    answer = request(served.port, f"/?token={served.token}", {"Host": served.host})
-    assert answer.status == 303
-    return cookie_of(answer, served.cookie_name)[0]
 
 
 def with_cookie(served: Served, cookie: str, **more: str) -> dict[str, str]:
@@ -61,7 +55,8 @@ def test_the_token_buys_a_cookie_once_and_every_page_needs_it(env, running) -> N
 
     bought = request(served.port, f"/?token={served.token}", {"Host": served.host})
     assert bought.status == 303
-    assert bought.header("location") == "/"  # the token leaves the address bar
+    location = bought.header("location") or ""
+    assert location.startswith("/#key=")  # the token leaves the address bar
     assert bought.header("referrer-policy") == "no-referrer"
     cookie, attributes = cookie_of(bought, served.cookie_name)
     assert cookie and cookie != served.token
@@ -90,7 +85,8 @@ def cookie_of_none(answer, name: str) -> bool:
 @pytest.mark.slow
 def test_a_foreign_host_is_misdirected(env, running) -> None:
     served = start_serve(env, running)
-    cookie = logged_in(served)
+    login = spend_link(served)
+    cookie = login.cookie
     other_port = served.port + 1 if served.port < 65535 else served.port - 1
     for host in (
         f"evil.example:{served.port}",  # a name rebound to this machine (DNS rebinding)
@@ -114,7 +110,8 @@ def test_a_foreign_host_is_misdirected(env, running) -> None:
 @pytest.mark.slow
 def test_static_serves_files_never_folders(env, running) -> None:
     served = start_serve(env, running)
-    cookie = logged_in(served)
+    login = spend_link(served)
+    cookie = login.cookie
     headers = with_cookie(served, cookie)
     assert request(served.port, "/static/js/textual.js", headers).status == 200
     for folder in ("/static/", "/static/js", "/static/js/", "/static/css/", "/static/fonts/"):
@@ -128,21 +125,28 @@ def test_static_serves_files_never_folders(env, running) -> None:
 @pytest.mark.slow
 def test_the_socket_takes_only_its_own_origin(env, running) -> None:
     served = start_serve(env, running)
-    cookie = logged_in(served)
+    login = spend_link(served)
+    cookie = login.cookie
     other = f"http://127.0.0.1:{served.port + 1 if served.port < 65535 else served.port - 1}"
     for origin in (other, "http://evil.example", "null", f"https://{served.host}", None):
         headers = with_cookie(served, cookie)
         if origin is not None:
             headers["Origin"] = origin
-        assert handshake(served.port, headers) == 403, origin
+        assert handshake(served.port, headers, login.socket) == 403, origin
     own = with_cookie(served, cookie, Origin=served.origin)
-    assert handshake(served.port, {"Host": served.host, "Origin": served.origin}) == 403
+    assert (
+        handshake(served.port, {"Host": served.host, "Origin": served.origin}, login.socket) == 403
+    )
     foreign_host = with_cookie(served, cookie, Host=f"evil.example:{served.port}")
     assert (
-        handshake(served.port, foreign_host | {"Origin": f"http://evil.example:{served.port}"})
+        handshake(
+            served.port,
+            foreign_host | {"Origin": f"http://evil.example:{served.port}"},
+            login.socket,
+        )
         == 421
     )
-    session = Handshake(served.port, own)
+    session = Handshake(served.port, own, path=login.socket)
     try:
         assert session.status == 101
     finally:
@@ -152,12 +156,13 @@ def test_the_socket_takes_only_its_own_origin(env, running) -> None:
 @pytest.mark.slow
 def test_one_session_too_many_gets_a_page_saying_so(env, running) -> None:
     served = start_serve(env, running)
-    cookie = logged_in(served)
+    login = spend_link(served)
+    cookie = login.cookie
     own = with_cookie(served, cookie, Origin=served.origin)
-    first = Handshake(served.port, own)
+    first = Handshake(served.port, own, path=login.socket)
     try:
         assert first.status == 101
-        assert handshake(served.port, own) == 503
+        assert handshake(served.port, own, login.socket) == 503
         busy = request(served.port, "/", with_cookie(served, cookie))
         assert busy.status == 503
         assert "already open in 1 session" in busy.text
@@ -169,7 +174,7 @@ def test_one_session_too_many_gets_a_page_saying_so(env, running) -> None:
         lambda: request(served.port, "/", with_cookie(served, cookie)).status == 200,
         "the slot given back",
     )
-    second = Handshake(served.port, own)
+    second = Handshake(served.port, own, path=login.socket)
     second.close()
     assert second.status == 101
 
@@ -177,12 +182,16 @@ def test_one_session_too_many_gets_a_page_saying_so(env, running) -> None:
 @pytest.mark.slow
 def test_max_sessions_lets_that_many_in(env, running) -> None:
     served = start_serve(env, running, "--max-sessions", "2")
-    cookie = logged_in(served)
+    login = spend_link(served)
+    cookie = login.cookie
     own = with_cookie(served, cookie, Origin=served.origin)
-    sessions = [Handshake(served.port, own), Handshake(served.port, own)]
+    sessions = [
+        Handshake(served.port, own, path=login.socket),
+        Handshake(served.port, own, path=login.socket),
+    ]
     try:
         assert [s.status for s in sessions] == [101, 101]
-        assert handshake(served.port, own) == 503
+        assert handshake(served.port, own, login.socket) == 503
     finally:
         for session in sessions:
             session.close()
@@ -245,8 +254,11 @@ def test_each_session_gets_the_target_as_given(env, running, config) -> None:
     """A profile's name goes to the session as written (the session resolves it)."""
     config(profile("cellsim", 5999))
     served = start_serve(env, running, "-H", "cellsim", "--timeout", "1.5")
-    cookie = logged_in(served)
-    session = Handshake(served.port, with_cookie(served, cookie, Origin=served.origin))
+    login = spend_link(served)
+    cookie = login.cookie
+    session = Handshake(
+        served.port, with_cookie(served, cookie, Origin=served.origin), path=login.socket
+    )
     try:
         assert session.status == 101
         pid = served.running.process.pid
@@ -260,7 +272,7 @@ def test_each_session_gets_the_target_as_given(env, running, config) -> None:
             return bool(found)
 
         until(child, "the session's console")
-        assert found[0].endswith("-m rac_console --host=cellsim --timeout=1.5 --read-only")
+        assert found[0].endswith("-P -m rac_console --host=cellsim --timeout=1.5 --read-only")
     finally:
         session.close()
 
@@ -309,8 +321,8 @@ def test_the_console_still_needs_a_terminal_unless_served(env) -> None:
 
 def test_a_session_runs_a_list_of_arguments_read_only_by_default() -> None:
     argv = session_argv(["--host=cell 3; rm -rf /", "--timeout=1.5"], allow_writes=False)
-    assert argv[:3] == (sys.executable, "-m", "rac_console")
-    assert argv[3:] == ("--host=cell 3; rm -rf /", "--timeout=1.5", "--read-only")
+    assert argv[:4] == (sys.executable, "-P", "-m", "rac_console")
+    assert argv[4:] == ("--host=cell 3; rm -rf /", "--timeout=1.5", "--read-only")
     assert session_argv([], allow_writes=True)[-1] == "rac_console"
     with pytest.raises(ValueError):
         session_argv(["-H", "x"], allow_writes=False)  # a value alone could be an option
@@ -386,10 +398,16 @@ def test_the_token_is_spent_once_and_a_wrong_one_spends_nothing() -> None:
     guard = Guard(8006, ["127.0.0.1"], token="t" * 43)
     assert isinstance(guard.exchange("x" * 43), Refusal)
     assert isinstance(guard.exchange(""), Refusal)
-    cookie = guard.exchange("t" * 43)
-    assert isinstance(cookie, str) and cookie != "t" * 43
+    login = guard.exchange("t" * 43)
+    assert isinstance(login, Login) and "t" * 43 not in (login.cookie, login.key)
+    assert login.cookie != login.key
     assert isinstance(guard.exchange("t" * 43), Refusal)
+    cookie = login.cookie
     assert guard.check_cookie(cookie) is None
+    assert guard.check_key(cookie, login.key) is None
+    assert guard.check_key(cookie, cookie) is not None
+    assert guard.check_key(login.key, login.key) is not None
+    assert guard.check_key(cookie, "é" * 43) is not None
     assert guard.check_cookie(None) is not None
     assert guard.check_cookie("t" * 43) is not None  # the token is no cookie
     assert guard.cookie_name == "rac_console_8006"
@@ -487,20 +505,17 @@ def test_the_private_parts_relied_on_are_where_they_were() -> None:
 
 
 @pytest.mark.slow
-async def test_a_served_console_says_so_on_its_status_line(
-    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
-) -> None:
+async def test_a_served_console_says_so_on_its_status_line(tmp_path: Path) -> None:
     """A session in a browser is not the console at the cell's own screen: its status line
     starts with SERVED (an unserved console's does not)."""
+    from rac_console.engine.where import Where
     from rac_console.tui.status_bar import StatusBar
     from tests.support.drivers import make_app, until
 
     (tmp_path / "plain").mkdir()
     (tmp_path / "served").mkdir()
     plain = make_app(tmp_path / "plain")
-    monkeypatch.setenv("TEXTUAL_DRIVER", WEB_DRIVER)
-    monkeypatch.setenv(SERVED_ENV, "1")
-    app = make_app(tmp_path / "served")
+    app = make_app(tmp_path / "served", where=Where.SERVED)
     for console, lead in ((app, True), (plain, False)):
         async with console.run_test(size=(100, 30)) as pilot:
             bar = console.main_screen.panes.status_bar

@@ -153,7 +153,11 @@ def make_cell(args: argparse.Namespace) -> Cell:
         log_csv=getattr(args, "log_csv", None),
         **getattr(args, "plant", {}),
     )
-    where = Where.CONSOLE if args.command is None else Where.REPL
+    from ..present.served import served
+
+    # A console served to a browser runs only what reaches its targets and nothing
+    # else of this machine (no file, no other host): the specs' Traits.reaches.
+    where = Where.REPL if args.command is not None else Where.SERVED if served() else Where.CONSOLE
     members = getattr(args, "cell_targets", None) or [(member_name(args.target), args.target)]
     return Cell(members, options=options, where=where)
 

@@ -37,12 +37,22 @@ class WriteTrait(Enum):
     UNLESS_GET = "unless a well-formed GET"  # a raw line, send
 
 
+class Reach(Enum):
+    """What a command reaches besides its target: a console served to a browser runs
+    only those that reach nothing else of the machine serving it."""
+
+    TARGET = "its target only"
+    FILES = "a file on this machine"  # save, load, log, record, transcript
+    NETWORK = "another host"  # connect, publish
+
+
 @dataclass(frozen=True)
 class Traits:
     """What the planner and the guards know of a command, declared on its spec."""
 
     writes: WriteTrait = WriteTrait.NEVER
     scope: Scope = Scope.TARGET
+    reaches: Reach = Reach.TARGET
 
     def writes_with(self, command: Command) -> bool:
         """Whether ``command`` (one of this spec's) may write: a put, a raw line but a

@@ -293,6 +293,14 @@ class Cell:
         from ..commands.routing import Chained, OnEveryTarget, OnTarget, Refused, SwitchCurrent
 
         route = self._route(item)
+        if isinstance(route, OnTarget | OnEveryTarget | SwitchCurrent):
+            spec = self.registry.get(self.registry.name_of(route.command) or "")
+            if spec is not None and not spec.runs_in(self.where):  # said once, not per target
+                from .jobs import not_here
+
+                text = not_here(self.registry, spec.name, self.where)
+                self._answer(item, (Message(text, "error"),), route.command)
+                return
         match route:
             case OnTarget(name=name, command=command):
                 self.member(name).engine.submit_command(command, item.line, item.seq)
@@ -311,12 +319,6 @@ class Cell:
                 self._answer(item, ())
 
     def _use(self, item: _Line, route: SwitchCurrent) -> None:
-        if self.where not in self.registry.spec_of(route.command).where:
-            from .jobs import not_here
-
-            text = not_here(self.registry, "use", self.where)
-            self._answer(item, (Message(text, "error"),), route.command)
-            return
         member = self.member(route.name)
         self.current = member.name
         label = member.target.label

@@ -10,10 +10,17 @@ from __future__ import annotations
 from typing import TYPE_CHECKING
 
 from ..commands.language import Command
+from ..commands.routing import Reach
 from ..protocol import InputError
 from .events import Feedback, Message
 from .registry import Registry
 from .where import Where
+
+#: Why a served console does not run a command, by what the command reaches.
+SERVED_REFUSALS = {
+    Reach.FILES: "it writes or reads files on the machine serving it",
+    Reach.NETWORK: "it opens connections from the machine serving it",
+}
 
 if TYPE_CHECKING:
     from .context import JobContext
@@ -38,7 +45,7 @@ def run_job(
         if command is None:
             return None, []
         spec = registry.spec_of(command)
-        if where not in spec.where:
+        if not spec.runs_in(where):
             return command, [Message(not_here(registry, spec.name, where), "error")]
         return command, spec.run(context, command, line)
     except InputError as exc:
@@ -49,6 +56,9 @@ def run_job(
 
 def not_here(registry: Registry, name: str, where: Where) -> str:
     """Why ``name`` does not run ``where``, and what does."""
+    spec = registry.get(name)
+    if where is Where.SERVED and spec is not None and spec.traits.reaches in SERVED_REFUSALS:
+        return f"{name!r} is not for a served console: {SERVED_REFUSALS[spec.traits.reaches]}"
     if where is Where.RUN:
         takes = ", ".join(registry.runs_in(Where.RUN))
         return f"{name!r} works in the console and the REPL; run takes {takes} and GET:/PUT: lines"

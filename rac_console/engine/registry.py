@@ -32,7 +32,7 @@ from ..commands.language import (
     parse_exchange,
     split_word,
 )
-from ..commands.routing import Route, Traits, plan
+from ..commands.routing import Reach, Route, Traits, plan
 from ..protocol import KINDS, InputError
 from ..protocol.text import close_match
 from .context import CommandContext, JobContext
@@ -153,6 +153,13 @@ class Spec(Generic[C, T]):
     def hint_for(self, args: list[str]) -> str:
         return (self.hint or words_of(self.arguments))(args)
 
+    def runs_in(self, where: Where) -> bool:
+        """Whether it runs ``where``: a place it declares, and in a served console only
+        when it reaches nothing but its target (no file, no other host)."""
+        if where is Where.SERVED and self.traits.reaches is not Reach.TARGET:
+            return False
+        return where in self.where
+
     def command_of(self, command: object) -> T:
         """``command`` as its handler takes it (TypeError: this entry does not run it)."""
         if isinstance(command, self.types):
@@ -240,6 +247,13 @@ class Registry:
     def names(self) -> list[str]:
         return list(self._specs)
 
+    def name_of(self, command: Command) -> str | None:
+        """The name of the entry that runs ``command``; None when none does."""
+        try:
+            return self.spec_of(command).name
+        except LookupError:
+            return None
+
     def spec_of(self, command: Command) -> AnySpec:
         """The entry that runs ``command`` (a command object carries no name)."""
         named = _named(command)
@@ -295,7 +309,7 @@ class Registry:
         return plan(line, names, current, self.parse, self.traits)
 
     def runs_in(self, where: Where) -> list[str]:
-        return [spec.name for spec in self._specs.values() if where in spec.where]
+        return [spec.name for spec in self._specs.values() if spec.runs_in(where)]
 
 
 def in_order(specs: Iterable[AnySpec], words: Sequence[str]) -> list[AnySpec]:

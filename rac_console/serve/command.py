@@ -2,7 +2,7 @@
 
 Every WebSocket starts one console process. Its command is a list of arguments run
 without a shell, so nothing from the command line (a profile's name, a host) is ever
-read by a shell: ``[python, -m, rac_console, --host=NAME, ..., --read-only]``. Options
+read by a shell: ``[python, -P, -m, rac_console, --host=NAME, ..., --read-only]``. Options
 and their values go as one word each (``--host=NAME``), so a value that starts with
 ``-`` stays a value.
 """
@@ -26,7 +26,8 @@ def session_argv(
         if not word.startswith("--") or ("=" not in word and word != "--no-verify"):
             raise ValueError(f"a target option is one --name=value word: {word!r}")
     read_only = () if allow_writes else ("--read-only",)
-    return (python or sys.executable, "-m", "rac_console", *target_words, *read_only)
+    # -P: the installed console, never a rac_console folder where serve was started.
+    return (python or sys.executable, "-P", "-m", "rac_console", *target_words, *read_only)
 
 
 def session_environment() -> dict[str, str]:

@@ -8,17 +8,24 @@ Every request is judged in this order, and the first refusal answers it:
    wildcard bind (``0.0.0.0``, ``::``) this machine's names; with the server's port. A
    page whose name was rebound to this machine's address (DNS rebinding) sends its own
    name: refused before anything else is looked at.
-2. **The token, once** (303 to ``/``, or 403): ``/?token=T`` with the token printed at
-   start sets the session cookie and redirects to ``/``, so the token leaves the address
-   bar; it is then spent. A browser that already holds a good cookie is just redirected.
+2. **The token, once** (303 to ``/#key=K``, or 403): ``GET /?token=T`` with the token
+   printed at start sets the session cookie and redirects to the page, so the token
+   leaves the address bar; it is then spent. The redirect's fragment hands the page
+   the cookie's key (below); no request ever carries a fragment. A browser that
+   already holds a good cookie is just redirected to ``/``.
 3. **The cookie** (403): every other request, pages, files and the WebSocket, needs
    the cookie (HttpOnly, SameSite=Strict). 403, not 401: a cookie is no HTTP
    authentication scheme, there is no challenge to send; the page says what to do.
 4. **Origin** (403, the WebSocket only): exactly this server's own origin
-   (``http://`` + the Host just checked). A page from another origin on the same host
-   (another port) holds the cookie too, since cookies know no ports: Origin is what
-   keeps its scripts off the socket. No Origin, or ``null``, is refused as well.
-5. **A session slot** (503, with a page): at most ``max_sessions`` consoles at once.
+   (``http://`` + the Host just checked). No Origin, or ``null``, is refused as well.
+5. **The key** (403, the WebSocket only): the socket's address is ``/ws/KEY``, the
+   key handed out with this cookie. Browsers send a cookie to every port of its host,
+   so another web service on this machine gets the cookie too, and a program can send
+   any Origin: the key is what it lacks. The page keeps it in its own origin's storage,
+   which no other port's page can read.
+6. **A session slot** (503, with a page): at most ``max_sessions`` consoles at once.
+
+Secrets are compared as bytes in constant time; one that is not ASCII is simply wrong.
 """
 
 from __future__ import annotations
@@ -137,9 +144,25 @@ class Slots:
         self.taken = max(0, self.taken - 1)
 
 
+@dataclass(frozen=True)
+class Login:
+    """What the link buys: the cookie, and the key the page opens the socket with."""
+
+    cookie: str
+    key: str
+
+
+def same_secret(given: str | None, kept: str) -> bool:
+    """``given`` is ``kept``, compared in constant time; never an error (a secret that
+    is not ASCII, from a header or a path, is just not the secret)."""
+    if not given:
+        return False
+    return hmac.compare_digest(given.encode("utf-8", "surrogateescape"), kept.encode())
+
+
 class Guard:
-    """The token (spent on first use), the cookies it bought, the names this server
-    answers to and its session slots."""
+    """The token (spent on first use), the cookies it bought and their keys, the names
+    this server answers to and its session slots."""
 
     def __init__(
         self,
@@ -154,7 +177,7 @@ class Guard:
         self.cookie_name = cookie_name(port)
         self.slots = Slots(max_sessions)
         self._token_spent = False
-        self._cookies: set[str] = set()
+        self._logins: list[Login] = []
 
     # ------------------------------------------------------------------ Host, Origin
 
@@ -196,23 +219,40 @@ class Guard:
 
     # --------------------------------------------------------------- token, cookie
 
-    def has_cookie(self, value: str | None) -> bool:
-        if not value:
-            return False
-        return any(hmac.compare_digest(value, kept) for kept in self._cookies)
+    def _login_of(self, cookie: str | None) -> Login | None:
+        found = None
+        for login in self._logins:  # every one compared: no early exit to time
+            if same_secret(cookie, login.cookie):
+                found = login
+        return found
 
-    def exchange(self, token: str) -> str | Refusal:
-        """The token printed at start, the first time: a new cookie value. Spent after."""
-        if self._token_spent or not hmac.compare_digest(token, self.token):
+    def has_cookie(self, value: str | None) -> bool:
+        return self._login_of(value) is not None
+
+    def exchange(self, token: str) -> Login | Refusal:
+        """The token printed at start, the first time: a new cookie and its key. Spent
+        after."""
+        if self._token_spent or not same_secret(token, self.token):
             return Refusal(
                 FORBIDDEN,
                 "this link is not valid (each link opens once): start rac-console serve "
                 "again for a new one",
             )
         self._token_spent = True
-        cookie = new_secret()
-        self._cookies.add(cookie)
-        return cookie
+        login = Login(new_secret(), new_secret())
+        self._logins.append(login)
+        return login
+
+    def check_key(self, cookie: str | None, key: str | None) -> Refusal | None:
+        """None when ``key`` is the one handed out with ``cookie``."""
+        login = self._login_of(cookie)
+        if login is not None and same_secret(key, login.key):
+            return None
+        return Refusal(
+            FORBIDDEN,
+            "the console's socket opens from its own page, with the key the link gave "
+            "it: open the link rac-console serve printed",
+        )
 
     def check_cookie(self, value: str | None) -> Refusal | None:
         if self.has_cookie(value):

@@ -19,6 +19,7 @@ from dataclasses import dataclass, field
 from aiohttp import web
 from aiohttp.typedefs import Middleware
 
+from ..protocol.text import terminal_safe
 from .guard import BUSY, WILDCARDS, Guard, Refusal, is_loopback, url_host
 from .textual_serve_parts import GuardedServer
 
@@ -40,6 +41,9 @@ HEADERS = {
         "connect-src 'self'; base-uri 'none'; form-action 'none'; frame-ancestors 'none'"
     ),
 }
+
+#: How long an idle kept-alive connection stays open (aiohttp's default is an hour).
+KEEPALIVE_SECONDS = 15.0
 
 #: How often the "already open" page asks again.
 RETRY_SECONDS = 5
@@ -70,6 +74,20 @@ def page(status: int, title: str, text: str, extra_head: str = "") -> web.Respon
 def refusal_page(refusal: Refusal) -> web.Response:
     titles = {421: "Misdirected request", 403: "Not allowed", 503: "Already open"}
     return page(refusal.status, titles.get(refusal.status, "Refused"), refusal.reason)
+
+
+def said_refusal(request: web.Request, refusal: Refusal, detail: str = "") -> web.Response:
+    """The refusal's page, and one line on this server's standard error: whoever runs
+    it sees who was turned away and why (what came from the request escaped)."""
+    peer = request.remote or "?"
+    what = terminal_safe(f"{request.method} {request.path}"[:200])
+    more = f" ({terminal_safe(detail[:200])})" if detail else ""
+    print(
+        f"rac-console serve: refused {what} from {peer}: {refusal.status}, {refusal.reason}{more}",
+        file=sys.stderr,
+        flush=True,
+    )
+    return refusal_page(refusal)
 
 
 def busy_page(slots: int) -> web.Response:
@@ -106,24 +124,26 @@ def make_middleware(server: ConsoleServer) -> Middleware:
         guard = server.guard
         if guard is None:  # listening, the link not made yet: nobody can hold it
             return page(BUSY, "Starting", "The server is starting: try again.")
-        refused = guard.check_host(request.headers.get("Host"), local_address(request))
+        host = request.headers.get("Host")
+        refused = guard.check_host(host, local_address(request))
         if refused is not None:
-            return refusal_page(refused)
+            return said_refusal(request, refused, f"Host {host!r}")
         cookie = request.cookies.get(guard.cookie_name)
-        if request.path == "/" and "token" in request.query:
+        if request.path == "/" and "token" in request.query and request.method == "GET":
             if guard.has_cookie(cookie):
                 return web.Response(status=303, headers={"Location": "/"})
             bought = guard.exchange(request.query["token"])
             if isinstance(bought, Refusal):
-                return refusal_page(bought)
-            response = web.Response(status=303, headers={"Location": "/"})
+                return said_refusal(request, bought)
+            # The key rides in the fragment: the browser keeps it, no request carries it.
+            response = web.Response(status=303, headers={"Location": f"/#key={bought.key}"})
             response.set_cookie(
-                guard.cookie_name, bought, httponly=True, samesite="Strict", path="/"
+                guard.cookie_name, bought.cookie, httponly=True, samesite="Strict", path="/"
             )
             return response
         refused = guard.check_cookie(cookie)
         if refused is not None:
-            return refusal_page(refused)
+            return said_refusal(request, refused)
         if request.path == "/" and guard.slots.full:
             return busy_page(guard.slots.most)
         return await handler(request)
@@ -172,10 +192,14 @@ class ConsoleServer:
         )
         textual.admit = self._admit
         runner = self._runner = web.AppRunner(
-            await textual._make_app(), handle_signals=False, access_log=None
+            await textual._make_app(),
+            handle_signals=False,
+            access_log=None,
+            keepalive_timeout=KEEPALIVE_SECONDS,
         )
         await runner.setup()
-        bind = None if options.bind in WILDCARDS else options.bind.strip("[]")
+        # 0.0.0.0 is IPv4's every address, :: IPv6's: each as written (None would be both).
+        bind = options.bind.strip("[]") or None
         try:
             await web.TCPSite(runner, bind, options.port, shutdown_timeout=2.0).start()
         except BaseException:
@@ -188,13 +212,20 @@ class ConsoleServer:
         self.url = f"http://{url_host(shown)}:{port}/?token={guard.token}"
         return self.url
 
-    def _admit(self, request: web.Request) -> web.StreamResponse | None:
-        """The socket's own checks, after the middleware's: its Origin, a free slot."""
+    def _admit(self, request: web.Request, key: str | None) -> web.StreamResponse | None:
+        """The socket's own checks, after the middleware's: an upgrade asked for, its
+        Origin, the cookie's key, a free slot (taken here)."""
         guard = self.guard
         assert guard is not None  # the middleware let the request through
-        refused = guard.check_origin(request.headers.get("Origin"), request.host)
+        if not web.WebSocketResponse().can_prepare(request).ok:
+            return page(400, "Not a WebSocket", "this address is the console's socket")
+        origin = request.headers.get("Origin")
+        refused = guard.check_origin(origin, request.host)
         if refused is not None:
-            return refusal_page(refused)
+            return said_refusal(request, refused, f"Origin {origin!r}")
+        refused = guard.check_key(request.cookies.get(guard.cookie_name), key)
+        if refused is not None:
+            return said_refusal(request, refused)
         if not guard.slots.take():
             return busy_page(guard.slots.most)
         return None

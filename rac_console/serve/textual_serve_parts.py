@@ -52,6 +52,23 @@ RELIES_ON = (
     "static/js/textual.js, static/css/xterm.css",
 )
 
+#: Put in the page before ``</body>``, so it runs before textual.js's ``onload``: the key
+#: the link's redirect put in the fragment goes to this origin's storage (no other
+#: port's page reads it) and leaves the address bar; the socket's address ends with it.
+KEY_SCRIPT = """<script>
+(() => {
+  const found = /^#key=([A-Za-z0-9_-]+)$/.exec(window.location.hash);
+  if (found) {
+    window.localStorage.setItem("rac-console-key", found[1]);
+    window.history.replaceState(null, "", window.location.pathname);
+  }
+  const key = window.localStorage.getItem("rac-console-key") || "none";
+  const terminal = document.getElementById("terminal");
+  terminal.dataset.sessionWebsocketUrl += "/" + encodeURIComponent(key);
+})();
+</script>
+"""
+
 #: How long a console has to quit once its socket closed before it is killed.
 QUIT_WAIT = 5.0
 
@@ -129,9 +146,11 @@ class GuardedServer(Server):
         self.middleware = middleware
         self.response_prepare = on_response_prepare
         self.services: set[ExecAppService] = set()
-        #: Called with the socket's request before a session starts: a refusal, or None
-        #: when the session may start (it then holds a slot until ``session_ended``).
-        self.admit: Callable[[web.Request], web.StreamResponse | None] = lambda _: None
+        #: Called with the socket's request and the key in its address before a session
+        #: starts: a refusal, or None when the session may start (it then holds a slot
+        #: until ``session_ended``).
+        self.admit: Callable[[web.Request, str | None], web.StreamResponse | None]
+        self.admit = lambda _request, _key: None
         self.session_ended: Callable[[], None] = lambda: None
 
     async def _make_app(self) -> web.Application:
@@ -141,6 +160,7 @@ class GuardedServer(Server):
             [
                 web.get("/", self.page, name="index"),
                 web.get("/ws", self.session, name="websocket"),
+                web.get("/ws/{key}", self.session, name="websocket-key"),
                 web.get("/download/{key}", self.handle_download, name="download"),
                 web.get("/static/{path:.*}", self.static_file, name="static"),
             ]
@@ -159,7 +179,10 @@ class GuardedServer(Server):
             "config": {"static": {"url": f"http://{host}/static/"}},
             "application": {"name": self.title},
         }
-        return aiohttp_jinja2.render_template("app_index.html", request, context)
+        response = aiohttp_jinja2.render_template("app_index.html", request, context)
+        assert response.text is not None and response.text.count("</body>") == 1
+        response.text = response.text.replace("</body>", KEY_SCRIPT + "</body>")
+        return response
 
     async def static_file(self, request: web.Request) -> web.StreamResponse:
         """A file of textual-serve's static folder; a folder, or anything outside it, is
@@ -172,16 +195,27 @@ class GuardedServer(Server):
 
     async def session(self, request: web.Request) -> web.StreamResponse:
         """textual-serve's handle_websocket, starting an :class:`ExecAppService` once
-        ``admit`` let the session in."""
-        refused = self.admit(request)
+        ``admit`` let the session in. Its slot is given back when the socket closes
+        (a reload finds it free), not once the console has ended."""
+        refused = self.admit(request, request.match_info.get("key"))
         if refused is not None:
             return refused
-        try:
-            return await self._run_session(request)
-        finally:
-            self.session_ended()
+        held = True
 
-    async def _run_session(self, request: web.Request) -> web.WebSocketResponse:
+        def give_back() -> None:
+            nonlocal held
+            if held:
+                held = False
+                self.session_ended()
+
+        try:
+            return await self._run_session(request, give_back)
+        finally:
+            give_back()
+
+    async def _run_session(
+        self, request: web.Request, socket_closed: Callable[[], None]
+    ) -> web.WebSocketResponse:
         websocket = web.WebSocketResponse(heartbeat=15)
         width = _whole(request.query.get("width"), 80)
         height = _whole(request.query.get("height"), 24)
@@ -200,6 +234,7 @@ class GuardedServer(Server):
             self.services.add(service)
             await service.start(width, height)
             await self._process_messages(websocket, service)
+            socket_closed()
         except asyncio.CancelledError:
             await websocket.close()
         except Exception as error:  # one session's failure ends that session alone

@@ -23,6 +23,7 @@ from textual.worker import Worker, WorkerState
 
 from .. import __version__
 from ..engine.feedback import Message
+from ..engine.where import Where
 from ..present.glyphs import ascii_wanted
 from ..present.heap import keep_full_collections_rare
 from . import keys
@@ -78,6 +79,8 @@ class RacConsoleApp(App[int]):
         self.cell = cell if isinstance(cell, Cell) else Cell.of(cell)
         self.watch_file = watch_file
         self.files = FileWrites()  # history and settings, written off the screen's loop
+        #: Served to a browser (``rac-console serve``): the cell runs there, see Where.
+        self.served = self.cell.where is Where.SERVED
         self.main_screen = ConsoleScreen(self.cell, history, self.files, profile_names)
         self.kept = SettingsKeeper(self, self.main_screen, settings)
         self._engine_starting: asyncio.Future[None] | None = None  # the start, on a thread
@@ -221,7 +224,10 @@ class RacConsoleApp(App[int]):
     def deliver_screenshot(
         self, filename: str | None = None, path: str | None = None, time_format: str | None = None
     ) -> str | None:
-        """Save an SVG of the screen in Downloads (or here when there is none)."""
+        """Save an SVG of the screen in Downloads (or here when there is none); served
+        to a browser, the browser gets it (Textual's own delivery), not this machine."""
+        if self.served:
+            return super().deliver_screenshot(filename, None, time_format)
         return deliver_screenshot(
             self, self.files, self.main_screen.show, filename, path, time_format
         )

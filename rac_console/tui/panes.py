@@ -16,7 +16,7 @@ from textual.containers import Horizontal
 from textual.widget import AwaitMount, Widget
 from textual.widgets import Static
 
-from ..present.served import served
+from ..engine.where import Where
 from ..present.status import placeholder_for
 from ..protocol.text import terminal_safe
 from .command_line import CommandLine
@@ -90,7 +90,7 @@ class Panes:
         io_panel = IoPanel(lambda var: members.toggles.busy(var), id="io")
         command_line = CommandLine(history, used, id="command", placeholder=placeholder_for(None))
         return cls(
-            status_bar=StatusBar(id="status", served=served()),
+            status_bar=StatusBar(id="status", served=members.cell.where is Where.SERVED),
             table=table,
             table_filter=TableFilter(table, id="table-filter"),
             trend_view=TrendView(trends, id="trend"),

@@ -47,6 +47,7 @@ import rac_console.tui.panes as panes_module
 from rac_console.commands.policy import TargetProfile, WritePolicy, Writes, parse_allow
 from rac_console.engine import Alert, Cycle, Engine, Message, Note, Result, RowView, Status
 from rac_console.engine.outbox import Batch
+from rac_console.engine.where import Where
 from rac_console.present.batches import BatchReader
 from rac_console.present.history import History
 from rac_console.present.render import make_console
@@ -75,9 +76,11 @@ def make_app(
     timeout: float = REQUEST_TIMEOUT,
     watch_file: str | None = None,
     record: str | None = None,
+    where: Where = Where.CONSOLE,
 ) -> RacConsoleApp:
     """The console on a private history; it records the wire to ``wire.jsonl`` in
-    ``tmp_path`` (read by :class:`FrameTap`) unless given another ``record`` file."""
+    ``tmp_path`` (read by :class:`FrameTap`) unless given another ``record`` file;
+    ``where``: a served console (:attr:`Where.SERVED`) or the terminal's."""
     engine = Engine(
         host,
         port,
@@ -86,6 +89,7 @@ def make_app(
         interval=interval,
         record=record or str(tmp_path / WIRE_RECORD),
         cycles=True,  # as the console's engine: trends are drawn from its cycles
+        where=where,
     )
     return RacConsoleApp(engine, History(tmp_path / "history"), watch_file)
 
@@ -608,12 +612,15 @@ class Running:
         *args: str,
         wrap: Sequence[str] = (),
         program: Sequence[str] = RAC,
+        cwd: Path | None = None,
     ) -> None:
         """``program`` with ``args``, behind ``wrap`` when given (``ip netns exec B``:
-        a command that runs it in place of itself, so that a signal reaches it)."""
+        a command that runs it in place of itself, so that a signal reaches it), in
+        ``cwd`` when given."""
         self.process = subprocess.Popen(
             [*wrap, *program, *args],
             env=environment,
+            cwd=cwd,
             stdout=subprocess.PIPE,
             stderr=subprocess.PIPE,
             text=True,

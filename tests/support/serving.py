@@ -13,6 +13,7 @@ handshakes over a socket of the test's own, every read under a deadline.
 from __future__ import annotations
 
 import base64
+import codecs
 import json
 import os
 import re
@@ -20,11 +21,12 @@ import socket
 import subprocess
 import sys
 import time
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
+from pathlib import Path
 from urllib.parse import parse_qs, urlsplit
 
-from tests.support.drivers import Running
+from tests.support.drivers import RAC, Running
 
 #: How long a test waits for an answer, a line or a session: only a hang reaches it.
 DEADLINE = 20.0
@@ -53,10 +55,16 @@ class Served:
 
 
 def start_serve(
-    env: dict[str, str], running: list[Running], *args: str, before: tuple[str, ...] = ()
+    env: dict[str, str],
+    running: list[Running],
+    *args: str,
+    before: tuple[str, ...] = (),
+    cwd: Path | None = None,
+    program: Sequence[str] = RAC,
 ) -> Served:
-    """``rac-console [BEFORE] serve --port 0 ARGS``, once it printed its link."""
-    run = Running(env, *before, "serve", "--port", "0", *args)
+    """``rac-console [BEFORE] serve --port 0 ARGS`` (in ``cwd``, as ``program``), once it
+    printed its link."""
+    run = Running(env, *before, "serve", "--port", "0", *args, cwd=cwd, program=program)
     running.append(run)
     run.wait_for("the link", lambda: any(line.startswith("http://") for line in run.out))
     url = next(line for line in run.out if line.startswith("http://"))
@@ -177,9 +185,9 @@ class Handshake:
         self.sock.close()
 
 
-def handshake(port: int, headers: Mapping[str, str]) -> int:
+def handshake(port: int, headers: Mapping[str, str], path: str = "/ws") -> int:
     """The status of a WebSocket handshake, its socket closed at once."""
-    made = Handshake(port, headers)
+    made = Handshake(port, headers, path=path)
     made.close()
     return made.status
 
@@ -200,3 +208,126 @@ def until(holds: Callable[[], bool], what: str, deadline: float = DEADLINE) -> N
         if time.monotonic() > end:
             raise AssertionError(f"timed out after {deadline} s waiting for {what}")
         time.sleep(0.05)
+
+
+class Console:
+    """One served session over a WebSocket of the test's own, as a browser drives it:
+    textual-serve's messages (``["stdin", TEXT]``, ``["resize", ...]``) in masked text
+    frames, the console's screen from the binary frames it sends back."""
+
+    def __init__(self, port: int, path: str, headers: Mapping[str, str]) -> None:
+        from tests.support.drivers import Screen
+
+        self.made = Handshake(port, headers, path=path)
+        self.sock = self.made.sock
+        self.screen = Screen(1000)
+        self._buffer = b""
+        self.closed = False
+        self.messages: list[object] = []  # the JSON messages (text frames) received
+        self._decoder = codecs.getincrementaldecoder("utf-8")("replace")
+
+    @property
+    def status(self) -> int:
+        return self.made.status
+
+    def send(self, kind: str, data: object) -> None:
+        payload = json.dumps([kind, data]).encode()
+        mask = os.urandom(4)
+        head = bytes([0x81])
+        if len(payload) < 126:
+            head += bytes([0x80 | len(payload)])
+        else:
+            head += bytes([0x80 | 126]) + len(payload).to_bytes(2, "big")
+        masked = bytes(b ^ mask[i % 4] for i, b in enumerate(payload))
+        self.sock.sendall(head + mask + masked)
+
+    def type_line(self, line: str) -> None:
+        self.send("stdin", line + "\r")
+
+    def _head(self) -> tuple[int, int] | None:
+        """Where the next frame's payload starts and its length, once its head is in."""
+        buffer = self._buffer
+        if len(buffer) < 2:
+            return None
+        length = buffer[1] & 0x7F
+        if length < 126:
+            return 2, length
+        size = 2 if length == 126 else 8
+        if len(buffer) < 2 + size:
+            return None
+        return 2 + size, int.from_bytes(buffer[2 : 2 + size], "big")
+
+    def _frame(self, deadline: float) -> tuple[int, bytes] | None:
+        """The next frame the server sent (opcode, payload); None once it closed."""
+        while True:
+            head = self._head()
+            if head is not None and len(self._buffer) >= head[0] + head[1]:
+                at, length = head
+                opcode = self._buffer[0] & 0x0F
+                payload = self._buffer[at : at + length]
+                self._buffer = self._buffer[at + length :]
+                return opcode, payload
+            self.sock.settimeout(max(0.01, deadline - time.monotonic()))
+            chunk = self.sock.recv(65536)
+            if not chunk:
+                return None
+            self._buffer += chunk
+
+    def _read_one(self, end: float, waiting_for: object) -> None:
+        """Read one frame and take it in: the screen, a JSON message, the close."""
+        try:
+            frame = self._frame(end)
+        except TimeoutError:
+            frame = None
+        if frame is None or time.monotonic() > end:
+            shown = "\n".join(self.screen.lines())
+            raise AssertionError(f"timed out waiting for {waiting_for} on the console:\n{shown}")
+        opcode, payload = frame
+        if opcode == 0x2:
+            self.screen.feed(self._decoder.decode(payload))
+        elif opcode == 0x1:
+            self.messages.append(json.loads(payload))
+        elif opcode == 0x8:
+            self.closed = True
+            raise AssertionError(f"the session closed while waiting for {waiting_for}")
+
+    def until(self, *texts: str, deadline: float = DEADLINE) -> str:
+        """Read frames until the screen shows every one of ``texts``; the screen."""
+        end = time.monotonic() + deadline
+        while True:
+            shown = "\n".join(self.screen.lines())
+            if all(text in shown for text in texts):
+                return shown
+            self._read_one(end, texts)
+
+    def until_message(self, wanted: Callable[[object], bool], deadline: float = DEADLINE) -> None:
+        """Read frames until a JSON message that ``wanted`` holds for has come."""
+        end = time.monotonic() + deadline
+        while not any(wanted(message) for message in self.messages):
+            self._read_one(end, "a message")
+
+    def close(self) -> None:
+        self.sock.close()
+
+
+@dataclass(frozen=True)
+class Login:
+    """What the printed link buys a browser: the cookie, and the key the page opens
+    the console's socket with (``/ws/KEY``)."""
+
+    cookie: str
+    key: str
+
+    @property
+    def socket(self) -> str:
+        return f"/ws/{self.key}"
+
+
+def spend_link(served: Served) -> Login:
+    """The link opened as a browser would: the cookie it set and the key its redirect
+    hands the page in the fragment (which no request carries)."""
+    answer = request(served.port, f"/?token={served.token}", {"Host": served.host})
+    assert answer.status == 303, answer.text
+    location = answer.header("location") or ""
+    assert location.startswith("/#key="), location
+    return Login(cookie_of(answer, served.cookie_name)[0], location.partition("#key=")[2])

@@ -6,13 +6,21 @@ from collections.abc import Sequence
 
 from ...commands.check import check_pointer
 from ...commands.language import Connect, Simple, Step, Use, parse_connect, parse_use
-from ...commands.routing import Scope, Traits
+from ...commands.routing import Reach, Scope, Traits
 from ...commands.target import Target, resolve_target
 from ...session import ConnectFailed, Disconnected
 from ...session.endpoints import addresses
 from ..context import CommandContext, JobContext
 from ..events import Feedback, Message, shown_label
-from ..registry import CommandSpec, EngineSpec, Option, Sources, Where, no_argument
+from ..registry import (
+    AT_A_TERMINAL,
+    CommandSpec,
+    EngineSpec,
+    Option,
+    Sources,
+    Where,
+    no_argument,
+)
 
 
 def run_connect(context: CommandContext, command: Connect, line: str | None) -> list[Feedback]:
@@ -112,7 +120,7 @@ SPECS = (
         ),
         complete=_targets,
         types=(Connect,),
-        traits=Traits(scope=Scope.ONE_TARGET),
+        traits=Traits(scope=Scope.ONE_TARGET, reaches=Reach.NETWORK),
     ),
     CommandSpec(
         "use",
@@ -125,7 +133,7 @@ SPECS = (
             "@NAME LINE runs one line on another target: @cell4 get I 10",
             "with several targets open, a write goes to the current one or to its @NAME",
         ),
-        where=frozenset({Where.CONSOLE, Where.REPL, Where.RUN}),
+        where=AT_A_TERMINAL | {Where.RUN},
         complete=_cell_targets,
         types=(Use,),
         traits=Traits(scope=Scope.CELL),

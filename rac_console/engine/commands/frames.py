@@ -15,6 +15,7 @@ from ...commands.language import (
     parse_frames,
     parse_help,
 )
+from ...commands.routing import Reach, Traits
 from ...protocol import InputError
 from ...protocol.text import terminal_safe
 from ..context import CommandContext
@@ -94,6 +95,7 @@ SPECS = (
             "rac-console sim --replay FILE serves what was recorded",
         ),
         types=(FrameFile,),
+        traits=Traits(reaches=Reach.FILES),
     ),
     EngineSpec(
         "transcript",
@@ -104,6 +106,7 @@ SPECS = (
         "transcript cell3.log",
         notes=("transcript stop ends it; transcript alone says where it goes",),
         types=(FrameFile,),
+        traits=Traits(reaches=Reach.FILES),
     ),
     EngineSpec(
         "clear",

@@ -10,7 +10,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 from ...commands.plant import PUBLISH_USAGE, Publish, parse_publish
-from ...commands.routing import Scope, Traits
+from ...commands.routing import Reach, Scope, Traits
 from ...protocol.errors import InputError
 from ..context import CommandContext
 from ..events import Feedback, Message
@@ -64,7 +64,7 @@ PUBLISH_SPEC = EngineSpec(
     ),
     complete=_complete,
     types=(Publish,),
-    traits=Traits(scope=Scope.EVERY_TARGET),
+    traits=Traits(scope=Scope.EVERY_TARGET, reaches=Reach.NETWORK),
 )
 
 #: This module's commands.

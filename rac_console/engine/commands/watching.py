@@ -21,6 +21,7 @@ from ...commands.language import (
     parse_unwatch,
     parse_watch,
 )
+from ...commands.routing import Reach, Traits
 from ...protocol import InputError
 from ...protocol.text import counted
 from ..context import CommandContext, CsvLogState
@@ -238,6 +239,7 @@ SPECS = (
         run_watch_file,
         "save cell3.toml",
         types=(WatchFile,),
+        traits=Traits(reaches=Reach.FILES),
     ),
     EngineSpec(
         "load",
@@ -247,6 +249,7 @@ SPECS = (
         run_watch_file,
         "load cell3.toml",
         types=(WatchFile,),
+        traits=Traits(reaches=Reach.FILES),
     ),
     EngineSpec(
         "log",
@@ -263,5 +266,6 @@ SPECS = (
         ),
         where=AT_A_TERMINAL | {Where.COMMAND_LINE},  # rac-console watch --log-csv
         types=(CsvLog,),
+        traits=Traits(reaches=Reach.FILES),
     ),
 )
