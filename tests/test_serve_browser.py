@@ -229,3 +229,18 @@ def test_with_allow_writes_a_confirmed_write_lands(env, running, browser, config
     console.page.keyboard.press("y")
     console.until("read back 5")
     assert sim_value(env, sim_port, "I 10") == 5
+
+
+def test_a_key_planted_in_the_address_does_not_replace_the_one_kept(env, running, browser):
+    """A page elsewhere sends the browser to the console's address with a key of its own
+    in the fragment: the console's page keeps the key the link gave it, and opens."""
+    served = start_serve(env, running, "--max-sessions", "2")
+    context = browser.new_context()
+    first = open_console(context, served)
+    key = first.page.evaluate("localStorage.getItem('rac-console-key')")
+    planted = context.new_page()
+    planted.add_init_script(TEE)
+    planted.goto(f"{served.origin}/#key={'j' * 43}", timeout=DEADLINE * 1000)
+    console = ServedPage(planted)
+    console.until("rac-console", "connected")
+    assert planted.evaluate("localStorage.getItem('rac-console-key')") == key

@@ -14,7 +14,7 @@ from rac_console.commands.routing import Reach
 from rac_console.engine.commands import BUILTIN
 from rac_console.engine.where import AT_A_TERMINAL, Where
 from tests.support.servers import RecordingServer
-from tests.support.serving import Console, Served, spend_link, start_serve
+from tests.support.serving import Console, Served, consoles_of, spend_link, start_serve, until
 
 pytest.importorskip("textual_serve", reason="needs the extra web")
 
@@ -96,3 +96,38 @@ def test_what_a_command_reaches_is_declared_on_its_spec() -> None:
     console = set(BUILTIN.runs_in(Where.CONSOLE))
     assert console - served == READS_OR_WRITES_FILES | OPENS_CONNECTIONS
     assert Where.SERVED in AT_A_TERMINAL
+
+
+@pytest.mark.slow
+def test_a_served_session_neither_reads_nor_writes_the_machines_history_or_settings(
+    env, running, config
+) -> None:
+    """The operator's history (Up, grey suggestions) and settings stay the operator's:
+    a session in a browser does not see them, and leaves both files as they were; its
+    palette names no profile of the config file."""
+    from rac_console.present.history import default_history_path
+
+    history = default_history_path()
+    history.parent.mkdir(parents=True)
+    history.write_text("connect plc-line3\nsave /home/op/secret-watch.toml\n", encoding="utf-8")
+    settings = config('[target.line3]\nhost = "10.0.0.5"\nlabel = "line 3 welder"\n')
+    kept_history, kept_settings = history.read_bytes(), settings.read_bytes()
+    served = start_serve(env, running)
+    console = open_session(served)
+    console.until("SERVED", "connected")
+    console.send("stdin", "\x1b[A")  # Up: the newest line of the history, if any
+    console.type_line("get I 1")  # Up recalled nothing: this line is the whole line
+    console.until("I1 = 1")
+    shown = console.until("› get I 1")
+    assert "secret-watch" not in shown
+    console.send("stdin", "\x1b[15~")  # F5: the I/O grid (a setting)
+    console.until("I/O")
+    console.send("stdin", "\x10")  # Ctrl+P: the palette
+    console.until("Search for commands")
+    console.send("stdin", "connect")
+    shown = console.until("connect")
+    assert "line3" not in shown and "welder" not in shown
+    console.close()  # the server ends the session's console
+    until(lambda: consoles_of(served.running.process.pid) == [], "the console ending")
+    assert history.read_bytes() == kept_history
+    assert settings.read_bytes() == kept_settings

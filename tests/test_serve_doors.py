@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import socket
 import sys
+import time
 import tomllib
 from pathlib import Path
 
@@ -18,7 +19,10 @@ from tests.support.serving import (
     DEADLINE,
     Console,
     Handshake,
+    Login,
     Served,
+    alive,
+    consoles_of,
     request,
     spend_link,
     start_serve,
@@ -110,6 +114,92 @@ def test_asking_for_the_socket_without_an_upgrade_takes_no_slot(env, running) ->
     session = Handshake(served.port, own(served, cookie), path=f"/ws/{key}")
     session.close()
     assert session.status == 101  # the one slot was still free
+
+
+def open_console(served: Served, login: Login, width: int = 100, height: int = 30) -> Console:
+    console = Console(
+        served.port, f"{login.socket}?width={width}&height={height}", own(served, login.cookie)
+    )
+    assert console.status == 101, console.made.answer
+    console.send("resize", {"width": width, "height": height})  # as the page does
+    return console
+
+
+@pytest.mark.slow
+def test_a_screen_size_no_screen_has_is_brought_within_bounds(env, running) -> None:
+    """One message asking for a screen of 3,000 by 3,000 (a browser never sends one):
+    the console draws within 1,000 rows, and goes on answering."""
+    served = start_serve(env, running)
+    console = open_console(served, spend_link(served))
+    try:
+        console.until("SERVED", "connected")
+        console.send("resize", {"width": 3000, "height": 3000})
+        console.send("resize", {"width": -5, "height": "x"})  # ignored
+        console.type_line("get I 1")
+        console.until("I1 = 1")
+        console.until("Quit")  # the footer, on the screen's last row
+        assert len(console.screen.rows) <= 1000
+    finally:
+        console.close()
+
+
+@pytest.mark.slow
+def test_sessions_never_outnumber_max_sessions(env, running) -> None:
+    """A session's slot comes back once its console has ended, not when its socket
+    closed: opening and closing sockets in a loop never runs two consoles at once."""
+    served = start_serve(env, running)
+    login = spend_link(served)
+    server = served.running.process.pid
+
+    def when_free() -> Handshake:
+        """A session, as soon as the server lets one in (503 until then)."""
+        end = time.monotonic() + DEADLINE
+        while True:
+            made = Handshake(served.port, own(served, login.cookie), path=login.socket)
+            if made.status == 101:
+                return made
+            made.close()
+            assert made.status == 503
+            assert time.monotonic() < end, "the slot never came back"
+
+    for _ in range(3):
+        first = when_free()
+        until(lambda: len(consoles_of(server)) == 1, "the session's console")
+        first.close()
+        again = when_free()
+        try:
+            assert len(consoles_of(server)) <= 1
+        finally:
+            again.close()
+
+
+@pytest.mark.slow
+def test_a_session_ends_when_its_server_dies(env, running) -> None:
+    """serve killed outright (no chance to end its sessions): each console ends by
+    itself, not left polling the controller with nobody to see it."""
+    served = start_serve(env, running)
+    console = open_console(served, spend_link(served))
+    try:
+        console.until("SERVED", "connected")
+        children = consoles_of(served.running.process.pid)
+        assert len(children) == 1
+        served.running.process.kill()
+        served.running.process.wait(DEADLINE)
+        until(lambda: not alive(children[0]), "the orphaned console ending")
+    finally:
+        console.close()
+
+
+@pytest.mark.slow
+def test_a_refusal_said_on_stderr_does_not_print_the_key(env, running) -> None:
+    served = start_serve(env, running)
+    login = spend_link(served)
+    foreign = own(served, login.cookie) | {"Origin": "http://evil.example"}
+    made = Handshake(served.port, foreign, path=login.socket)
+    made.close()
+    assert made.status == 403
+    until(lambda: any("evil.example" in line for line in served.running.err), "the refusal")
+    assert not any(login.key in line for line in served.running.err)
 
 
 @pytest.mark.slow

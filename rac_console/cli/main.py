@@ -194,16 +194,18 @@ def _interactive(args: argparse.Namespace) -> int:
         except InputError as exc:
             print(f"rac-console: {terminal_safe(str(exc))}", file=sys.stderr)
             return 2
-    from ..present.served import served
+    from ..engine.where import Where
 
-    if not (sys.stdin.isatty() and sys.stdout.isatty()) and not served():
+    served = cell.where is Where.SERVED
+    if not (sys.stdin.isatty() and sys.stdout.isatty()) and not served:
         print(
             "rac-console: the console needs a terminal; for scripts use "
             "'rac-console run -' (or get, put, send with --json)",
             file=sys.stderr,
         )
         return 2
-    history = History(args.history or default_history_path())
+    # Served to a browser: the lines typed there stay in that session's memory.
+    history = History(None if served else args.history or default_history_path())
     if args.command == "repl":
         from ..commands.language import WatchFile
         from ..repl.repl import run_repl
@@ -217,7 +219,8 @@ def _interactive(args: argparse.Namespace) -> int:
     from ..tui.app import run_console
 
     watch_cell(cell, getattr(args, "cell_watch", ()))
-    return run_console(cell, history, args.watch, sorted(args.target.profiles), _after_first_paint)
+    profiles = () if served else sorted(args.target.profiles)  # a browser sees none
+    return run_console(cell, history, args.watch, profiles, _after_first_paint)
 
 
 def watch_cell(cell: Cell, lines: Sequence[str]) -> None:

@@ -41,8 +41,11 @@ def _distinct(lines: list[str]) -> list[str]:
 
 
 class History:
-    def __init__(self, path: Path | str, limit: int = DEFAULT_LIMIT) -> None:
-        self.path = Path(path)
+    """The lines typed: recalled, suggested, and appended to ``path`` (None: kept in
+    memory only, as a console served to a browser keeps them)."""
+
+    def __init__(self, path: Path | str | None, limit: int = DEFAULT_LIMIT) -> None:
+        self.path = Path(path) if path is not None else None
         self.limit = limit
         lines = self._read()
         self.entries: list[str] = _distinct(lines)[-limit:]
@@ -52,10 +55,12 @@ class History:
         # A file left long by an earlier run is trimmed at this run's first append.
         self._appends = limit if len(lines) >= 2 * limit else 0
         with contextlib.suppress(OSError):  # an older file may be readable by others
-            if self.path.exists():
+            if self.path is not None and self.path.exists():
                 self.path.chmod(0o600)
 
     def _read(self) -> list[str]:
+        if self.path is None:
+            return []
         try:
             text = self.path.read_text(encoding="utf-8", errors="replace")
         except OSError:
@@ -110,6 +115,8 @@ class History:
     def _write(self, line: str) -> None:
         from ..engine.recorder import open_private
 
+        if self.path is None:
+            return
         try:
             self.path.parent.mkdir(parents=True, exist_ok=True)
             with _locked(self.path):
@@ -126,6 +133,7 @@ class History:
         """Keep the newest ``limit`` lines of the file as it is now (the lock is held)."""
         from ..engine.recorder import open_private
 
+        assert self.path is not None  # only a file is trimmed
         lines = self._read()
         if len(lines) < 2 * self.limit:
             return

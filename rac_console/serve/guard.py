@@ -45,6 +45,9 @@ NOT_FOUND = 404
 #: How many random bytes a token and a cookie hold.
 SECRET_BYTES = 32
 
+#: How many characters of a key its page is told, to check a key in its address.
+KEY_START = 8
+
 WILDCARDS = frozenset({"0.0.0.0", "::", ""})
 
 
@@ -242,6 +245,13 @@ class Guard:
         login = Login(new_secret(), new_secret())
         self._logins.append(login)
         return login
+
+    def key_start(self, cookie: str | None) -> str:
+        """The first characters of the key of ``cookie`` ("" for no good cookie): the
+        page checks a key in its address against them (48 of the key's 256 bits, told
+        only to a request that holds the cookie)."""
+        login = self._login_of(cookie)
+        return login.key[:KEY_START] if login is not None else ""
 
     def check_key(self, cookie: str | None, key: str | None) -> Refusal | None:
         """None when ``key`` is the one handed out with ``cookie``."""

@@ -80,7 +80,8 @@ def said_refusal(request: web.Request, refusal: Refusal, detail: str = "") -> we
     """The refusal's page, and one line on this server's standard error: whoever runs
     it sees who was turned away and why (what came from the request escaped)."""
     peer = request.remote or "?"
-    what = terminal_safe(f"{request.method} {request.path}"[:200])
+    path = "/ws/…" if request.path.startswith("/ws/") else request.path  # never a key
+    what = terminal_safe(f"{request.method} {path}"[:200])
     more = f" ({terminal_safe(detail[:200])})" if detail else ""
     print(
         f"rac-console serve: refused {what} from {peer}: {refusal.status}, {refusal.reason}{more}",
@@ -209,6 +210,7 @@ class ConsoleServer:
         shown, names = own_names(options.bind)
         guard = self.guard = Guard(port, names, options.max_sessions)
         textual.session_ended = guard.slots.give_back
+        textual.key_start = lambda request: guard.key_start(request.cookies.get(guard.cookie_name))
         self.url = f"http://{url_host(shown)}:{port}/?token={guard.token}"
         return self.url
 

@@ -55,11 +55,16 @@ RELIES_ON = (
 #: Put in the page before ``</body>``, so it runs before textual.js's ``onload``: the key
 #: the link's redirect put in the fragment goes to this origin's storage (no other
 #: port's page reads it) and leaves the address bar; the socket's address ends with it.
+#: A fragment key is kept only when it starts as the cookie's key does (KEY_START, the
+#: first 8 of its 43 characters): a page elsewhere that sends the browser here with a
+#: key of its own in the address does not replace the one kept.
 KEY_SCRIPT = """<script>
 (() => {
   const found = /^#key=([A-Za-z0-9_-]+)$/.exec(window.location.hash);
-  if (found) {
+  if (found && "KEY_START".length === 8 && found[1].startsWith("KEY_START")) {
     window.localStorage.setItem("rac-console-key", found[1]);
+  }
+  if (window.location.hash) {
     window.history.replaceState(null, "", window.location.pathname);
   }
   const key = window.localStorage.getItem("rac-console-key") || "none";
@@ -98,6 +103,13 @@ class ExecAppService(AppService):
         assert process.stdin is not None
         self._stdin = process.stdin
         return process
+
+    async def set_terminal_size(self, width: int, height: int) -> None:
+        """A browser's resize, within what a screen can be: a size that is not a whole
+        number is ignored (one message asking for 100,000 rows grew a console by 70 MB
+        a second)."""
+        if type(width) is int and type(height) is int:
+            await super().set_terminal_size(_within(width), _within(height))
 
     @property
     def pid(self) -> int | None:
@@ -152,6 +164,8 @@ class GuardedServer(Server):
         self.admit: Callable[[web.Request, str | None], web.StreamResponse | None]
         self.admit = lambda _request, _key: None
         self.session_ended: Callable[[], None] = lambda: None
+        #: The first characters of the key of the request's cookie ("" without one).
+        self.key_start: Callable[[web.Request], str] = lambda _request: ""
 
     async def _make_app(self) -> web.Application:
         app = web.Application(middlewares=[self.middleware])
@@ -181,7 +195,8 @@ class GuardedServer(Server):
         }
         response = aiohttp_jinja2.render_template("app_index.html", request, context)
         assert response.text is not None and response.text.count("</body>") == 1
-        response.text = response.text.replace("</body>", KEY_SCRIPT + "</body>")
+        script = KEY_SCRIPT.replace("KEY_START", self.key_start(request))
+        response.text = response.text.replace("</body>", script + "</body>")
         return response
 
     async def static_file(self, request: web.Request) -> web.StreamResponse:
@@ -195,27 +210,18 @@ class GuardedServer(Server):
 
     async def session(self, request: web.Request) -> web.StreamResponse:
         """textual-serve's handle_websocket, starting an :class:`ExecAppService` once
-        ``admit`` let the session in. Its slot is given back when the socket closes
-        (a reload finds it free), not once the console has ended."""
+        ``admit`` let the session in. Its slot is given back once its console has ended
+        (not when the socket closed: sockets opened and closed in a loop would start
+        consoles faster than they end)."""
         refused = self.admit(request, request.match_info.get("key"))
         if refused is not None:
             return refused
-        held = True
-
-        def give_back() -> None:
-            nonlocal held
-            if held:
-                held = False
-                self.session_ended()
-
         try:
-            return await self._run_session(request, give_back)
+            return await self._run_session(request)
         finally:
-            give_back()
+            self.session_ended()
 
-    async def _run_session(
-        self, request: web.Request, socket_closed: Callable[[], None]
-    ) -> web.WebSocketResponse:
+    async def _run_session(self, request: web.Request) -> web.WebSocketResponse:
         websocket = web.WebSocketResponse(heartbeat=15)
         width = _whole(request.query.get("width"), 80)
         height = _whole(request.query.get("height"), 24)
@@ -234,7 +240,6 @@ class GuardedServer(Server):
             self.services.add(service)
             await service.start(width, height)
             await self._process_messages(websocket, service)
-            socket_closed()
         except asyncio.CancelledError:
             await websocket.close()
         except Exception as error:  # one session's failure ends that session alone
@@ -249,8 +254,16 @@ class GuardedServer(Server):
         await asyncio.gather(*(service.stop() for service in list(self.services)))
 
 
+#: The sizes a served screen may have, in cells.
+SMALLEST, LARGEST = 10, 1000
+
+
+def _within(size: int) -> int:
+    return max(SMALLEST, min(size, LARGEST))
+
+
 def _whole(text: str | None, default: int) -> int:
     """A size from the query, within what a screen can be."""
-    if text is None or not text.isdigit():
+    if text is None or not (text.isascii() and text.isdigit()):
         return default
-    return max(10, min(int(text), 1000))
+    return _within(int(text))

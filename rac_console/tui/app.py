@@ -138,7 +138,9 @@ class RacConsoleApp(App[int]):
         with suppress(NotImplementedError, AttributeError, ValueError):  # Windows: none
             loop.add_signal_handler(signal.SIGHUP, self._hung_up)
         stdin = sys.__stdin__
-        if stdin is not None and stdin.isatty() and sys.platform != "win32":  # poll(): POSIX
+        # Served, stdin is the pipe from rac-console serve: it hangs up when serve dies.
+        watched = stdin is not None and (stdin.isatty() or self.served)
+        if stdin is not None and watched and sys.platform != "win32":  # poll(): POSIX
             self.terminal_watch = TerminalWatch(stdin.fileno(), gone).start()
 
     def _hung_up(self) -> None:
@@ -243,13 +245,14 @@ def run_console(
     """The console on a cell (one target: the console as it always was; an engine is
     taken as a cell of one); ``profile_names`` are the config file's targets (the
     palette's ``connect NAME`` entries); ``after_first_paint`` is called once its first
-    screen is painted. Its settings are read here, before the app runs its loop."""
+    screen is painted. Its settings are read here, before the app runs its loop (a
+    console served to a browser neither reads nor writes them)."""
     from ..engine.config import config_path
     from ..engine.settings import SettingsFile
 
-    app = RacConsoleApp(
-        cell, history, watch_file, profile_names, settings=SettingsFile(config_path())
-    )
+    served = cell.where is Where.SERVED
+    settings = None if served else SettingsFile(config_path())
+    app = RacConsoleApp(cell, history, watch_file, profile_names, settings=settings)
     app.kept.load(app.available_themes)
     app.after_first_paint = after_first_paint
     if ascii_wanted():  # RAC_CONSOLE_ASCII=1, or Windows' old console host

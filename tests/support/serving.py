@@ -61,10 +61,11 @@ def start_serve(
     before: tuple[str, ...] = (),
     cwd: Path | None = None,
     program: Sequence[str] = RAC,
+    wrap: Sequence[str] = (),
 ) -> Served:
     """``rac-console [BEFORE] serve --port 0 ARGS`` (in ``cwd``, as ``program``), once it
     printed its link."""
-    run = Running(env, *before, "serve", "--port", "0", *args, cwd=cwd, program=program)
+    run = Running(env, *before, "serve", "--port", "0", *args, cwd=cwd, program=program, wrap=wrap)
     running.append(run)
     run.wait_for("the link", lambda: any(line.startswith("http://") for line in run.out))
     url = next(line for line in run.out if line.startswith("http://"))
@@ -331,3 +332,29 @@ def spend_link(served: Served) -> Login:
     location = answer.header("location") or ""
     assert location.startswith("/#key="), location
     return Login(cookie_of(answer, served.cookie_name)[0], location.partition("#key=")[2])
+
+
+def consoles_of(server_pid: int) -> list[int]:
+    """The processes ``server_pid`` started that are still running (its sessions'
+    consoles), read from /proc."""
+    found = []
+    for entry in Path("/proc").iterdir():
+        if not entry.name.isdigit():
+            continue
+        try:
+            stat = (entry / "stat").read_text()
+        except OSError:
+            continue
+        fields = stat.rpartition(")")[2].split()
+        if fields and fields[0] != "Z" and int(fields[1]) == server_pid:
+            found.append(int(entry.name))
+    return found
+
+
+def alive(pid: int) -> bool:
+    """``pid`` runs (a zombie does not count)."""
+    try:
+        stat = (Path("/proc") / str(pid) / "stat").read_text()
+    except OSError:
+        return False
+    return stat.rpartition(")")[2].split()[0] != "Z"
