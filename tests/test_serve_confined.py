@@ -122,6 +122,12 @@ def test_a_served_session_neither_reads_nor_writes_the_machines_history_or_setti
     assert "secret-watch" not in shown
     console.send("stdin", "\x1b[15~")  # F5: the I/O grid (a setting)
     console.until("I/O")
+    console.send("stdin", "connect ")
+    console.send("stdin", "\t")  # completion: what connect could take
+    # One candidate is put on the line; several are listed.
+    shown = console.until_any("the built-in simulator", "connect sim")
+    assert "line3" not in shown and "welder" not in shown
+    console.send("stdin", "\x15")  # Ctrl+U: the line emptied
     console.send("stdin", "\x10")  # Ctrl+P: the palette
     console.until("Search for commands")
     console.send("stdin", "connect")

@@ -135,6 +135,9 @@ def test_a_screen_size_no_screen_has_is_brought_within_bounds(env, running) -> N
         console.until("SERVED", "connected")
         console.send("resize", {"width": 3000, "height": 3000})
         console.send("resize", {"width": -5, "height": "x"})  # ignored
+        # The same asked as keys (an in-band resize sequence), in two messages.
+        console.send("stdin", "\x1b[48;3000")
+        console.send("stdin", ";3000;0;0t")
         console.type_line("get I 1")
         console.until("I1 = 1")
         console.until("Quit")  # the footer, on the screen's last row

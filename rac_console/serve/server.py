@@ -80,7 +80,10 @@ def said_refusal(request: web.Request, refusal: Refusal, detail: str = "") -> we
     """The refusal's page, and one line on this server's standard error: whoever runs
     it sees who was turned away and why (what came from the request escaped)."""
     peer = request.remote or "?"
-    path = "/ws/…" if request.path.startswith("/ws/") else request.path  # never a key
+    path = request.path
+    for secret in ("/ws/", "/download/"):  # a key or a download's key: never printed
+        if path.startswith(secret):
+            path = secret + "…"
     what = terminal_safe(f"{request.method} {path}"[:200])
     more = f" ({terminal_safe(detail[:200])})" if detail else ""
     print(

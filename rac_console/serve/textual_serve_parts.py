@@ -61,7 +61,8 @@ RELIES_ON = (
 KEY_SCRIPT = """<script>
 (() => {
   const found = /^#key=([A-Za-z0-9_-]+)$/.exec(window.location.hash);
-  if (found && "KEY_START".length === 8 && found[1].startsWith("KEY_START")) {
+  const start = "KEY_START";
+  if (found && start.length === 8 && found[1].length === 43 && found[1].startsWith(start)) {
     window.localStorage.setItem("rac-console-key", found[1]);
   }
   if (window.location.hash) {

@@ -28,6 +28,7 @@ from ..present.glyphs import ascii_wanted
 from ..present.heap import keep_full_collections_rare
 from . import keys
 from .ascii_screen import ascii_driver
+from .bounded_driver import bounded_driver
 from .console import ConsoleScreen, SettingChanged
 from .file_writes import FileWrites
 from .frame_log import FrameLog
@@ -257,6 +258,8 @@ def run_console(
     app.after_first_paint = after_first_paint
     if ascii_wanted():  # RAC_CONSOLE_ASCII=1, or Windows' old console host
         app.driver_class = ascii_driver(app.driver_class)
+    if served:  # a resize typed in as keys is clamped too (see bounded_driver.py)
+        app.driver_class = bounded_driver(app.driver_class)
     keep_full_collections_rare()  # the start-up's objects frozen: no key waits on a full pass
     try:
         status = app.run() or 0

@@ -22,6 +22,7 @@ from textual.widget import Widget
 from textual.widgets import DataTable, Input
 
 from ..engine.feedback import Message
+from ..engine.where import Where
 from ..present.cell_view import cell_targets
 from ..present.status import connect_targets, writes_refused
 from ..present.trends import has_trend
@@ -79,7 +80,9 @@ class ConsoleScreen(Screen[None]):
         )
         self.lines = Lines(cell, self.members, panes.command_line, self._line_started)
         #: Read before the engine starts: the palette's words for each profile.
-        self.profiles = dict(self.members.engine.profiles)
+        # Served to a browser, the config file's profiles are not shown (nor run).
+        served = cell.where is Where.SERVED
+        self.profiles = {} if served else dict(self.members.engine.profiles)
         panes.command_line.targets = tuple(connect_targets(self.profiles))
         panes.command_line.cell = tuple(cell_targets(cell))  # none for one target
         panes.command_line.may_ask = self.lines.may_ask

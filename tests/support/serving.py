@@ -301,6 +301,15 @@ class Console:
                 return shown
             self._read_one(end, texts)
 
+    def until_any(self, *texts: str, deadline: float = DEADLINE) -> str:
+        """Read frames until the screen shows one of ``texts``; the screen."""
+        end = time.monotonic() + deadline
+        while True:
+            shown = "\n".join(self.screen.lines())
+            if any(text in shown for text in texts):
+                return shown
+            self._read_one(end, texts)
+
     def until_message(self, wanted: Callable[[object], bool], deadline: float = DEADLINE) -> None:
         """Read frames until a JSON message that ``wanted`` holds for has come."""
         end = time.monotonic() + deadline
