@@ -292,23 +292,21 @@ class Console:
             self.closed = True
             raise AssertionError(f"the session closed while waiting for {waiting_for}")
 
-    def until(self, *texts: str, deadline: float = DEADLINE) -> str:
-        """Read frames until the screen shows every one of ``texts``; the screen."""
+    def _until(self, shows: Callable[[str], bool], texts: tuple[str, ...], deadline: float) -> str:
         end = time.monotonic() + deadline
         while True:
             shown = "\n".join(self.screen.lines())
-            if all(text in shown for text in texts):
+            if shows(shown):
                 return shown
             self._read_one(end, texts)
 
+    def until(self, *texts: str, deadline: float = DEADLINE) -> str:
+        """Read frames until the screen shows every one of ``texts``; the screen."""
+        return self._until(lambda shown: all(t in shown for t in texts), texts, deadline)
+
     def until_any(self, *texts: str, deadline: float = DEADLINE) -> str:
         """Read frames until the screen shows one of ``texts``; the screen."""
-        end = time.monotonic() + deadline
-        while True:
-            shown = "\n".join(self.screen.lines())
-            if any(text in shown for text in texts):
-                return shown
-            self._read_one(end, texts)
+        return self._until(lambda shown: any(t in shown for t in texts), texts, deadline)
 
     def until_message(self, wanted: Callable[[object], bool], deadline: float = DEADLINE) -> None:
         """Read frames until a JSON message that ``wanted`` holds for has come."""
