@@ -671,6 +671,19 @@ async def test_the_change_highlight_is_legible_in_every_theme(tmp_path: Path) ->
         assert not app.available_themes["textual-light"].dark
         await pilot.press("f5")
         await until(pilot, lambda: app.main_screen.panes.io_panel.grid is not None, "the I/O grid")
+
+        def grid_texts() -> set[str]:
+            grid = app.main_screen.panes.io_panel.grid
+            assert grid is not None
+            word = grid.lines[0].word
+            return {"128", "129", "130", "131", word.hex_text(), word.dec_text()}
+
+        def grid_drawn() -> bool:
+            """Every text of the grid on the screen (a busy machine paints it later)."""
+            body = app.main_screen.panes.io_panel.query_one("#io-grid")
+            return set(colours_on_screen(app, body, grid_texts())) == grid_texts()
+
+        await until(pilot, grid_drawn, "the I/O grid drawn, its word included")
         app.main_screen.panes.table.set_hide_io(
             False
         )  # the IO rows in the table too: both in one pass
@@ -680,10 +693,7 @@ async def test_the_change_highlight_is_legible_in_every_theme(tmp_path: Path) ->
             assert_legible(
                 name, colours_on_screen(app, app.main_screen.panes.table, in_table), in_table
             )
-            grid = app.main_screen.panes.io_panel.grid
-            assert grid is not None
-            word = grid.lines[0].word
-            in_grid = {"128", "129", "130", "131", word.hex_text(), word.dec_text()}
+            in_grid = grid_texts()
             body = app.main_screen.panes.io_panel.query_one("#io-grid")
             assert_legible(name, colours_on_screen(app, body, in_grid), in_grid)
 
