@@ -359,8 +359,21 @@ class Pane:
 
 
 class ConsoleView(Pane):
-    def look(self) -> View:
+    def settled_screen(self) -> tuple[str, bool]:
+        """The screen, and whether it was whole: two captures in a row alike. A capture
+        taken while the console redraws a line can hold half of the old line and half of
+        the new (tmux's capture-pane does not wait for the end of a synchronized update):
+        a busy machine once showed I10 to I13 as 1, the first digit of each value."""
         text = self.screen()
+        for _ in range(5):
+            again = self.screen()
+            if again == text:
+                return text, True
+            text = again
+        return text, False
+
+    def look(self) -> View:
+        text, whole = self.settled_screen()
         view = View(text=text)
         lines = text.splitlines()
         fields = [part.strip() for part in lines[0].split(" · ")] if lines else []
@@ -371,7 +384,8 @@ class ConsoleView(Pane):
                 value = CONSOLE_VALUE.search(line[row.end() :])
                 number = int(value.group(1)) if value else None
                 view.rows[int(row.group(1))] = (row.group(2), number)
-                self.attribution.see("console", int(row.group(1)), number)
+                if whole:  # a torn capture is no value shown
+                    self.attribution.see("console", int(row.group(1)), number)
         return view
 
 

@@ -717,12 +717,13 @@ def test_snapshot_a_just_changed_row_in_the_light_theme(snap_compare, tmp_path: 
         await pilot.press("f5")
         app.main_screen.panes.table.set_hide_io(False)  # the IO rows in the table and in the grid
         # I4, IO 130 (OFF) and IO 131 (ON) changed just now (stamped a minute ahead: for
-        # as long as it takes); the others 5 s ago, as stage() had them.
+        # as long as it takes); the others 5 s ago, as stage() had them (5.001: "5s" for the
+        # whole second after, however late a busy machine draws the screen).
         now = time.monotonic()
         for var, view in list(app.main_screen.members.rows.items()):
             changed = str(var) in ("I4", "IO130", "IO131")
             app.main_screen.members.rows[var] = replace(
-                view, changed_at=now + 60 if changed else now - 5.5
+                view, changed_at=now + 60 if changed else now - 5.001
             )
         app.main_screen.refresh_table()
         await pilot.pause(0.1)

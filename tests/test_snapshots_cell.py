@@ -44,7 +44,7 @@ def stage(app: RacConsoleApp) -> float:
     now = time.monotonic()
     for state in app.main_screen.members.states.values():
         for var, view in list(state.rows.items()):
-            state.rows[var] = replace(view, changed_at=now - 5.5)
+            state.rows[var] = replace(view, changed_at=now - 5.001)
         assert state.status is not None
         state.status = replace(state.status, rtt=0.00025)
         state.trends.clear()

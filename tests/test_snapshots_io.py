@@ -65,7 +65,7 @@ def test_io_grid_80x24(snap_compare, tmp_path: Path, utc: None) -> None:
                 view,
                 label=LABELS.get(var.index, ""),
                 variant=Variant(IO.vt, var.index in ON_BITS),
-                changed_at=now - 5.5,
+                changed_at=now - 5.001,
                 status="TIMEOUT" if var.index == STALE else "OK",
                 stale=var.index == STALE,
             )

@@ -62,7 +62,7 @@ def hold_ages(app: RacConsoleApp) -> None:
     """The ages as stage() set them, just before the screenshot (the waits moved them)."""
     now = time.monotonic()
     for var, view in list(app.main_screen.members.rows.items()):
-        app.main_screen.members.rows[var] = replace(view, changed_at=now - 5.5)
+        app.main_screen.members.rows[var] = replace(view, changed_at=now - 5.001)
     app.main_screen.refresh_table()
 
 
