@@ -15,6 +15,16 @@ SERVED_ENV = "RAC_CONSOLE_SERVED"
 #: What textual-serve sets ``TEXTUAL_DRIVER`` to in the processes it starts.
 WEB_DRIVER = "textual.drivers.web_driver:WebDriver"
 
+#: The sizes a served screen may have, in cells each way: what a browser asks for, by
+#: message or typed in as keys, is brought within them (serve's parts, the console's
+#: driver).
+SMALLEST_SCREEN, LARGEST_SCREEN = 10, 1000
+
+
+def within_screen(cells: int) -> int:
+    return max(SMALLEST_SCREEN, min(cells, LARGEST_SCREEN))
+
+
 #: What leads a served console's status line.
 SERVED_BADGE = Text.assemble(("SERVED", "bold black on cyan"), " ")
 

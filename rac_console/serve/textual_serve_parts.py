@@ -31,6 +31,8 @@ from aiohttp.typedefs import Middleware
 from textual_serve.app_service import AppService
 from textual_serve.server import Server
 
+from ..present.served import within_screen
+
 log = logging.getLogger("rac_console.serve")
 
 #: The versions of textual-serve this module was written against (pyproject's extra).
@@ -110,7 +112,7 @@ class ExecAppService(AppService):
         number is ignored (one message asking for 100,000 rows grew a console by 70 MB
         a second)."""
         if type(width) is int and type(height) is int:
-            await super().set_terminal_size(_within(width), _within(height))
+            await super().set_terminal_size(within_screen(width), within_screen(height))
 
     @property
     def pid(self) -> int | None:
@@ -255,16 +257,8 @@ class GuardedServer(Server):
         await asyncio.gather(*(service.stop() for service in list(self.services)))
 
 
-#: The sizes a served screen may have, in cells.
-SMALLEST, LARGEST = 10, 1000
-
-
-def _within(size: int) -> int:
-    return max(SMALLEST, min(size, LARGEST))
-
-
 def _whole(text: str | None, default: int) -> int:
     """A size from the query, within what a screen can be."""
     if text is None or not (text.isascii() and text.isdigit()):
         return default
-    return _within(int(text))
+    return within_screen(int(text))

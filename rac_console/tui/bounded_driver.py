@@ -13,12 +13,11 @@ from textual.driver import Driver
 from textual.geometry import Size
 from textual.message import Message
 
-#: The sizes a served screen may have, in cells (as serve's own clamp).
-SMALLEST, LARGEST = 10, 1000
+from ..present.served import within_screen
 
 
 def bounded(size: Size) -> Size:
-    return Size(max(SMALLEST, min(size.width, LARGEST)), max(SMALLEST, min(size.height, LARGEST)))
+    return Size(within_screen(size.width), within_screen(size.height))
 
 
 def bounded_driver(base: type[Driver]) -> type[Driver]:
