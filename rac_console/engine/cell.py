@@ -294,7 +294,7 @@ class Cell:
 
         route = self._route(item)
         if isinstance(route, OnTarget | OnEveryTarget | SwitchCurrent):
-            spec = self.registry.get(self.registry.name_of(route.command) or "")
+            spec = self.registry.find(route.command)
             if spec is not None and not spec.runs_in(self.where):  # said once, not per target
                 from .jobs import not_here
 

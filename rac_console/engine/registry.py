@@ -247,17 +247,15 @@ class Registry:
     def names(self) -> list[str]:
         return list(self._specs)
 
-    def name_of(self, command: Command) -> str | None:
-        """The name of the entry that runs ``command``; None when none does."""
-        try:
-            return self.spec_of(command).name
-        except LookupError:
-            return None
+    def find(self, command: Command) -> AnySpec | None:
+        """The entry that runs ``command`` (a command object carries no name); None when
+        none does."""
+        named = _named(command)
+        return self._specs.get(named) if named is not None else self._by_type.get(type(command))
 
     def spec_of(self, command: Command) -> AnySpec:
-        """The entry that runs ``command`` (a command object carries no name)."""
-        named = _named(command)
-        spec = self._specs.get(named) if named is not None else self._by_type.get(type(command))
+        """The entry that runs ``command``; LookupError when none does."""
+        spec = self.find(command)
         if spec is None:
             raise LookupError(f"no command runs {type(command).__name__}")
         return spec
@@ -299,10 +297,8 @@ class Registry:
 
     def traits(self, command: Command) -> Traits:
         """What ``command``'s entry declares of it (a command no entry runs: a target's)."""
-        try:
-            return self.spec_of(command).traits
-        except LookupError:
-            return Traits()
+        spec = self.find(command)
+        return spec.traits if spec is not None else Traits()
 
     def plan(self, line: str, names: Sequence[str], current: str) -> Route:
         """The route of a typed line in a cell of ``names`` (see :func:`..routing.plan`)."""
