@@ -50,6 +50,30 @@ def test_a_mistyped_command_line_is_one_line_saying_what_was_meant(
     assert "--help" in line and result.stdout == ""
 
 
+@pytest.mark.parametrize(
+    ("before", "after", "says"),
+    [
+        (("--hots", "127.0.0.1"), ("get", "I", "1"), "did you mean --host?"),
+        (("--intreval", "0.2"), ("get", "I", "1"), "did you mean --interval?"),
+        (("--intreval", "0.2"), ("watch", "I", "1"), "did you mean --interval?"),
+        (("--hots", "127.0.0.1"), (), "did you mean --host?"),  # the console
+    ],
+)
+def test_an_option_mistyped_before_the_command_is_named_as_after_it(
+    env: dict[str, str], before: tuple[str, ...], after: tuple[str, ...], says: str
+) -> None:
+    """Not its value taken for the command (``unknown command '127.0.0.1'``)."""
+    result = cli(env, *before, *after)
+    assert result.returncode == 2
+    line = one_error_line(result)
+    assert f"no option {before[0]}: {says}" in line, line
+    assert "unknown command" not in line and result.stdout == ""
+    if after:  # the same typo after the command is met by the same guess
+        behind = cli(env, *after, *before)
+        assert behind.returncode == 2
+        assert says in one_error_line(behind)
+
+
 def test_a_cells_targets_are_watched_each_with_its_own_variables(env: dict[str, str]) -> None:
     result = cli(
         env, "--cell", "demo", "--json", "watch", "IO", "64", "@robotA", "IO", "128",

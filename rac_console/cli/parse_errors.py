@@ -2,7 +2,8 @@
 
 argparse answers a mistyped command with its whole usage and ``invalid choice``, a
 mistyped option with ``unrecognized arguments`` under the top-level usage, and an
-option written before its command (``--count 3 watch I 1``) with ``invalid choice: '3'``.
+option written before its command (``--count 3 watch I 1``), or one mistyped there
+(``--hots 127.0.0.1 get``), with ``invalid choice`` naming the option's value.
 The console and the REPL say ``did you mean get?``; so does this, in one line on stderr,
 exit status 2, naming the ``--help`` to read.
 """
@@ -79,6 +80,9 @@ class RacParser(argparse.ArgumentParser):
             owners = sorted(n for n, p in commands.items() if _option_of(p, misplaced[0]))
             if owners:
                 return f"{misplaced[0]} is an option of {', '.join(owners)}: write it after one"
+            # An option no command knows (--hots 127.0.0.1 get): argparse took its value
+            # for the command; the typo is the fault, said as after the command.
+            return self._unknown_option(misplaced[0])
         guess = close_match(word, commands)
         shown = f"unknown command '{word}'"
         if guess is not None:
