@@ -12,7 +12,7 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Literal
 
 from ..protocol.errors import InputError
-from ..protocol.text import endpoint, terminal_safe
+from ..protocol.text import close_match, endpoint, terminal_safe
 from .policy import TargetProfile, WritePolicy, Writes
 
 if TYPE_CHECKING:  # matching a name to a profile loads with the first host named
@@ -147,13 +147,17 @@ def one_controller_each(
 def no_profile_hint(
     host: str, profiles: Mapping[str, TargetProfile], config_where: str | None = None
 ) -> str | None:
-    """``no profile named cel3 in FILE`` (or with the profiles there are), when ``host``
-    looks like a profile's name rather than an address; None when it does not."""
+    """``no profile named cel3 in FILE`` (or with the profiles there are), and ``did you
+    mean cell3?`` when a profile's name is close, when ``host`` looks like a profile's
+    name rather than an address; None when it does not. Every front end says it: the
+    console, the REPL, ``connect`` and the one-shot commands all resolve through here."""
     from .profiles import could_be_profile_name
 
     if not could_be_profile_name(host):
         return None
+    guess = close_match(host, profiles)
+    meant = f": did you mean {terminal_safe(guess)}?" if guess is not None else ""
     if config_where is not None:
-        return f"no profile named {host} in {config_where}"
+        return f"no profile named {host} in {config_where}{meant}"
     known = f"profiles: {', '.join(sorted(profiles))}" if profiles else "the config file names none"
-    return f"no profile named {host} ({known})"
+    return f"no profile named {host} ({known}){meant}"
