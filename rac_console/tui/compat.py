@@ -3,8 +3,8 @@
 Textual gives no promise about names with a leading underscore. Keeping them in one
 place means an upgrade is checked here, and ``tests/test_tui_compat.py`` fails (one test
 per hook) when a hook stops existing or stops doing what the console relies on. Each
-was checked against Textual 8.2.8, and found in 2.0, 4.0 and 6.0 (the lower bound,
-``textual>=2.0``, is where ``Content`` and text selection came); the rest of ``tui/``
+was checked against Textual 8.2.8, and CI runs those tests again on the lowest Textual
+pyproject allows (``textual>=6.2``: ``scripts/lowest-tests``); the rest of ``tui/``
 uses public Textual only.
 """
 
