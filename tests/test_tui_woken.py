@@ -31,7 +31,7 @@ def running_timers(app: RacConsoleApp) -> list[Timer]:
 
 
 @pytest.mark.slow  # over half a second
-async def test_the_only_timer_is_the_clock_and_a_get_reaches_the_log_when_the_engine_notifies(
+async def test_the_clock_and_the_watchdog_are_the_only_timers_and_the_engine_wakes_the_log(
     tmp_path: Path,
 ) -> None:
     base = make_app(tmp_path)
@@ -45,11 +45,13 @@ async def test_the_only_timer_is_the_clock_and_a_get_reaches_the_log_when_the_en
             ),
             "the connection",
         )
-        await until(pilot, lambda: len(running_timers(app)) == 1, "one timer left")
-        clock = app.main_screen.pacing.clock
-        assert running_timers(app) == [clock]
+        await until(pilot, lambda: len(running_timers(app)) == 2, "two timers left")
+        clock, watchdog = app.main_screen.pacing.clock, app.watchdog_timer
+        assert clock is not None and watchdog is not None
+        assert set(running_timers(app)) == {clock, watchdog}
 
-        clock.pause()  # type: ignore[union-attr]  # nothing periodic at all: only the engine's notify wakes the app
+        clock.pause()  # nothing periodic at all: only the engine's notify wakes the app
+        watchdog.pause()
         woken = app.woken
         app.main_screen.submit_line("get I 1")
         await until(pilot, lambda: "GET:RC8:1:I:" in log_text(app), "the GET's request")

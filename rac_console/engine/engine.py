@@ -55,6 +55,10 @@ STATUS_EVERY = 0.1
 #: How often an idle engine (nothing to poll) looks whether its connection still lives.
 LINK_CHECK_EVERY = 1.0
 NOT_RUN = "not run: cancelled (Esc, Ctrl+C) before it started"
+#: What a line submitted to an engine whose thread has ended is answered.
+ENGINE_STOPPED = "not run: this target's engine has stopped (restart rac-console)"
+#: What the line running when the engine died is answered: a write may have gone out.
+DIED_RUNNING = "the engine stopped on an internal error while running this: its outcome is unknown"
 
 
 @dataclass(frozen=True)
@@ -104,6 +108,8 @@ class Engine:
         self._connect_first = True
         self._started = threading.Event()
         self._stopping = threading.Event()
+        #: Why the thread ended without being stopped (an internal error), once it has.
+        self.died: str | None = None
         self._thread = threading.Thread(target=self._run, name="rac-engine", daemon=True)
         self._build_lock = threading.Lock()
         self._built = False
@@ -192,7 +198,9 @@ class Engine:
 
     def submit(self, line: str) -> int:
         """Queue a typed line; its :class:`Result` comes out with the number returned."""
-        return self._inbox.put(line)
+        seq = self._inbox.put(line)
+        self._answer_if_dead()
+        return seq
 
     def submit_command(
         self, command: Command, line: str | None = None, seq: int | None = None
@@ -201,7 +209,27 @@ class Engine:
         run like a typed line, never parsed; ``line`` is how it is shown (the echo,
         the result), or None for nothing to echo. ``seq``: the number its cell gave
         the line (else the next of :attr:`numbers`)."""
-        return self._inbox.put(command, line, seq)
+        seq = self._inbox.put(command, line, seq)
+        self._answer_if_dead()
+        return seq
+
+    @property
+    def ended(self) -> bool:
+        """The thread has ended without :meth:`stop` (it died): nothing runs any more."""
+        return (
+            self._thread.ident is not None
+            and not self._thread.is_alive()
+            and (not self._stopping.is_set())
+        )
+
+    def _answer_if_dead(self) -> None:
+        """Once the thread has died, every job queued is answered at once: not run."""
+        if self.died is None and not self.ended:
+            return
+        from .events import Message, Result
+
+        for job in self._inbox.abandon():
+            self.outbox.put(Result(job.seq, (Message(ENGINE_STOPPED, "error"),), job.line, None))
 
     def stop(self, timeout: float = 5.0) -> None:
         """End the thread: a request in flight is cut short, the target closed."""
@@ -278,7 +306,9 @@ class Engine:
                     self._link.check_idle()
                 else:
                     self._poller.poll_once(more=self._inbox.empty)
-        except Exception as exc:  # a bug must not leave the front end waiting in silence
+        except BaseException as exc:  # a bug must not leave the front end waiting in silence
+            if not self._stopping.is_set():
+                self.died = f"{type(exc).__name__}: {exc}"
             self._alert(f"the engine stopped on an internal error: {exc!r}")
         finally:
             self._started.set()
@@ -289,6 +319,8 @@ class Engine:
             self.publish_status(force=True)
             if self._publisher.tap is not None:
                 self._publisher.tap.close()
+            if self.died is not None:
+                self._answer_if_dead()
 
     def _run_job(self, job: Job) -> None:
         """Run one job; the status, then its Result, go to the outbox (so a front end
@@ -312,6 +344,10 @@ class Engine:
                     self._stopping.is_set,
                 )
                 command, feedback = run_job(self.registry, context, job.what, self.where, job.line)
+        except BaseException:  # the thread ends (see _run): this line is answered first
+            said = Message(DIED_RUNNING, "error")
+            self._publisher.emit(Result(job.seq, (said,), job.line, self._parsed(job.what)))
+            raise
         finally:
             self._inbox.end()
         self.publish_status(force=True)
@@ -422,6 +458,11 @@ class Engine:
         )
 
     def _status(self) -> Status:
+        if self.died is not None:  # never "connected" once nothing polls any more
+            return replace(self._live_status(), connection="engine stopped", has_session=False)
+        return self._live_status()
+
+    def _live_status(self) -> Status:
         if not self._built:
             return status_before_start(self._rules, self.options)
         tap = self._publisher.tap

@@ -64,6 +64,21 @@ class Inbox:
         with self._lock:
             self._answers[seq] = yes
 
+    def abandon(self) -> list[Job]:
+        """Every job queued, taken out unrun: the engine's thread has ended, and a job
+        left in the queue would be waited for forever."""
+        taken: list[Job] = []
+        with self._lock:
+            while True:
+                try:
+                    job = self._jobs.get_nowait()
+                except queue.Empty:
+                    break
+                if job is not None:
+                    self._queued.pop(job.seq, None)
+                    taken.append(job)
+        return taken
+
     # ------------------------------------------------------------ the engine's thread
 
     def empty(self) -> bool:

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import contextlib
 import threading
+import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
@@ -53,6 +54,9 @@ class Outbox:
         self._lock = threading.Lock()
         self._batch = Batch()
         self._empty = True
+        #: ``time.monotonic()`` when the outbox stopped being empty, None while it is: a
+        #: front end that has not drained for long has stalled (the console's watchdog).
+        self.pending_since: float | None = None
         #: ``time.perf_counter()`` when the request in flight left, None when none is; one
         #: writer (the engine's frame observer), read by the status line.
         self.waiting_since: float | None = None
@@ -102,10 +106,13 @@ class Outbox:
         with self._lock:
             batch, self._batch = self._batch, Batch()
             self._empty = True
+            self.pending_since = None
         return batch
 
     def _wake(self) -> bool:
         woke, self._empty = self._empty, False
+        if woke:
+            self.pending_since = time.monotonic()
         return woke
 
     def _notify(self) -> None:

@@ -19,8 +19,9 @@ if TYPE_CHECKING:
 
 #: The connection as the status line says it: the session's state, lost (found dead
 #: while idle, or a poll's connection failed after one had opened), dropped (closed
-#: early: backing off), or why connecting failed.
-Connection = Union["State", Literal["lost", "dropped"], "ConnectProblem"]
+#: early: backing off), why connecting failed, or that the engine's thread has ended
+#: on an internal error (nothing polls or answers any more).
+Connection = Union["State", Literal["lost", "dropped", "engine stopped"], "ConnectProblem"]
 
 #: A watched row's status when its last read came back good, and before its first.
 OK = "OK"

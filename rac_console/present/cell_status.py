@@ -56,6 +56,9 @@ def connection_words(status: Status | None, now: float) -> tuple[Text, Text]:
         )
     if state in ("lost", "dropped"):
         return Text("lost", style="bold red"), Text("lost", style="bold red")
+    if state == "engine stopped":
+        stopped = Text("ENGINE STOPPED", style="bold white on red")
+        return stopped, Text("STOPPED", style="bold white on red")
     if state in CANNOT_CONNECT:
         short = CANNOT_CONNECT[state][1]
         return Text(short, style="bold red"), Text(short, style="bold red")

@@ -273,6 +273,14 @@ def _connection(status: Status) -> _Field:
             droppable=False,
             last_resort=1,
         )
+    if state == "engine stopped":  # its thread died: nothing polls or answers
+        return _figure(
+            Text("ENGINE STOPPED: restart rac-console", style="bold white on red"),
+            Text("ENGINE STOPPED", style="bold white on red"),
+            essential=True,
+            droppable=False,
+            last_resort=1,
+        )
     if state == "lost":  # found dead while idle: nothing retries until a command
         return _figure(
             Text("lost, the next command reconnects", style="bold red"),
@@ -411,3 +419,30 @@ def placeholder_for(status: Status | None) -> str:
     if status is None or writes_refused(status) or not status.is_simulator:
         return READ_ONLY_PLACEHOLDER
     return PLACEHOLDER
+
+
+#: How long the status line says what the console's watchdog did.
+NOTICE_SECONDS = 10.0
+
+
+def caught_up_notice(seconds: float) -> Text:
+    """The status line's word after a stall: the screen was behind, and is not now."""
+    return Text(f"SCREEN WAS {seconds:.0f} s BEHIND, caught up", style="bold black on yellow")
+
+
+def caught_up_alert(seconds: float) -> str:
+    """The frame log's line after a stall (kept after the status line's has gone)."""
+    return (
+        f"the screen had not shown what the engine published for {seconds:.1f} s:"
+        " brought up to date"
+    )
+
+
+def engine_stopped_text(name: str | None, why: str | None) -> str:
+    """Said once when a target's engine has died: nothing is polled or answered."""
+    whose = f"{name}'s engine" if name else "the engine"
+    cause = f" ({terminal_safe(why)})" if why else ""
+    return (
+        f"{whose} has stopped{cause}: nothing is polled or sent any more, and the values"
+        " shown are old. Restart rac-console."
+    )

@@ -19,6 +19,7 @@ from textual import on
 from textual.app import App, ComposeResult
 from textual.binding import BindingType
 from textual.message import Message as TextualMessage
+from textual.timer import Timer
 from textual.worker import Worker, WorkerState
 
 from .. import __version__
@@ -35,6 +36,7 @@ from .frame_log import FrameLog
 from .hangup import HANGUP_STATUS, TerminalWatch
 from .palette import ConsoleCommands, Providers, deliver_screenshot
 from .settings import SettingsKeeper
+from .watchdog import WATCH_EVERY, Watchdog
 
 if TYPE_CHECKING:
     from ..engine import Engine
@@ -86,6 +88,8 @@ class RacConsoleApp(App[int]):
         self.kept = SettingsKeeper(self, self.main_screen, settings)
         self._engine_starting: asyncio.Future[None] | None = None  # the start, on a thread
         self.terminal_watch: TerminalWatch | None = None  # in a terminal: see hangup.py
+        self.watchdog: Watchdog | None = None  # once the engines run: see watchdog.py
+        self.watchdog_timer: Timer | None = None
         #: Called once the first screen is painted, before the engine starts (the
         #: command line's start turns the garbage collector back on there).
         self.after_first_paint: Callable[[], object] | None = None
@@ -177,6 +181,13 @@ class RacConsoleApp(App[int]):
         console.pacing.start_clock()
         console.pacing.now()
         console.panes.command_line.focus()
+        self.watchdog = Watchdog(
+            console.members,
+            (console.pacing.due, self.kept.due),
+            console.caught_up,
+            console.engine_stopped,
+        )
+        self.watchdog_timer = self.set_interval(WATCH_EVERY, self.watchdog.check)
 
     async def on_unmount(self) -> None:
         if self._engine_starting is not None:

@@ -157,7 +157,30 @@ class ConsoleScreen(Screen[None]):
             self.members.members_timed()  # rows' ages, a reply waited for, a retry
             or self.lines.pending  # the running line's time
             or self.frames_per_second() > 0  # the rate, back to 0
+            or self.panes.status_bar.saying  # the watchdog's notice, until it goes
         )
+
+    def caught_up(self, seconds: float) -> None:
+        """The watchdog found the screen ``seconds`` behind what the engines published:
+        everything is shown now, and the status line and the log say so."""
+        from ..engine.events import Alert
+        from ..present.status import NOTICE_SECONDS, caught_up_alert, caught_up_notice
+
+        self.panes.frame_log.add(Alert(caught_up_alert(seconds), local_failure=False))
+        self.panes.status_bar.say(caught_up_notice(seconds), NOTICE_SECONDS)
+        self.pacing.catch_up()
+        self.pacing.clock_needed()
+
+    def engine_stopped(self, name: str) -> None:
+        """The watchdog found ``name``'s engine dead: said once, in red; its status line
+        says so from now on (see the watchdog)."""
+        from ..present.status import engine_stopped_text
+
+        engine = self.members.states[name].member.engine
+        self.show(Message(engine_stopped_text(self._named(name), engine.died), "error"))
+        self.lines.pending.clear()  # nothing will answer them: Esc has nothing to wait on
+        self.sync_bindings()
+        self.refresh_table()
 
     def sync_bindings(self) -> None:
         """The one place the state the footer's keys depend on is set: a change shows
@@ -236,7 +259,7 @@ class ConsoleScreen(Screen[None]):
     @on(CommandLine.Entered)
     def entered(self, event: CommandLine.Entered) -> None:
         """Hand the line to the cell: lines run one at a time, each once, in order."""
-        self.panes.completions.remove_class("-visible")
+        self.panes.completions.hide()
         self.lines.entered(event.line, event.held)
 
     @on(CommandLine.Dropped)
@@ -246,15 +269,12 @@ class ConsoleScreen(Screen[None]):
 
     @on(CommandLine.Completions)
     def list_completions(self, event: CommandLine.Completions) -> None:
-        from ..present.completion import completions_text
-
         self.mount_hidden_panes()
-        self.panes.completions.update(completions_text(event.candidates))
-        self.panes.completions.add_class("-visible")
+        self.panes.completions.show(event.candidates)  # again: the next page
 
     @on(CommandLine.Changed)
     def hide_completions(self, event: CommandLine.Changed) -> None:
-        self.panes.completions.remove_class("-visible")
+        self.panes.completions.hide()
         if not event.value:
             self.panes.hint.remove_class("-visible")
 

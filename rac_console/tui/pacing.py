@@ -1,6 +1,10 @@
 """When the console brings its screen up to date: at each wake of the engines, but
 under a flood no more often than the keys can still be answered, and on a clock only
 while something on screen changes with time alone.
+
+An update put off is a :class:`~.deadline.Deadline`: its one-shot timer may be lost
+(see there), so the clock runs while one is due and makes it when it is overdue; the
+app's watchdog is the last resort (:meth:`Pacing.catch_up`).
 """
 
 from __future__ import annotations
@@ -10,12 +14,14 @@ from collections import deque
 from collections.abc import Callable
 from typing import TYPE_CHECKING
 
+from .deadline import Deadline
+
 if TYPE_CHECKING:
     from textual.message_pump import MessagePump
     from textual.timer import Timer
 
 #: Under a flood of frames the screen is brought up to date at most this often; the
-#: drains in between are put off by a one-shot timer, so keys are answered meanwhile.
+#: drains in between are put off (a deadline), so keys are answered meanwhile.
 MIN_DRAIN_GAP = 1 / 30
 #: Under a flood (updates back to back), the costly parts wait their turn: the log is
 #: written at most this often, and the table's rows rebuilt at most this often, so
@@ -49,22 +55,32 @@ class Pacing:
         self._flushes: deque[tuple[float, int]] = deque()  # (when, frames) in RATE_WINDOW
         self._last = 0.0  # time.monotonic() of the last update
         self._log_at = self._table_at = 0.0  # of the last log write and table refresh
-        self._due: Timer | None = None  # the put-off update, under a flood
+        #: The put-off update, under a flood (the app's watchdog checks it too).
+        self.due = Deadline(owner, self.now)
         self.clock: Timer | None = None
 
     def woke(self) -> None:
         """The engines published: up to date now, or, under a flood, once MIN_DRAIN_GAP
         has passed since the last time (one update put off at a time)."""
-        if self._due is not None:
-            return  # an update is due already: it takes this wake's events too
+        if self.due.armed:  # it takes this wake's events too (made now if overdue)
+            self.due.check()
+            return
         wait = self._last + MIN_DRAIN_GAP - time.monotonic()
         if wait > 0:
-            self._due = self.owner.set_timer(wait, self._when_due)
+            self._put_off(wait)
         else:
             self.now()
 
-    def _when_due(self) -> None:
-        self._due = None
+    def _put_off(self, wait: float) -> None:
+        """The update in ``wait`` seconds; the clock runs until it is made."""
+        self.due.arm(wait)
+        self.clock_needed()
+
+    def catch_up(self) -> None:
+        """Everything on screen now, log and table, whatever turn they had: the
+        watchdog found the screen behind what the engines published."""
+        self.due.cancel()
+        self._last = self._log_at = self._table_at = 0.0
         self.now()
 
     def now(self) -> None:
@@ -82,8 +98,8 @@ class Pacing:
             self._log_at = now
         self.update(log, table)
         put_off = log_turn - now if not log else table_turn - now if not table else 0.0
-        if put_off > 0 and self._due is None:
-            self._due = self.owner.set_timer(put_off, self._when_due)
+        if put_off > 0:
+            self._put_off(put_off)
 
     def start_clock(self) -> None:
         """The one timer: nothing comes from the engine while a reply, a retry or a typed
@@ -92,8 +108,10 @@ class Pacing:
         self.clock = self.owner.set_interval(CLOCK_EVERY, self._tick)
 
     def _tick(self) -> None:
+        if self.due.check():  # its timer was lost: the update is made here
+            return
         self.refresh()
-        if self.clock is not None and not self.timed():
+        if self.clock is not None and not self.timed() and not self.due.armed:
             self.clock.pause()
 
     def clock_needed(self) -> None:

@@ -24,10 +24,10 @@ from typing import TYPE_CHECKING
 
 from textual.app import ScreenStackError
 from textual.command import CommandPalette
-from textual.timer import Timer
 
 from ..engine.feedback import Message
 from ..protocol.errors import InputError
+from .deadline import Deadline
 
 if TYPE_CHECKING:
     from textual.app import App
@@ -52,7 +52,8 @@ class SettingsKeeper:
         self._tried: dict[str, Value] | None = None  # the last state a save failed for
         self._said = False  # a failure already said
         self._problems: list[str] = []
-        self._due: Timer | None = None  # the save after the last change
+        #: The save after the last change (checked by the app's watchdog too).
+        self.due = Deadline(app, self._save_when_due)
         self._loaded: LoadedSettings | None = None  # read by load(), applied by apply()
         self._at_start: dict[str, Value] | None = None  # as applied at mount
         self._new_file = False  # no config file at start: none is made to hold the start
@@ -119,14 +120,12 @@ class SettingsKeeper:
         """A setting may have changed: save after SAVE_AFTER, unless it changes again."""
         if self.store is None:
             return
-        if self._due is not None:
-            self._due.stop()
-        self._due = self.app.set_timer(SAVE_AFTER, self._save_when_due)
+        self.due.cancel()
+        self.due.arm(SAVE_AFTER)
 
     def _save_when_due(self) -> None:
         """Save what changed (not while the palette is open: again once it is closed;
         not while the console closes: the exit saves)."""
-        self._due = None
         try:
             screen = self.app.screen
         except ScreenStackError:
@@ -140,9 +139,7 @@ class SettingsKeeper:
         """Queue a write of what changed since the last save (see :class:`FileWrites`)."""
         if self.store is None:
             return
-        if self._due is not None:
-            self._due.stop()
-            self._due = None
+        self.due.cancel()
         now = self.current()
         changed = {key: value for key, value in now.items() if self._saved.get(key) != value}
         if not changed or now == self._tried:

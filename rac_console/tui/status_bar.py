@@ -3,6 +3,7 @@ the widget's width: whole fields, built again when the width changes."""
 
 from __future__ import annotations
 
+import time
 from typing import TYPE_CHECKING
 
 from rich.text import Text
@@ -29,6 +30,25 @@ class StatusBar(Static):
         self._badges: list[Badge] = []
         self._cell_running: tuple[str, float, int] | None = None
         self.line = Text()
+        #: Said first on the line until ``time.monotonic()`` passes its second item:
+        #: what the watchdog did (see watchdog.py).
+        self.notice: tuple[Text, float] | None = None
+
+    def say(self, notice: Text, seconds: float) -> None:
+        """``notice`` first on the line for ``seconds``."""
+        self.notice = (notice, time.monotonic() + seconds)
+
+    @property
+    def saying(self) -> bool:
+        """A notice is on the line (the clock goes on until it has gone)."""
+        return self.notice is not None
+
+    def _lead(self) -> Text:
+        if self.notice is not None and time.monotonic() >= self.notice[1]:
+            self.notice = None
+        if self.notice is None:
+            return self.lead
+        return self.lead + self.notice[0] + Text(" ")
 
     def show(
         self,
@@ -40,8 +60,9 @@ class StatusBar(Static):
         """Build the line for ``status`` (see :func:`.status_text`) to fit this widget;
         repaint only when it changed. Returns the line."""
         self._figures = (status, waiting_since, frames_per_second, running)
-        width = self.content_size.width - len(self.lead)
-        line = self.lead + status_text(
+        lead = self._lead()
+        width = self.content_size.width - len(lead)
+        line = lead + status_text(
             status, waiting_since, frames_per_second, running, width=width if width > 0 else None
         )
         if line != self.line:  # an unchanged line costs no repaint
@@ -54,8 +75,9 @@ class StatusBar(Static):
     def show_cell(self, badges: list[Badge], running: tuple[str, float, int] | None = None) -> Text:
         """A cell's line: one badge per target (see :func:`.cell_status_text`)."""
         self._badges, self._cell_running = badges, running
-        width = self.content_size.width - len(self.lead)
-        line = self.lead + cell_status_text(badges, width if width > 0 else None, running=running)
+        lead = self._lead()
+        width = self.content_size.width - len(lead)
+        line = lead + cell_status_text(badges, width if width > 0 else None, running=running)
         if line != self.line:
             self.line = line
             self.refresh()
