@@ -15,6 +15,8 @@
 - :mod:`tests.support.cells`: the console and a front in miniature on a cell;
 - :mod:`tests.support.sessions`: the blocking session driven from asyncio tests;
 - :mod:`tests.support.samples`: the vendor's sample exchanges, statuses to present.
+- :mod:`tests.support.doc_samples`: the docs' marked sample sessions, and how they are
+  compared with what the program prints.
 
 Nothing here is collected as tests; every module is typed strictly (``mypy tests``).
 """
