@@ -7,7 +7,6 @@ The end-to-end test needs the write pipeline's confirm question (engine/writes.p
 
 from __future__ import annotations
 
-import time
 from dataclasses import replace
 from pathlib import Path
 
@@ -22,7 +21,7 @@ from rac_console.engine.status import LABEL_WIDTH
 from rac_console.repl import asking as asking_module
 from rac_console.repl.prompt_parts import confirm_message, prompt_fragments, toolbar_fragments
 from rac_console.sim.thread import SimulatorThread
-from tests.support.drivers import Driver
+from tests.support.drivers import ANSWERABLE, Driver
 from tests.support.samples import CELL3, SIM
 
 
@@ -67,16 +66,15 @@ QUESTION = ConfirmWrite(9, "I10", "14", "15", "PUT:RC8:10:I:3,15", "LIVE h:1", "
 
 @pytest.mark.slow  # over half a second
 async def test_a_confirm_question_is_asked_and_answered(tmp_path: Path) -> None:
-    driver = Driver(tmp_path)
+    driver = Driver(tmp_path, screen=True)
     answers: list[tuple[int, bool]] = []
     driver.engine.answer_confirm = lambda seq, yes: answers.append((seq, yes))  # type: ignore[method-assign]
 
     async def steps(d: Driver) -> None:
         for typed, expected in (("\r", False), ("n\r", False), ("y\r", True), ("yes\r", True)):
+            asked = d.mark()
             d.engine.outbox.put_many([QUESTION])
-            await d.until(lambda _: d.repl.asking is not None, "the question")
-            ready = time.monotonic() + 0.5  # a yes within the guard time is asked again
-            await d.until(lambda _, at=ready: time.monotonic() > at, "the guard time to pass")  # type: ignore[misc]
+            await d.answerable(asked)  # a yes sooner is asked again
             d.type(typed)
             await d.until(lambda _: len(answers) == len(seen) + 1, "the answer")
             seen.append(expected)
@@ -89,13 +87,14 @@ async def test_a_confirm_question_is_asked_and_answered(tmp_path: Path) -> None:
 
 @pytest.mark.slow  # over half a second
 async def test_a_confirm_target_writes_only_after_yes(tmp_path: Path) -> None:
-    driver = Driver(tmp_path, policy=WritePolicy(Writes.CONFIRM, source="profile cell3"))
+    driver = Driver(
+        tmp_path, screen=True, policy=WritePolicy(Writes.CONFIRM, source="profile cell3")
+    )
 
     async def steps(d: Driver) -> None:
+        asked = d.mark()
         d.type("put I 10 14\r")
-        await d.until(lambda _: d.repl.asking is not None, "the first question")
-        asked = time.monotonic()
-        await d.until(lambda _: time.monotonic() > asked + 0.5, "the guard time to pass")
+        await d.answerable(asked)
         d.type("y\r")
         await d.until(lambda out: "read back 14" in out, "the first write")
         d.type("put I 10 15\r")
@@ -115,20 +114,22 @@ async def test_a_yes_typed_right_after_the_question_is_not_taken(
 ) -> None:
     """As in the console: a y within 0.4 s of the question came typed ahead, or pasted
     spread out over a slow link; it is not an answer."""
-    driver = Driver(tmp_path, policy=WritePolicy(Writes.CONFIRM, source="profile cell3"))
+    driver = Driver(
+        tmp_path, screen=True, policy=WritePolicy(Writes.CONFIRM, source="profile cell3")
+    )
 
     async def steps(d: Driver) -> None:
         # "At once" is within the guard time however busy the machine: a guard of a
         # minute for the first answer (a y typed 0.4 s late would be a yes).
         monkeypatch.setattr(asking_module, "CONFIRM_GUARD_SECONDS", 60.0)
         d.type("put I 10 15\r")
-        await d.until(lambda _: d.repl.asking is not None, "the question")
+        await d.until(lambda out: "? …" in out, "the question, waiting")
         d.type("y\r")  # at once
         await d.until(lambda out: "answer again" in out, "the question asked again")
         monkeypatch.setattr(asking_module, "CONFIRM_GUARD_SECONDS", CONFIRM_GUARD_SECONDS)
         assert b"PUT:RC8:10:I:3,15\r" not in d.tap.sent
-        asked = time.monotonic()
-        await d.until(lambda _: time.monotonic() > asked + 0.5, "the guard time to pass")
+        assert ANSWERABLE not in d.out.getvalue()  # it never said a yes would count
+        await d.answerable(0)
         d.type("y\r")
         await d.until(lambda out: "read back 15" in out, "the write")
 

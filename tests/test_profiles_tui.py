@@ -25,9 +25,12 @@ from rac_console.tui import confirm_screen
 from rac_console.tui.app import RacConsoleApp
 from rac_console.tui.confirm_screen import ConfirmWriteScreen
 from tests.support.drivers import (
+    ANSWERABLE,
     FrameTap,
+    answerable,
     console,
     modal,
+    question_keys,
     results_text,
     type_line,
     until,
@@ -77,7 +80,7 @@ async def question_up(pilot, app: RacConsoleApp, accepting: bool = False) -> Con
     assert screen is not None
     await until(pilot, lambda: screen.shown, "the question on screen")
     if accepting:
-        await until(pilot, lambda: screen.accepting, "the end of the guard time")
+        await answerable(pilot, screen)
     return screen
 
 
@@ -171,11 +174,12 @@ async def test_the_question_shows_target_values_request_and_default_no(tmp_path:
         app.main_screen.confirm_write(QUESTION)
         screen = await question_up(pilot, app)
         shown = "\n".join(str(w.content) for w in screen.query(Static))
-        for part in ("LIVE 10.0.0.1:5006", "I10: 14 → 15", "PUT:RC8:10:I:3,15", "[y/N]", "0.4 s"):
+        for part in ("LIVE 10.0.0.1:5006", "I10: 14 → 15", "PUT:RC8:10:I:3,15", "0.4 s"):
             assert part in shown
         assert "Cell 3" in str(screen.query_one("#confirm-box").border_title)
         assert app.focused is None  # nothing to press with Enter
-        await until(pilot, lambda: screen.accepting, "the end of the guard time")
+        await answerable(pilot, screen)
+        assert "Enter, n or Esc: no" in question_keys(screen)
         await pilot.press("enter")
         await until(pilot, lambda: answers.given == [(7, False)], "the answer")
         assert modal(app) is None
@@ -268,7 +272,7 @@ async def test_a_confirm_target_declines_by_default_and_typed_ahead_keys_do_not_
         if screen is not None:
             await until(pilot, lambda: screen.shown, "the question on screen")  # type: ignore[union-attr]
             assert "I10: 14 → 15" in str(screen.query_one("#confirm-question", Static).content)
-            await until(pilot, lambda: screen.accepting, "the end of the guard time")  # type: ignore[union-attr]
+            await answerable(pilot, screen)
             assert modal(app) is screen, answers.given  # the burst answered nothing
             await pilot.press("enter")  # the default: No
         await until(pilot, lambda: len(answers.given) == 1, "the answer")
@@ -285,6 +289,27 @@ async def test_a_confirm_target_declines_by_default_and_typed_ahead_keys_do_not_
         await until(pilot, lambda: b"PUT:RC8:10:I:3,15\r" in tap.sent, "the write")
         await type_line(pilot, "get I 10")
         await until(pilot, lambda: "I10 = 15" in results_text(app), "the value written")
+
+
+async def test_a_y_pressed_when_the_question_says_y_N_writes_however_long_its_guard(
+    tmp_path: Path, cell: SimulatorThread, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Whoever answers at the first sight of ``[y/N]`` is answering a question that
+    takes the answer: the marker shows once a y counts, never while keys are ignored.
+    The guard time is held open for 2 s, so that a ``[y/N]`` shown from the start would
+    be answered well inside it (the y ignored, nothing written)."""
+    monkeypatch.setattr(confirm_screen, "GUARD_SECONDS", 2.0)
+    app = console(tmp_path, cell3(cell))
+    tap = FrameTap(tmp_path)
+    async with app.run_test(size=(100, 30)) as pilot:
+        await type_line(pilot, "put I 10 15")
+        await until(pilot, lambda: modal(app) is not None, "the question")
+        screen = modal(app)
+        assert screen is not None
+        await until(pilot, lambda: ANSWERABLE in question_keys(screen), "[y/N] on the question")
+        await pilot.press("y")
+        await until(pilot, lambda: "read back 15" in results_text(app), "the write read back")
+        assert b"PUT:RC8:10:I:3,15\r" in tap.sent
 
 
 async def test_tab_completes_profile_names_after_connect(

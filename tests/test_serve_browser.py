@@ -224,7 +224,7 @@ def test_with_allow_writes_a_confirmed_write_lands(env, running, browser, config
     shown = console.until("cellsim")
     assert "READ-ONLY" not in shown
     console.type_line("put I 10 5")
-    console.until("[y/N]")
+    console.until("[y/N]")  # shown once a y counts (until then the question says …)
     assert sim_value(env, sim_port, "I 10") != 5  # nothing written before the answer
     console.page.keyboard.press("y")
     console.until("read back 5")

@@ -20,7 +20,7 @@ from rac_console.sim.controller import SimulatedController
 from rac_console.tui.app import RacConsoleApp
 from rac_console.tui.confirm_screen import ConfirmWriteScreen
 from tests.support.cells import make_cell_app, row
-from tests.support.drivers import log_text, results_text, type_line, until
+from tests.support.drivers import answerable, log_text, results_text, type_line, until
 
 #: A console on two or three simulators: a second or more each, seconds on a busy machine.
 pytestmark = pytest.mark.slow
@@ -181,7 +181,7 @@ async def test_the_confirm_dialog_names_the_target(tmp_path: Path, two) -> None:
         assert screen.member == "robotB"
         box = screen.query_one("#confirm-box")
         assert "robotB" in str(box.border_title) and "Cell B" in str(box.border_title)
-        await until(pilot, lambda: screen.accepting, "the guard time over")
+        await answerable(pilot, screen)
         await pilot.press("y")
         await until(pilot, lambda: value(two, 1, "I", 10) == 42, "robotB's I10 written")
         assert value(two, 0, "I", 10) != 42

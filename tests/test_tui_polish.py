@@ -21,7 +21,14 @@ from rac_console.sim.thread import SimulatorThread
 from rac_console.tui.app import RacConsoleApp
 from rac_console.tui.confirm_screen import ConfirmWriteScreen
 from rac_console.tui.help_screen import HelpScreen
-from tests.support.drivers import REQUEST_TIMEOUT, make_app, results_text, type_line, until
+from tests.support.drivers import (
+    REQUEST_TIMEOUT,
+    answerable,
+    make_app,
+    results_text,
+    type_line,
+    until,
+)
 
 #: Terminal apps: `pytest -m "not slow"` skips them.
 pytestmark = pytest.mark.slow
@@ -70,7 +77,7 @@ async def confirm_up(pilot: Pilot) -> ConfirmWriteScreen:
     await until(pilot, lambda: isinstance(app.screen, ConfirmWriteScreen), "the question")
     screen = app.screen
     assert isinstance(screen, ConfirmWriteScreen)
-    await until(pilot, lambda: screen.accepting, "the end of the guard time")
+    await answerable(pilot, screen)
     return screen
 
 

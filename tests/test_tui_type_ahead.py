@@ -22,6 +22,7 @@ from rac_console.sim.thread import SimulatorThread
 from rac_console.tui.app import RacConsoleApp
 from tests.support.drivers import (
     FrameTap,
+    answerable,
     burst,
     confirm_console,
     connected,
@@ -46,7 +47,7 @@ async def declined_with_keys_typed_ahead(pilot: Any, app: RacConsoleApp) -> None
     await until(pilot, lambda: modal(app) is not None, "the question")
     screen = modal(app)
     assert screen is not None
-    await until(pilot, lambda: screen.accepting, "the end of the guard time")
+    await answerable(pilot, screen)
     await pilot.press("n")
 
 
@@ -144,7 +145,7 @@ async def test_keys_typed_after_space_on_a_row_do_not_reach_the_command_line(
         await until(pilot, lambda: modal(app) is not None, "the question", timeout=3)
         screen = modal(app)
         assert screen is not None
-        await until(pilot, lambda: screen.accepting, "the end of the guard time")
+        await answerable(pilot, screen)
         await pilot.press("n")
         await until(pilot, lambda: "not confirmed" in results_text(app), "the answer's result")
         await pilot.pause(0.3)

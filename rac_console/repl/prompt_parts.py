@@ -113,9 +113,12 @@ def cell_toolbar_fragments(
     return [("class:toolbar", f" {cell_status_text(badges).plain} ")]
 
 
-def confirm_message(question: ConfirmWrite, member: str | None = None) -> FormattedText:
+def confirm_message(
+    question: ConfirmWrite, member: str | None = None, ready: bool = True
+) -> FormattedText:
     """``Write I10: 14 → 15 on Cell 3 — welding? [y/N] `` (default No); in a cell, led
-    by the target's name: ``Write I10: 14 → 15 on cell3 (Cell 3 — welding)?``."""
+    by the target's name: ``Write I10: 14 → 15 on cell3 (Cell 3 — welding)?``. Until
+    ``ready`` (a yes typed now would be asked again), ``…`` stands where ``[y/N]`` will."""
     before = question.before
     where = label_text(question.label) if question.label else terminal_safe(question.target)
     if member is not None:
@@ -130,7 +133,7 @@ def confirm_message(question: ConfirmWrite, member: str | None = None) -> Format
             ("class:confirm", " → "),
             ("class:confirm.value", terminal_safe(question.after)),
             ("class:confirm", f" on {where}? "),
-            ("bold", "[y/N] "),
+            ("bold", "[y/N] " if ready else "… "),
         ]
     )
 

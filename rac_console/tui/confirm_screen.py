@@ -6,6 +6,10 @@ ignored, and so is every key that follows the one before by less than that (a bu
 ahead stays ignored until it pauses): a typed-ahead Enter or y answers nothing. Then
 Enter, n and Esc answer No, only y (or a click on Yes) answers Yes; Esc answers No at
 any time. Nothing here can be focused, so no Enter presses a button.
+
+What the keys line says follows the guard: ``… wait`` while keys are ignored, ``[y/N]``
+only once a y would count (and the Yes button is disabled until then), so whoever
+answers, a person or a test, sees when an answer is taken.
 """
 
 from __future__ import annotations
@@ -33,6 +37,13 @@ if TYPE_CHECKING:
 #: Keys in the first this many seconds of the question (and any typed before it) are
 #: ignored; Esc still answers No.
 GUARD_SECONDS = CONFIRM_GUARD_SECONDS  # as the REPL's (tests lengthen it here)
+
+#: How often the keys line looks whether the guard time is over.
+READY_TICK = 0.05
+
+#: What the keys line shows while keys are ignored, and once a y counts.
+WAITING_KEYS = Text.assemble(("… ", "bold"), "wait: keys now are ignored · Esc: no")
+READY_KEYS = Text.assemble(("[y/N] ", "bold"), "y writes · Enter, n or Esc: no")
 
 
 def question_text(question: ConfirmWrite) -> Text:
@@ -65,6 +76,7 @@ class ConfirmWriteScreen(ModalScreen[bool]):
         self.member = member
         self.ignored = 0  # keys ignored: typed ahead, or within the guard time
         self._ready_at = float("inf")  # event_clock() from when keys answer
+        self._ready_shown = False  # the keys line says [y/N]
         self._answered = False
 
     @property
@@ -88,13 +100,7 @@ class ConfirmWriteScreen(ModalScreen[bool]):
                 yield Static(Text(terminal_safe(question.target), style="dim"))
             yield Static(question_text(question), id="confirm-question")
             yield Static(Text(terminal_safe(question.request), style="dim"), id="confirm-request")
-            yield Static(
-                Text.assemble(
-                    ("[y/N] ", "bold"),
-                    "y writes · Enter, n or Esc: no",
-                ),
-                id="confirm-keys",
-            )
+            yield Static(WAITING_KEYS, id="confirm-keys")
             yield Static(
                 Text(
                     f"keys typed ahead are ignored: y counts once this has been up "
@@ -109,6 +115,7 @@ class ConfirmWriteScreen(ModalScreen[bool]):
                     Button("Yes, write", id="confirm-yes", variant="error"),
                 ):
                     button.can_focus = False  # by mouse only: Enter must never press one
+                    button.disabled = button.id == "confirm-yes"  # until a y counts
                     yield button
 
     def on_mount(self) -> None:
@@ -122,6 +129,16 @@ class ConfirmWriteScreen(ModalScreen[bool]):
         """Painted: the guard time starts now (not when it was made: building a screen
         takes a moment, while keys typed ahead still arrive)."""
         self._ready_at = event_clock() + GUARD_SECONDS
+        self.set_interval(READY_TICK, self._show_readiness)  # a tick, not a one-shot
+
+    def _show_readiness(self) -> None:
+        """The keys line (and the Yes button) say whether a y would count now: ``[y/N]``
+        is never shown while a key would still be ignored."""
+        ready = self.accepting
+        if ready != self._ready_shown:
+            self._ready_shown = ready
+            self.query_one("#confirm-keys", Static).update(READY_KEYS if ready else WAITING_KEYS)
+            self.query_one("#confirm-yes", Button).disabled = not ready
 
     def on_key(self, event: events.Key) -> None:
         event.stop()
@@ -133,6 +150,7 @@ class ConfirmWriteScreen(ModalScreen[bool]):
             # of keys goes on being one until it pauses (five keys outlast 0.4 s).
             self.ignored += 1
             self._ready_at = max(self._ready_at, event.time + GUARD_SECONDS)
+            self._show_readiness()  # a key from before [y/N] showed: wait again
         elif event.key in ("y", "Y"):
             self.answer(True)
         elif event.key in ("enter", "n", "N"):

@@ -3,10 +3,10 @@ the CLI as a subprocess, the engine alone, and the console in a real terminal (t
 pty).
 
 - the console (Pilot): :func:`make_app` (and :func:`console` on a profile,
-  :func:`confirm_console` on a target whose writes ask), :func:`type_line`,
-  :func:`burst`, :func:`until`, :func:`results_text`, :func:`log_text`,
-  :class:`FrameTap` (what went on the wire); for the snapshots, :func:`watch_then_pause`,
-  :func:`stage` and :func:`hold_still`;
+  :func:`confirm_console` on a target whose writes ask, :func:`answerable` once its
+  question takes an answer), :func:`type_line`, :func:`burst`, :func:`until`,
+  :func:`results_text`, :func:`log_text`, :class:`FrameTap` (what went on the wire);
+  for the snapshots, :func:`watch_then_pause`, :func:`stage` and :func:`hold_still`;
 - the REPL: :class:`Driver`, and :class:`Screen`, a model of what a terminal shows;
 - the engine alone: :class:`Front`;
 - the CLI: :func:`cli`, :func:`one_error_line`, :func:`json_lines`, :func:`profile` (a
@@ -41,7 +41,7 @@ from prompt_toolkit.output import DummyOutput
 from prompt_toolkit.output.vt100 import Vt100_Output
 from textual import events
 from textual.pilot import Pilot
-from textual.widgets import RichLog
+from textual.widgets import RichLog, Static
 
 import rac_console.tui.panes as panes_module
 from rac_console.commands.policy import TargetProfile, WritePolicy, Writes, parse_allow
@@ -206,6 +206,21 @@ def burst(app: RacConsoleApp, text: str) -> None:
 def modal(app: RacConsoleApp) -> ConfirmWriteScreen | None:
     """The write's confirm question, when it is up."""
     return app.screen if isinstance(app.screen, ConfirmWriteScreen) else None
+
+
+#: What the question's keys line shows once a y counts (and never before).
+ANSWERABLE = "[y/N]"
+
+
+def question_keys(screen: ConfirmWriteScreen) -> str:
+    """The question's keys line, as shown."""
+    return str(screen.query_one("#confirm-keys", Static).content)
+
+
+async def answerable(pilot: Pilot[Any], screen: ConfirmWriteScreen) -> None:
+    """Wait until the question says it takes an answer (``[y/N]`` on its keys line):
+    a y pressed sooner is one typed ahead, and ignored."""
+    await until(pilot, lambda: ANSWERABLE in question_keys(screen), f"{ANSWERABLE} on the question")
 
 
 async def connected(pilot: Pilot[Any], app: RacConsoleApp) -> None:
@@ -380,6 +395,16 @@ class Driver:
 
     def type(self, text: str) -> None:
         self.pipe.send_text(text)
+
+    def mark(self) -> int:
+        """Where the output is now: :meth:`answerable` reads what comes after it."""
+        return len(self.out.getvalue())
+
+    async def answerable(self, since: int) -> None:
+        """Wait until a question drawn after ``since`` says it takes an answer
+        (``[y/N]`` where ``…`` stood): a yes sooner is asked again. Needs ``screen``."""
+        assert self.screen, "the question is drawn only on a screen"
+        await self.until(lambda out: ANSWERABLE in out[since:], f"{ANSWERABLE} on the question")
 
     async def until(self, predicate: Callable[[str], bool], what: str, timeout: float = 30) -> None:
         deadline = time.monotonic() + timeout
