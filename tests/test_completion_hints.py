@@ -287,15 +287,13 @@ def test_a_long_list_is_cut_leaving_a_line_to_say_how_many_more() -> None:
 
 @pytest.mark.slow  # over half a second
 async def test_the_console_lists_the_nine_types_whole(tmp_path: Path) -> None:
-    from textual.widgets import Static
-
     from tests.support.drivers import make_app, until
 
     app = make_app(tmp_path)
     async with app.run_test(size=(100, 30)) as pilot:
         await pilot.press(*"get ")
         await pilot.press("tab")
-        panel = app.query_one("#completions", Static)
+        panel = app.main_screen.panes.completions
         await until(pilot, lambda: panel.has_class("-visible"), "the list")
         await pilot.pause()
         listed = str(panel.render())

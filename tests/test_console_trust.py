@@ -319,14 +319,12 @@ async def test_argument_hint_and_history_suggestion_are_both_shown(tmp_path: Pat
 async def test_a_cut_candidate_list_says_how_many_more(tmp_path: Path) -> None:
     app = make_app(tmp_path)
     async with app.run_test(size=(120, 40)) as pilot:
-        from textual.widgets import Static
-
         from rac_console.engine.commands import BUILTIN
         from rac_console.present.completion import WHOLE_LIST
 
         await type_line(pilot, "help ", enter=False, keys=True)  # 19 commands: cut
         await pilot.press("tab")
-        panel = app.query_one("#completions", Static)
+        panel = app.main_screen.panes.completions
         await until(pilot, lambda: panel.has_class("-visible"), "the candidates")
         listed = str(panel.render())
         shown = [line for line in listed.splitlines() if line.strip()]

@@ -72,5 +72,32 @@ def test_completion_candidates(snap_compare, tmp_path: Path, utc: None) -> None:
     assert snap_compare(app, terminal_size=(100, 30), run_before=run_before)
 
 
+@pytest.mark.parametrize("size", [(40, 12), (80, 24)], ids=["40x12", "80x24"])
+def test_completion_list_over_the_panes(
+    snap_compare,
+    tmp_path: Path,
+    utc: None,
+    monkeypatch: pytest.MonkeyPatch,
+    size: tuple[int, int],
+) -> None:
+    """Tab after ``get `` with J, T and IO rows watched: the list floats above the
+    command line, which keeps its row; the table keeps its rows (at 40x12 the list has
+    all the room there is, the log left out: the table and the results share it)."""
+    app = make_app(tmp_path)
+
+    async def run_before(pilot) -> None:
+        lines = ("watch J 1 home", "watch T 1", "watch IO 128-131")
+        await watch_then_pause(pilot, lines, rows=6)
+        await until(pilot, lambda: app.main_screen.frames_per_second() == 0, "no frames flowing")
+        hold_still(app, monkeypatch, stage(app), frames_per_second=0)
+        app.main_screen.flush_log()
+        app.main_screen.refresh_table()
+        await pilot.press(*"get ", "tab")
+        await until(pilot, lambda: app.main_screen.panes.completions.is_open, "the list")
+        await pilot.pause()
+
+    assert snap_compare(app, terminal_size=size, run_before=run_before)
+
+
 def test_kind_labels_used_on_screen() -> None:
     assert kind_of("P").value_hint == "X Y Z Rx Ry Rz Fig"

@@ -6,7 +6,6 @@ import re
 from pathlib import Path
 
 import pytest
-from textual.widgets import Static
 
 from rac_console.sim.server import SimulatorServer
 from rac_console.tui.command_line import CommandLine
@@ -138,7 +137,7 @@ async def test_tab_completes_and_lists_candidates_with_help(tmp_path: Path) -> N
         assert command_line.value == "watch "
         await type_line(pilot, "i", enter=False, keys=True)
         await pilot.press("tab")
-        panel = app.query_one("#completions", Static)
+        panel = app.main_screen.panes.completions
         assert panel.has_class("-visible")
         listed = str(panel.render())
         assert "I " in listed and "integer" in listed and "IO" in listed and "I/O bit" in listed

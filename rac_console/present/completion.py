@@ -86,34 +86,52 @@ def complete(
 
 #: A candidate list this long or shorter is listed whole (the 9 types, the 7 conditions
 #: of a ``wait`` on a number): a cut short list hides the very choice asked for. A longer
-#: one (the 19 commands) is cut: it would push the rest of the screen away.
+#: one (the 19 commands) is cut: it would cover the rest of the screen. A front end with
+#: less room than this lists what fits (see ``room`` below).
 WHOLE_LIST = 12
 
 
-def shown_candidates(candidates: list[Candidate]) -> tuple[list[Candidate], int]:
-    """The candidates to list, and how many are left out: a list of up to
-    :data:`WHOLE_LIST` whole; a longer one its first ``WHOLE_LIST - 1``, so the list
-    with its "… and N more" line still takes ``WHOLE_LIST`` lines."""
-    if len(candidates) <= WHOLE_LIST:
+def shown_candidates(
+    candidates: list[Candidate], room: int = WHOLE_LIST, first: int = 0
+) -> tuple[list[Candidate], int]:
+    """The candidates to list in ``room`` lines, from the ``first``, and how many are
+    left out: a list that fits is shown whole; a longer one a page of ``room - 1``, so
+    that with its "… and N more" line it still takes ``room`` lines."""
+    if len(candidates) <= room:
         return candidates, 0
-    shown = candidates[: WHOLE_LIST - 1]
+    shown = candidates[first : first + max(1, room - 1)]
     return shown, len(candidates) - len(shown)
 
 
-def completions_text(candidates: list[Candidate]) -> Text:
-    """The list under the command line: each candidate and what it means, aligned, and
-    how many more when the list is cut."""
-    shown, more = shown_candidates(candidates)
-    width = max(len(c.text) for c in shown)
-    text = Text()
-    for n, candidate in enumerate(shown):
-        if n:
-            text.append("\n")
-        text.append(f"{candidate.text:<{width}}", style="bold")
-        text.append(f"  {candidate.help}", style="dim")
+def next_page(count: int, room: int, first: int) -> int:
+    """The first candidate of the page after the one from ``first`` (Tab again), back
+    to the start after the last: every candidate is reached in turn."""
+    if count <= room:
+        return 0
+    following = first + max(1, room - 1)
+    return following if following < count else 0
+
+
+def completions_text(
+    candidates: list[Candidate], room: int = WHOLE_LIST, first: int = 0, width: int = 0
+) -> Text:
+    """The list over the command line: each candidate and what it means, aligned, a
+    line each (cut at ``width`` with an ellipsis when given, never wrapped: the list
+    takes as many lines as it counts), and how many more when it is cut to ``room``."""
+    shown, more = shown_candidates(candidates, room, first)
+    column = max(len(c.text) for c in shown)
+    lines: list[Text] = []
+    for candidate in shown:
+        line = Text(f"{candidate.text:<{column}}", style="bold")
+        line.append(f"  {candidate.help}", style="dim")
+        lines.append(line)
     if more:
-        text.append(f"\n… and {more} more: type a letter or two to narrow", style="italic")
-    return text
+        tail = f"… and {more} more: Tab again, or type to narrow"
+        lines.append(Text(tail, style="italic"))
+    if width > 0:
+        for line in lines:
+            line.truncate(width, overflow="ellipsis")
+    return Text("\n", end="").join(lines)
 
 
 def hint(text: str, registry: Registry = BUILTIN) -> str:

@@ -12,7 +12,8 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
-from textual.containers import Horizontal
+from textual import events
+from textual.containers import Horizontal, Vertical
 from textual.widget import AwaitMount, Widget
 from textual.widgets import Static
 
@@ -20,6 +21,7 @@ from ..engine.where import Where
 from ..present.status import placeholder_for
 from ..protocol.text import terminal_safe
 from .command_line import CommandLine
+from .completion_list import CompletionList
 from .filter_line import FilterLine
 from .frame_log import FrameLog
 from .io_panel import IoPanel, WatchArea
@@ -41,6 +43,19 @@ if TYPE_CHECKING:
 FILTER_HINT = "filter frames: text, or a variable (IO128, I 10, P[3]): its requests and replies"
 CELL_FILTER_HINT = "filter frames: @NAME for a target, text, or a variable (@robotB IO64)"
 
+#: Panes shorter than this (a terminal under 15 lines) show no frame log: its two lines
+#: would take the table's rows; the table and the results share the room.
+SHORT_ROWS = 12
+
+
+class PaneArea(Vertical):
+    """The panes between the status line and the command line: they share what the
+    terminal leaves them, so the command line below is always on screen; the completion
+    list floats over their bottom (a layer of its own), pushing nothing."""
+
+    def on_resize(self, event: events.Resize) -> None:
+        self.set_class(event.size.height < SHORT_ROWS, "-short")
+
 
 @dataclass
 class Panes:
@@ -56,7 +71,8 @@ class Panes:
     log_filter: FilterLine
     io_panel: IoPanel
     watch_area: WatchArea
-    completions: Static
+    area: PaneArea
+    completions: CompletionList
     hint: Static
     results: ResultsLog
     command_line: CommandLine
@@ -89,6 +105,8 @@ class Panes:
             frame_log.target_width = max(len(terminal_safe(n)) for n in members.cell.names)
         io_panel = IoPanel(lambda var: members.toggles.busy(var), id="io")
         command_line = CommandLine(history, used, id="command", placeholder=placeholder_for(None))
+        watch_area = WatchArea(table, io_panel, id="watch-area")
+        results = ResultsLog(id="results")
         return cls(
             status_bar=StatusBar(id="status", served=members.cell.where is Where.SERVED),
             table=table,
@@ -100,10 +118,11 @@ class Panes:
                 frame_log, CELL_FILTER_HINT if cell else FILTER_HINT, id="log-filter"
             ),
             io_panel=io_panel,
-            watch_area=WatchArea(table, io_panel, id="watch-area"),
-            completions=Static(id="completions"),
+            watch_area=watch_area,
+            area=PaneArea(watch_area, frame_log, results, id="panes"),
+            completions=CompletionList(id="completions"),
             hint=Static(id="hint"),
-            results=ResultsLog(id="results"),
+            results=results,
             command_line=command_line,
             prompt=Static(id="prompt"),
         )
@@ -114,7 +133,7 @@ class Panes:
         command: Widget = self.command_line
         if cell_mode:
             command = Horizontal(self.prompt, self.command_line, id="command-row")
-        return [self.status_bar, self.watch_area, self.frame_log, self.results, command]
+        return [self.status_bar, self.area, command]
 
     def mount_hidden(self, screen: Screen[None]) -> list[AwaitMount]:
         """The panes nobody sees at start (the filter lines, the trend, the detail, the
@@ -124,16 +143,12 @@ class Panes:
         if self.hidden_mounted:
             return []
         self.hidden_mounted = True
+        area = self.area
         return [
-            screen.mount(self.table_filter, after=self.watch_area),
-            screen.mount(
-                self.log_filter,
-                self.trend_view,
-                self.row_detail,
-                self.completions,
-                after=self.frame_log,
-            ),
-            screen.mount(self.hint, after=self.results),
+            area.mount(self.table_filter, after=self.watch_area),
+            area.mount(self.log_filter, self.trend_view, self.row_detail, after=self.frame_log),
+            area.mount(self.completions),  # docked: its place among them is no matter
+            screen.mount(self.hint, after=area),
         ]
 
     def in_focus_order(self) -> list[Widget]:
@@ -143,8 +158,9 @@ class Panes:
             shown.append(self.io_panel)
         if self.trend_view.has_class("-open"):
             shown.append(self.trend_view)
-        elif not self.row_detail.is_open:  # the detail takes no focus: the arrows stay
-            shown.append(self.frame_log)  # the table's
+        elif not self.row_detail.is_open and self.frame_log.display:
+            shown.append(self.frame_log)  # the detail takes no focus: the arrows stay the
+            # table's; a short terminal shows no log
         return shown
 
     def refresh(
