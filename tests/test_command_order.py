@@ -15,7 +15,8 @@ import pkgutil
 import pytest
 
 import rac_console.engine.commands as package
-from rac_console.commands.language import COMMAND_WORDS, Get, Simple, Step, parse_get
+from rac_console.commands.exchange_parsers import parse_get
+from rac_console.commands.language import COMMAND_WORDS, Get, Simple, Step
 from rac_console.engine import Feedback, Message
 from rac_console.engine.commands import BUILTIN, help_lines, parse_command
 from rac_console.engine.context import JobContext

@@ -31,6 +31,7 @@ PURE_MODULES = [
     "rac_console.protocol.framing",
     "rac_console.commands.argv",
     "rac_console.commands.check",
+    "rac_console.commands.exchange_parsers",
     "rac_console.commands.language",
     "rac_console.commands.outcome",
     "rac_console.commands.profiles",

@@ -1,7 +1,8 @@
 """The test suite's own rules: tests share helpers through ``tests/support`` (a driver
 module, a server factory, fixtures from a plugin), never by importing each other, and
 never import a fixture by name (which needed a ``noqa`` for ruff's F811 where the
-fixture was then used as a parameter)."""
+fixture was then used as a parameter). And one rule of the package's: no module of it
+grows past :data:`MOST_LINES`."""
 
 from __future__ import annotations
 
@@ -13,6 +14,11 @@ SUPPORT = TESTS / "support"
 TEST_MODULES = sorted(TESTS.glob("test_*.py"))
 #: The modules of tests/ that are not tests.
 NOT_TESTS = {"__init__.py", "conftest.py"}
+PACKAGE = TESTS.parent / "rac_console"
+#: The most lines a module of the package may hold (a few hundred, the style says): one
+#: that grows past it is split at a seam, as commands/exchange_parsers.py was. No module
+#: is excepted.
+MOST_LINES = 500
 
 
 def imported_modules(path: Path) -> list[tuple[int, str]]:
@@ -101,3 +107,13 @@ def test_no_noqa_f811() -> None:
         if marker in line
     ]
     assert offenders == []
+
+
+def test_no_module_of_the_package_is_over_most_lines() -> None:
+    sizes = {
+        str(path.relative_to(PACKAGE)): len(path.read_text(encoding="utf-8").splitlines())
+        for path in sorted(PACKAGE.rglob("*.py"))
+    }
+    over = {name: lines for name, lines in sizes.items() if lines > MOST_LINES}
+    assert len(sizes) > 100  # the rule sees the package
+    assert over == {}, f"over {MOST_LINES} lines (split each at a seam): {over}"

@@ -7,7 +7,8 @@ from dataclasses import replace
 
 import pytest
 
-from rac_console.commands.language import VarRef, parse_put
+from rac_console.commands.exchange_parsers import parse_put
+from rac_console.commands.language import VarRef
 from rac_console.commands.outcome import ExitStatus, Outcome
 from rac_console.engine.events import Cycle, Message, Result, RowView
 from rac_console.present.row_actions import put_line, toggle_line

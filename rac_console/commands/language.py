@@ -3,8 +3,9 @@
 Each parser turns the text after a command word into a command object or raises
 :class:`InputError` with what is wrong and how to write it; nothing here sends
 anything. Each command's registry entry (:mod:`rac_console.engine.commands`) names
-its parser. Over 450 lines on purpose: every command object sits next to the parser
-that makes it, and the shared pieces (variables, ranges, seconds) are used by all.
+its parser. Every command object sits next to the parser that makes it, and the shared
+pieces (variables, ranges, seconds) are used by all; the parsers of the exchanges (get,
+put, send: one request each) are apart, in :mod:`.exchange_parsers`.
 """
 
 from __future__ import annotations
@@ -24,7 +25,6 @@ from ..protocol import (
     parse_index,
 )
 from ..protocol.request import Request, get_for, put_for, raw_request
-from ..protocol.variables import encode_value
 from .plant import Publish
 
 
@@ -316,40 +316,6 @@ def parse_var(text: str, usage: str) -> tuple[VarRef, str]:
         index_text, rest = index_match.group(1), rest[index_match.end() :]
     return VarRef(kind, parse_index(index_text)), rest
 
-
-def parse_exchange(line: str) -> Exchange | None:
-    """Parse a get/put/send/raw line; None when the line is not one of those."""
-    if is_raw_line(line):
-        return Raw.of(line)
-    word, rest = split_word(line)
-    parse = _EXCHANGES.get(word)
-    return parse(rest) if parse is not None else None
-
-
-def parse_send(rest: str) -> Raw:
-    if not rest:
-        raise InputError("send needs the text to send: send GET:RC8:10:I:")
-    return Raw.of(rest)
-
-
-def parse_get(rest: str) -> Get:
-    var, extra = parse_var(rest, "get TYPE INDEX, e.g. get I 10 or get P[3]")
-    if extra.strip():
-        raise InputError(f"get takes only a variable, not {extra.strip()!r}: get {var}")
-    return Get(var)
-
-
-def parse_put(rest: str) -> Put:
-    var, value = parse_var(rest, "put TYPE INDEX VALUE..., e.g. put I 10 123")
-    variant, value_text = encode_value(var.kind, value)
-    return Put.of(var, variant, value_text)
-
-
-_EXCHANGES: dict[str, Callable[[str], Exchange]] = {
-    "get": parse_get,
-    "put": parse_put,
-    "send": parse_send,
-}
 
 UNWATCH_USAGE = "unwatch TYPE INDEX | all"
 WATCH_USAGE = "watch TYPE INDEX [LABEL] [every SECONDS], e.g. watch IO 128-135"

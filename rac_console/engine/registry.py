@@ -22,6 +22,7 @@ from collections.abc import Callable, Iterable, Iterator, Sequence
 from dataclasses import dataclass, field
 from typing import Any, Generic, TypeVar
 
+from ..commands.exchange_parsers import parse_exchange
 from ..commands.language import (
     Command,
     FrameFile,
@@ -29,7 +30,6 @@ from ..commands.language import (
     Step,
     WatchFile,
     is_raw_line,
-    parse_exchange,
     split_word,
 )
 from ..commands.routing import Reach, Route, Traits, plan

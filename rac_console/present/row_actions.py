@@ -10,7 +10,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from ..commands.language import Put, VarRef, parse_put
+from ..commands.exchange_parsers import parse_put
+from ..commands.language import Put, VarRef
 from ..protocol import Variant
 from ..protocol.errors import InputError
 from ..protocol.text import scalar_text, terminal_safe

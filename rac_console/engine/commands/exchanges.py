@@ -6,18 +6,8 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 from ...commands.conditions import parse_wait
-from ...commands.language import (
-    Exchange,
-    Get,
-    Latency,
-    Put,
-    Raw,
-    Wait,
-    parse_get,
-    parse_latency,
-    parse_put,
-    parse_send,
-)
+from ...commands.exchange_parsers import parse_get, parse_put, parse_send
+from ...commands.language import Exchange, Get, Latency, Put, Raw, Wait, parse_latency
 from ...commands.outcome import Outcome
 from ...commands.routing import Traits, WriteTrait
 from ...protocol import KINDS
