@@ -41,8 +41,9 @@ def listed(app: RacConsoleApp) -> list[str]:
     """The first word of each line of the completion list as drawn on the screen."""
     panel = app.main_screen.panes.completions
     region = panel.region
-    lines = screen_lines(app)[region.y : region.bottom]
-    return [line[region.x : region.right].split()[0] for line in lines if line.strip()]
+    lines = [line[region.x : region.right] for line in screen_lines(app)[region.y : region.bottom]]
+    assert all(line.strip() for line in lines), f"a blank line in the list: {lines}"
+    return [line.split()[0] for line in lines]
 
 
 async def every_candidate(pilot: Pilot[Any], app: RacConsoleApp, typed: str) -> set[str]:

@@ -4,8 +4,9 @@ command line.
 It floats on a layer of its own, so opening it moves nothing: the command line stays
 where it is typed on and the table keeps its rows. It is as high as the list, at most
 :data:`~rac_console.present.completion.WHOLE_LIST` lines and never more than the panes'
-room (CSS: ``max-height: 100%`` of the panes); what does not fit is counted on its last
-line, and Tab again shows the next page, so every candidate can be read at any size.
+height (its room, read at each layout, so a resize fits it again); what does not fit is
+counted on its last line, and Tab again shows the next page, so every candidate can be
+read at any size.
 """
 
 from __future__ import annotations
@@ -28,6 +29,7 @@ class CompletionList(Widget):
         super().__init__(**kwargs)  # type: ignore[arg-type]
         self.candidates: list[Candidate] = []
         self.first = 0  # the page shown starts at this candidate
+        self.room = 0  # the lines it may take, as the last layout found them
 
     @property
     def is_open(self) -> bool:
@@ -39,7 +41,7 @@ class CompletionList(Widget):
         from ..present.completion import next_page
 
         if self.is_open and candidates == self.candidates:
-            self.first = next_page(len(candidates), self.content_size.height, self.first)
+            self.first = next_page(len(candidates), self.room, self.first)
         else:
             self.candidates, self.first = candidates, 0
         self.add_class("-visible")
@@ -49,20 +51,22 @@ class CompletionList(Widget):
         self.remove_class("-visible")
 
     def get_content_height(self, container: Size, viewport: Size, width: int) -> int:
-        """The lines the whole list wants, up to a screenful of its own; the CSS keeps
-        it within the panes."""
-        from ..present.completion import WHOLE_LIST
+        """The page's lines: the panes' height (``container``), at most a screenful of
+        its own; a last page that is short takes only its lines."""
+        from ..present.completion import WHOLE_LIST, shown_candidates
 
-        return min(len(self.candidates), WHOLE_LIST)
+        self.room = min(container.height, WHOLE_LIST)
+        if self.room <= 0 or not self.candidates:
+            return 0
+        shown, more = shown_candidates(self.candidates, self.room, self.first)
+        if not shown:  # the terminal shrank under a later page: the first again
+            self.first = 0
+            shown, more = shown_candidates(self.candidates, self.room, 0)
+        return len(shown) + (1 if more else 0)
 
     def render(self) -> Text:
-        """The page for the lines given: a page that no longer fits them (the terminal
-        shrank) starts again at the first."""
-        from ..present.completion import completions_text, shown_candidates
+        from ..present.completion import completions_text
 
-        room = self.content_size.height
-        if not self.candidates or room <= 0:
+        if not self.candidates or self.room <= 0:
             return Text()
-        if not shown_candidates(self.candidates, room, self.first)[0]:
-            self.first = 0
-        return completions_text(self.candidates, room, self.first, self.content_size.width)
+        return completions_text(self.candidates, self.room, self.first, self.content_size.width)
