@@ -10,6 +10,10 @@ shorter than a limit, so the console's drawing is judged with them all lost.
 
 from __future__ import annotations
 
+import json
+import shutil
+import subprocess
+import sys
 from collections.abc import Awaitable, Callable, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -24,6 +28,8 @@ from rac_console.tui.app import OutboxWoke, RacConsoleApp
 
 from .support.drivers import connected, log_text, make_app, results_text, type_line, until
 
+BENCHMARKS = Path(__file__).resolve().parent.parent / "benchmarks"
+LOSING = ("--lose-below", "0.005", "--json")
 #: Longer than any wait the console's pacing computes (it puts an update off by at most
 #: a fifth of a second): with this, every one of those timers is lost.
 LOST_BELOW = 0.25
@@ -178,3 +184,29 @@ async def test_an_engine_that_died_is_said_in_red_and_answers_every_line_after(
         assert not app.main_screen.lines.pending
 
     await run_console(tmp_path, steps)
+
+
+@pytest.mark.slow  # a real terminal for half a minute
+@pytest.mark.skipif(shutil.which("tmux") is None, reason="needs tmux (.ci/run installs it)")
+def test_the_soak_in_a_real_terminal_keeps_drawing_with_short_timers_lost(tmp_path: Path) -> None:
+    """The hour's soak (benchmarks/console_soak.py), shortened: the real console in tmux
+    under a flood, one-shot timers under 5 ms lost. Judged on what reached the screen:
+    every put typed answered there, and the values and the log went on changing."""
+    figures = tmp_path / "soak.json"
+    subprocess.run(
+        [
+            sys.executable,
+            str(BENCHMARKS / "console_soak.py"),
+            "--seconds",
+            "25",
+            *LOSING,
+            str(figures),
+        ],
+        check=True,
+        timeout=300,
+        capture_output=True,
+    )
+    seen = json.loads(figures.read_text())
+    assert seen["keys"] >= 2 and seen["keys_unanswered"] == 0, seen
+    assert all(seen["changes"].get(what, 0) >= 5 for what in ("F0", "J0", "log")), seen
+    assert seen["said_engine_stopped"] == 0, seen

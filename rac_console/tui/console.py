@@ -178,7 +178,8 @@ class ConsoleScreen(Screen[None]):
 
         engine = self.members.states[name].member.engine
         self.show(Message(engine_stopped_text(self._named(name), engine.died), "error"))
-        self.lines.pending.clear()  # nothing will answer them: Esc has nothing to wait on
+        for seq in list(self.lines.pending):  # the engine answers them (not run); should
+            self.lines.answered(seq)  # it not, nothing holds the keys or waits on them
         self.sync_bindings()
         self.refresh_table()
 
