@@ -110,18 +110,37 @@ def one_command(args: argparse.Namespace) -> ExitStatus:
     """
     output = Output(args.json)
     line = _exchange_line(args)
+    writes = False
     try:
         if args.words_problem is not None:
             raise InputError(args.words_problem)
         output.target = pick_member(args)  # a cell: get @cell3 I 10
         command = exchange_from_words(args.command, args.words)
+        writes = BUILTIN.traits(command).writes_with(command)
         with open_session(args, output.local_failure) as session:
             results = _results(session, command, args, line, Where.COMMAND_LINE)
         outcome = next(r for r in results if isinstance(r, Outcome))  # an exchange has one
     except InputError as exc:
         outcome = refused(line, str(exc))
     output.show(pointed_to_check(outcome, args.target))
+    if writes and outcome.status is not ExitStatus.REFUSED and own_simulator(args.target):
+        print_error(output.err, WRITE_GONE)  # stderr only: stdout and --json stay as they are
     return output.status(outcome.status)
+
+
+#: Said after a write sent to a simulator started for one command: a put then a get, as
+#: two commands, would otherwise show the old value with no word why.
+WRITE_GONE = (
+    "the write is gone when this command ends: it went to a simulator of its own, and the "
+    "next command starts a fresh one (keep one with rac-console sim and -H 127.0.0.1, or "
+    "send several lines over one session with run -)"
+)
+
+
+def own_simulator(target: Target | None) -> bool:
+    """Whether ``target`` is a simulator this command started (no ``-H``, or ``--cell
+    demo``), which ends with it."""
+    return target is not None and (target.host is None or target.simulated)
 
 
 def pointed_to_check(outcome: Outcome, target: Target | None) -> Outcome:

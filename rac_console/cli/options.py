@@ -14,10 +14,11 @@ if TYPE_CHECKING:
 
 DESCRIPTION = "A console for DENSO RC8 controllers speaking RAC (TCP port 5006)."
 EPILOG = """\
-Without -H every command talks to a built-in RC8 simulator. -H NAME uses the
-[target.NAME] profile of config.toml in your config directory (rac-console paths
-says where; RAC_CONSOLE_CONFIG names another file): its address, label, colour
-and write rules.
+Without -H every command talks to a built-in RC8 simulator of its own, gone when
+it ends (what put wrote too): rac-console sim serves one that stays, for
+-H 127.0.0.1. -H NAME uses the [target.NAME] profile of config.toml in your
+config directory (rac-console paths says where; RAC_CONSOLE_CONFIG names another
+file): its address, label, colour and write rules.
 Options may also come after the command, even after a value. A value that starts
 with - and is not a number goes after --, where every word is the value:
   rac-console put S 10 -- -text
