@@ -36,7 +36,7 @@ from tests.support.servers import unused_port
 #: How long a step waits for its lines before the next is typed. A sample that is
 #: wrong waits this long once, then is judged on the whole output, which is complete
 #: either way (the REPL and the console run lines in order).
-SETTLE = 10.0
+SETTLE = 20.0
 #: Wide enough for the samples' longest lines: the docs show them unwrapped.
 WIDTH = 400
 
