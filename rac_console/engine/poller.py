@@ -21,6 +21,10 @@ from .publisher import Publisher
 from .schedule import Schedule
 from .watch import WatchList, WatchRow
 
+#: The status line's polls/s: the GETs of the cycles begun in this many seconds (at
+#: least the last cycle), over the time from the first of them to the newest start.
+RATE_WINDOW = 2.0
+
 
 class Poller:
     def __init__(
@@ -64,7 +68,9 @@ class Poller:
         self._cycle_count = 0
         self._samples: list[tuple[VarRef, Variant | None]] = []  # read in this cycle
         self._readings: list[Reading] = []  # and how each read went, for Cycle
-        self._last_cycle: tuple[float, int] | None = None  # start, polls: for polls/s
+        #: (start, polls) of the cycles ended within RATE_WINDOW, oldest first: polls/s.
+        self._window: deque[tuple[float, int]] = deque()
+        self._window_polls = 0
         self._schedule = Schedule()  # on time.monotonic()
 
     # ------------------------------------------------------ what commands change
@@ -92,7 +98,8 @@ class Poller:
     def forget_figures(self) -> None:
         """Round trips and poll rates measured on a connection that is gone say nothing now."""
         self.cycle_seconds = self.polls_per_second = None
-        self._last_cycle = None
+        self._window.clear()
+        self._window_polls = 0
 
     def stop_cycle(self) -> None:
         self._cycle.clear()
@@ -210,22 +217,32 @@ class Poller:
 
     def _begin_cycle(self, now: float) -> None:
         started = time.perf_counter()
-        if self._last_cycle is not None:
-            last_start, last_count = self._last_cycle
-            if last_count and started > last_start:
-                self.polls_per_second = last_count / (started - last_start)
+        self._measure_rate(started)
         interval = self.interval
         self._cycle.extend(row for row in self.watch.rows.values() if row.due(now, interval))
         self._cycle_started, self._cycle_count = started, 0
         self._samples, self._readings = [], []
         self._schedule.start(now, self.period)
 
+    def _measure_rate(self, started: float) -> None:
+        """polls/s as a cycle starts: the GETs over the last :data:`RATE_WINDOW`
+        seconds, not one cycle's. Cycles poll different rows (a row's own ``every``, a
+        row polled late in one cycle and due again only in the one after): one cycle's
+        count over its period said 5 polls/s for as long as the cycles that polled one
+        row were the ones shown, while a hundred went out each second."""
+        window = self._window
+        while len(window) > 1 and window[0][0] < started - RATE_WINDOW:
+            self._window_polls -= window.popleft()[1]
+        if window and started > window[0][0] and self._window_polls:
+            self.polls_per_second = self._window_polls / (started - window[0][0])
+
     def _end_cycle_if_done(self) -> None:
         if self._cycle:
             return
         if self._cycle_count:
             self.cycle_seconds = time.perf_counter() - self._cycle_started
-            self._last_cycle = (self._cycle_started, self._cycle_count)
+            self._window.append((self._cycle_started, self._cycle_count))
+            self._window_polls += self._cycle_count
         if self._cycle_count:
             self._cycle_ended()
         self.publish_status(False)  # at most every STATUS_EVERY while polling flat out

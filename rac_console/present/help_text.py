@@ -189,7 +189,7 @@ STATUS_FIGURES: tuple[HelpEntry, ...] = (
         "or set a longer interval",
     ),
     HelpEntry("cycle 12 ms back to back", "interval 0: each cycle starts when the last ends"),
-    HelpEntry("120 polls/s", "watched variables read per second"),
+    HelpEntry("120 polls/s", "watched variables read per second, over the last 2 s"),
     HelpEntry("40 frames/s", "frames (sent and received) added to the frame log per second"),
     HelpEntry("POLLING PAUSED", "nothing is polled: F2 or resume starts polling again"),
 )

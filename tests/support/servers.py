@@ -7,7 +7,8 @@
   may close the connection (:data:`CLOSE`) or reset it (:data:`RESET`) instead.
 - the replies: :func:`fixed_reply`, :class:`Answering` (changed while the server runs),
   :func:`sample_reply` (the vendor's samples), :func:`reset_first`;
-- :class:`Valve`: a path to the simulator whose answers the test lets through;
+- :class:`Valve`: a path to the simulator whose answers the test lets through, counting
+  the requests that reached it;
 - :class:`FaultServer`: an asyncio server running a test's handler per connection, for
   the tests that drive the session from the event loop.
 """
@@ -281,10 +282,14 @@ class Valve:
     test lets through: while :meth:`shut`, what the server sends waits (nothing is lost,
     nothing reordered); :meth:`open` sends it on. What the client sends always goes
     through. A reply is then in flight for exactly as long as the test says, whatever
-    the load of the machine (a delay set on the simulator is a race with the test)."""
+    the load of the machine (a delay set on the simulator is a race with the test).
+    :attr:`requests` counts the CR-terminated lines that went through to the server:
+    what the controller was asked, counted at its side."""
 
     def __init__(self, host: str, port: int) -> None:
         self.host, self.port_to = host, port
+        self.requests = 0
+        self._counting = threading.Lock()
         self._open = threading.Event()
         self._open.set()
         self._ends: list[socket.socket] = []
@@ -310,6 +315,9 @@ class Valve:
                 if held:
                     self._open.wait()
                 sink.sendall(data)
+                if not held:
+                    with self._counting:
+                        self.requests += data.count(b"\r")
         for end in (sink, source):
             with contextlib.suppress(OSError):
                 end.shutdown(socket.SHUT_RDWR)
