@@ -360,7 +360,7 @@ async def test_a_long_label_is_cut_wherever_the_console_shows_it(
         await until(
             pilot, lambda: app.main_screen.panes.completions.has_class("-visible"), "the candidates"
         )
-        listed = str(app.main_screen.panes.completions.content)
+        listed = str(app.main_screen.panes.completions.render())
         assert "cell3" in listed and 0 < listed.count(MARK) <= LABEL_WIDTH
         await pilot.press("c", "e", "l", "l", "3")
         await pilot.press("enter")
