@@ -115,7 +115,7 @@ CELL_SCENES = {
             "@robotB watch I 10 parts",
             "@robotB put I 10 7",
         ],
-        ["f6", "t", "shift+f6", "down", "down", "T", "f6"],
+        ["f6", "t", "down", "down", "T", "f6"],  # t leaves the table the keys
     ),
 }
 

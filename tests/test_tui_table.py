@@ -324,7 +324,7 @@ async def test_trend_view_of_a_moving_value(tmp_path: Path) -> None:
         await watch(pilot, "watch I 0 counter", 1)
         await pilot.press("f6", "t")
         view = app.query_one(TrendView)
-        assert view.display and app.focused is view
+        assert view.display and app.focused is app.main_screen.panes.table  # t, T, d go on
         assert not app.main_screen.panes.frame_log.display
         var = next(iter(app.main_screen.members.rows))
 
@@ -360,6 +360,8 @@ async def test_trend_view_of_a_moving_value(tmp_path: Path) -> None:
         assert all(line[:blank].isspace() for line in lines)
         assert any(not line[-1].isspace() for line in lines)  # the newest slice drawn
         assert "Trend I0" in str(view.border_title)
+        await pilot.press("f6")  # the view's own keys
+        assert app.focused is view
         await pilot.press("w")
         await until(pilot, lambda: "1 min" in figures(), "the 1 min window")
         await pilot.press("w", "w")

@@ -357,6 +357,8 @@ class ConsoleScreen(Screen[None]):
             return self.line_running
         if action == "next_target":
             return self.cell_mode
+        if action == "close_view":  # Esc on the table: else it leaves the table
+            return self.panes.view_open
         if action == "toggle_polling":
             return self.polling_paused == (parameters == ("resume",))
         if action == "toggle_scroll":
@@ -403,6 +405,9 @@ class ConsoleScreen(Screen[None]):
 
     def action_focus_command_line(self) -> None:
         focus_now(self.panes.command_line)
+
+    def action_close_view(self) -> None:
+        row_keys.close_views(self.panes)
 
     def action_toggle_polling(self, _shown: str = "") -> None:
         from ..commands.language import Simple, Step

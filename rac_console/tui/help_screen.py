@@ -141,7 +141,7 @@ def console_key_groups(app_class: type[App[int]], cell: bool = False) -> list[Ke
         (f"filter line ({row_filter} in the table or the frame log)", _pairs(FilterLine)),
         (f"I/O grid ({grid}, then {pane})", _pairs(IoPanel)),
         (f"frame log ({pane})", _pairs(FrameLog)),
-        (f"trend view ({trend} on a row)", _pairs(TrendView)),
+        (f"trend view ({trend} on a row, then {pane})", _pairs(TrendView)),
         ("anywhere", [*anywhere[:1], palette, *anywhere[1:]]),
     ]
 

@@ -237,6 +237,16 @@ WATCH_TABLE: list[BindingType] = [
         tooltip="Trend the next field (X, Y, Z…) of a position row",
         id="row-field",
     ),
+    # Esc backs out a step at a time: the view opened on a row (shown while one is, see
+    # the console's check_action), then to the command line.
+    Binding(
+        "escape",
+        "screen.close_view",
+        "Close view",
+        tooltip="Close the detail or the trend (the table keeps the keys); again: to the "
+        "command line",
+        id="row-close-view",
+    ),
     Binding("escape", "screen.focus_command_line", "Command line", id="row-leave"),
     *pane_bindings("row"),
 ]

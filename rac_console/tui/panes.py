@@ -151,6 +151,11 @@ class Panes:
             screen.mount(self.hint, after=area),
         ]
 
+    @property
+    def view_open(self) -> bool:
+        """A view opened on a row (the detail, the trend) is in the frame log's place."""
+        return self.row_detail.is_open or self.trend_view.has_class("-open")
+
     def in_focus_order(self) -> list[Widget]:
         """The panes F6 goes through, in order: the ones shown."""
         shown: list[Widget] = [self.command_line, self.table]

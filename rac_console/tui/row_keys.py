@@ -1,6 +1,10 @@
 """What the console does with the keys on a row: a put made on the command line, the
 trend view and the detail in the frame log's place, and what goes with unwatched rows.
 
+The trend and the detail are opened from the table and leave it the focus, so the row
+keys go on working (``↓ t`` the next row's trend, ``T`` an overlay, ``d``); Esc on the
+table closes the one open, and Esc again goes to the command line.
+
 Functions over the panes they touch, called by the console screen's handlers. A line
 put on the command line is never sent without the user's own Enter; what reaches the
 controller goes through the screen's ``submit_line``, the path of a typed line.
@@ -60,6 +64,20 @@ def close_detail(panes: Panes) -> None:
     """The frame log again, in the detail's place."""
     panes.row_detail.remove_class("-open")
     panes.frame_log.remove_class("-under-detail")
+    views_changed(panes)
+
+
+def close_views(panes: Panes) -> None:
+    """Esc on the table: the detail or the trend closes, the table keeps the focus."""
+    if panes.row_detail.is_open:
+        close_detail(panes)
+    if panes.trend_view.has_class("-open"):
+        close_trend(panes)
+
+
+def views_changed(panes: Panes) -> None:
+    """The footer says what Esc does now (closes a view, or leaves the table)."""
+    panes.table.refresh_bindings()
 
 
 def open_detail(panes: Panes) -> None:
@@ -70,11 +88,12 @@ def open_detail(panes: Panes) -> None:
     panes.row_detail.add_class("-open")
     panes.frame_log.add_class("-under-detail")
     panes.detail_follows_cursor()
+    views_changed(panes)
 
 
-def open_trend(panes: Panes, row: RowView, target: str = "", focus: bool = True) -> None:
-    """``t`` on a row: its trend in the frame log's place (again: closed); focused
-    unless ``focus`` is False (``T``: the table keeps it, for the next row's ``T``)."""
+def open_trend(panes: Panes, row: RowView, target: str = "") -> None:
+    """``t`` on a row: its trend in the frame log's place (again: closed); the table
+    keeps the focus, for the next row's ``t``, ``T`` or ``d`` (F6 reaches the view)."""
     view = panes.trend_view
     if view.has_class("-open") and view.var == row.var and view.target == target:
         close_trend(panes)
@@ -85,8 +104,7 @@ def open_trend(panes: Panes, row: RowView, target: str = "", focus: bool = True)
     view.show_row(row.var, terminal_safe(row.label), field, target)
     view.add_class("-open")
     panes.frame_log.add_class("-under-trend")
-    if focus:
-        view.focus()
+    views_changed(panes)
 
 
 def overlay_trend(panes: Panes, row: RowView, target: str) -> str | None:
@@ -95,7 +113,7 @@ def overlay_trend(panes: Panes, row: RowView, target: str) -> str | None:
     to say when it is in the trend already."""
     view = panes.trend_view
     if not view.has_class("-open"):
-        open_trend(panes, row, target, focus=False)  # the next row's T, from the table
+        open_trend(panes, row, target)
         return None
     field = panes.table.field_of((target, row.var))
     if not view.add_row(row.var, terminal_safe(row.label), field, target):
@@ -110,6 +128,7 @@ def close_trend(panes: Panes) -> None:
     panes.frame_log.remove_class("-under-trend")
     if had_focus:
         focus_now(panes.table)
+    views_changed(panes)
 
 
 def cycle_trend_field(panes: Panes, target: str, var: VarRef) -> None:

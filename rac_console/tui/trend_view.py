@@ -32,6 +32,8 @@ if TYPE_CHECKING:
 
 #: The windows `w` steps through, in seconds (the store reaches back 5 minutes).
 WINDOWS = (10.0, 60.0, 300.0)
+#: The view's own keys are reached by F6 (``t`` leaves the focus on the table).
+SUBTITLE = "Esc closes · F6 here: w window"
 
 
 def window_name(seconds: float) -> str:
@@ -167,6 +169,9 @@ class TrendView(Vertical, can_focus=True):
     def field(self, field: int) -> None:
         if self.fields:
             self.fields[0] = field
+
+    def on_mount(self) -> None:
+        self.border_subtitle = SUBTITLE
 
     def compose(self) -> ComposeResult:
         yield self.stats
