@@ -23,7 +23,7 @@ if TYPE_CHECKING:
     from ..engine.events import RowView
 
 EMPTY_TEXT = Text("No rows: watch P 0 adds one; d on a row shows it here", style="dim")
-SUBTITLE = "d closes · ↑↓ in the table: another row"
+SUBTITLE = "d or Esc closes · ↑↓ in the table: another row"
 
 
 class RowDetail(Static):
