@@ -19,6 +19,7 @@ from typing import Any
 
 import pytest
 
+from rac_console.serve.early_keys import LOST_KEYS_ID
 from tests.support.drivers import Screen, profile
 from tests.support.serving import DEADLINE, Served, sim_value, start_serve, start_sim, until
 
@@ -64,6 +65,9 @@ socket.onerror = () => { window.result = "error"; };
 socket.onclose = (e) => { if (window.result === "pending") window.result = "closed " + e.code; };
 </script></body></html>"""
 
+
+#: Whether the page's focus is in its terminal (xterm.js's input).
+TERMINAL_FOCUSED = "document.activeElement?.classList.contains('xterm-helper-textarea')"
 
 #: Opens a socket from the page it runs in: "open" or "error".
 OPEN_SOCKET = """(url) => new Promise((resolve) => {
@@ -118,7 +122,8 @@ def open_console(context: Any, served: Served) -> ServedPage:
     page.goto(served.url, wait_until="domcontentloaded", timeout=DEADLINE * 1000)
     console = ServedPage(page)
     console.until("rac-console")
-    page.focus(".xterm-helper-textarea")  # the keys go to xterm, no click on a pane
+    # The terminal took the focus when it was made: the keys go to it, no click needed.
+    assert page.evaluate(TERMINAL_FOCUSED), "the terminal does not have the focus"
     return console
 
 
@@ -229,6 +234,36 @@ def test_with_allow_writes_a_confirmed_write_lands(env, running, browser, config
     console.page.keyboard.press("y")
     console.until("read back 5")
     assert sim_value(env, sim_port, "I 10") == 5
+
+
+def test_keys_typed_before_the_terminal_exists_reach_the_console_or_are_said_lost(
+    env, running, browser
+):
+    """The page's load is held (its background image not yet answered): the terminal
+    does not exist, nothing has the focus, and keys typed then go to the page. Once it
+    loads, the terminal has the focus, the line typed runs, and the key that could not
+    be kept (Page Down) is said on the page."""
+    served = start_serve(env, running)
+    page = browser.new_context().new_page()
+    page.add_init_script(TEE)
+    held: list[Any] = []
+    page.route("**/images/background.png", lambda route: held.append(route))
+    page.goto(served.url, wait_until="domcontentloaded", timeout=DEADLINE * 1000)
+    end = time.monotonic() + DEADLINE
+    while not held:  # Playwright calls the route's handler while the test waits in it
+        assert time.monotonic() < end, "the page never asked for its background"
+        page.wait_for_timeout(50)
+    assert page.query_selector(".xterm-helper-textarea") is None  # no terminal yet
+    page.keyboard.type("get I 1")
+    page.keyboard.press("PageDown")
+    page.keyboard.press("Enter")
+    assert page.query_selector(".xterm-helper-textarea") is None  # typed before it
+    held[0].continue_()
+    console = ServedPage(page)
+    console.until("I1 = 1")
+    assert page.evaluate(TERMINAL_FOCUSED)
+    lost = page.inner_text(f"#{LOST_KEYS_ID}")
+    assert "1 key typed before the console was ready could not be sent (PageDown)" in lost
 
 
 def test_a_key_planted_in_the_address_does_not_replace_the_one_kept(env, running, browser):

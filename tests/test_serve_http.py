@@ -501,7 +501,11 @@ def test_the_private_parts_relied_on_are_where_they_were() -> None:
         assert variable in template, variable
     for file in ("js/textual.js", "css/xterm.css"):
         assert (Path(made.statics_path) / file).is_file(), file
-    assert len(RELIES_ON) == 11  # a new reliance gets its check here
+    script = (Path(made.statics_path) / "js/textual.js").read_text(encoding="utf-8")
+    for part in ("window.onload=", "xterm-helper-textarea", "new WebSocket("):
+        assert script.count(part) == 1, part  # what early_keys.py's script counts on
+    assert 'this.socket.send(JSON.stringify(["stdin"' in script
+    assert len(RELIES_ON) == 12  # a new reliance gets its check here
 
 
 @pytest.mark.slow

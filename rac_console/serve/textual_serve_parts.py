@@ -32,6 +32,7 @@ from textual_serve.app_service import AppService
 from textual_serve.server import Server
 
 from ..present.served import within_screen
+from .early_keys import EARLY_KEYS_SCRIPT
 
 log = logging.getLogger("rac_console.serve")
 
@@ -52,6 +53,8 @@ RELIES_ON = (
     "textual_serve.server.Server.statics_path, .templates_path",
     "templates/app_index.html: font_size, app_websocket_url, config.static.url, application.name",
     "static/js/textual.js, static/css/xterm.css",
+    "static/js/textual.js: the terminal (its .xterm-helper-textarea) made in window.onload, "
+    "its socket a window.WebSocket sent to as keys come (early_keys.py)",
 )
 
 #: Put in the page before ``</body>``, so it runs before textual.js's ``onload``: the key
@@ -199,7 +202,7 @@ class GuardedServer(Server):
         response = aiohttp_jinja2.render_template("app_index.html", request, context)
         assert response.text is not None and response.text.count("</body>") == 1
         script = KEY_SCRIPT.replace("KEY_START", self.key_start(request))
-        response.text = response.text.replace("</body>", script + "</body>")
+        response.text = response.text.replace("</body>", script + EARLY_KEYS_SCRIPT + "</body>")
         return response
 
     async def static_file(self, request: web.Request) -> web.StreamResponse:
