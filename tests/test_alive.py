@@ -28,6 +28,9 @@ from rac_console.tui.app import OutboxWoke, RacConsoleApp
 
 from .support.drivers import connected, log_text, make_app, results_text, type_line, until
 
+#: Over half a second each (a console under a flood): `pytest -m "not slow"` skips them.
+pytestmark = pytest.mark.slow
+
 BENCHMARKS = Path(__file__).resolve().parent.parent / "benchmarks"
 LOSING = ("--lose-below", "0.005", "--json")
 #: Longer than any wait the console's pacing computes (it puts an update off by at most
@@ -138,7 +141,8 @@ async def test_a_screen_that_missed_every_wake_catches_up_and_says_it_was_behind
         await answered(pilot, app, 50)
         bar = app.main_screen.panes.status_bar
         await until(pilot, lambda: "BEHIND, caught up" in bar.line.plain, "the status line's word")
-        assert "the screen had not shown what the engine published" in log_text(app)
+        said = "the screen had not shown what the engine published for"
+        await until(pilot, lambda: said in newest_log_line(app), "the log's line, newest")
 
     await run_console(tmp_path, steps)
 
@@ -186,7 +190,6 @@ async def test_an_engine_that_died_is_said_in_red_and_answers_every_line_after(
     await run_console(tmp_path, steps)
 
 
-@pytest.mark.slow  # a real terminal for half a minute
 @pytest.mark.skipif(shutil.which("tmux") is None, reason="needs tmux (.ci/run installs it)")
 def test_the_soak_in_a_real_terminal_keeps_drawing_with_short_timers_lost(tmp_path: Path) -> None:
     """The hour's soak (benchmarks/console_soak.py), shortened: the real console in tmux

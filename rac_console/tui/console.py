@@ -166,9 +166,10 @@ class ConsoleScreen(Screen[None]):
         from ..engine.events import Alert
         from ..present.status import NOTICE_SECONDS, caught_up_alert, caught_up_notice
 
-        self.panes.frame_log.add(Alert(caught_up_alert(seconds), local_failure=False))
         self.panes.status_bar.say(caught_up_notice(seconds), NOTICE_SECONDS)
-        self.pacing.catch_up()
+        self.pacing.catch_up()  # the log's line after what was caught up: the newest
+        self.panes.frame_log.add(Alert(caught_up_alert(seconds), local_failure=False))
+        self.flush_log()
         self.pacing.clock_needed()
 
     def engine_stopped(self, name: str) -> None:
