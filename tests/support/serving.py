@@ -7,7 +7,8 @@ handshakes over a socket of the test's own, every read under a deadline.
 - :func:`request`: one HTTP/1.1 request, exactly the headers given (Host included);
 - :func:`handshake`: a WebSocket opening handshake; :class:`Handshake` keeps the socket
   so that an accepted session stays open until closed;
-- :func:`sim_value`: a variable as ``rac-console get --json`` reads it from outside.
+- :func:`sim_value`: a variable as ``rac-console get --json`` reads it from outside;
+- :func:`open_console`: the link spent and a session's socket opened, as a browser does.
 """
 
 from __future__ import annotations
@@ -339,6 +340,20 @@ def spend_link(served: Served) -> Login:
     location = answer.header("location") or ""
     assert location.startswith("/#key="), location
     return Login(cookie_of(answer, served.cookie_name)[0], location.partition("#key=")[2])
+
+
+def open_console(served: Served, width: int = 120, height: int = 40) -> Console:
+    """The link spent as a browser would, and the session's socket opened at that size."""
+    login = spend_link(served)
+    headers = {
+        "Host": served.host,
+        "Origin": served.origin,
+        "Cookie": f"{served.cookie_name}={login.cookie}",
+    }
+    console = Console(served.port, f"{login.socket}?width={width}&height={height}", headers)
+    assert console.status == 101, console.made.answer
+    console.send("resize", {"width": width, "height": height})  # as the page does once open
+    return console
 
 
 def consoles_of(server_pid: int) -> list[int]:
