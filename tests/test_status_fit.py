@@ -96,6 +96,25 @@ def test_a_long_label_never_hides_the_target_writes_or_connection(width: int) ->
         assert "cycle 7 ms/0.5 s · 16 polls/s · 120 frames/s" in plain
 
 
+SIMULATED = replace(
+    BASE,
+    target="SIMULATOR (built-in)",
+    is_simulator=True,
+    host=None,
+    profile=None,
+    label=None,
+    writes="open",
+)
+
+
+@pytest.mark.parametrize("width", [38, 40, 50])
+def test_on_a_small_screen_the_simulator_says_it_is_one_and_connected_whole(width: int) -> None:
+    """At 40 columns the line held ``SIMULATOR (built-in)  writes open ·`` and was cut
+    there: the connection went, and a separator was left hanging."""
+    plain = assert_whole(status_text(SIMULATED, None, 0.0, width=width), width)
+    assert "SIMULATOR" in plain and "writes open" in plain and "connected" in plain
+
+
 @pytest.mark.parametrize("width", [60, 80, 120, 200])
 def test_a_retry_keeps_its_countdown(width: int) -> None:
     status = replace(BASE, connection="lost", retry_at=time.monotonic() + 3.0, rtt=None)

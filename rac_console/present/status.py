@@ -168,9 +168,11 @@ def _fields(
         target_style = SIMULATOR_STYLE
     else:
         target_style = LIVE_STYLE
-    fields.append(
-        _badge(terminal_safe(status.target), target_style, essential=True, droppable=False)
-    )
+    target = terminal_safe(status.target)
+    # On a small screen the simulator is still named one, in a word.
+    short = target.removesuffix(" (built-in)")
+    forms = [Text(f" {name} ", style=target_style) for name in dict.fromkeys((target, short))]
+    fields.append(_Field(forms, True, True, essential=True, droppable=False))
     # The writes mode changes what a command does: never off a narrow screen.
     if status.read_only:
         fields.append(_badge("READ-ONLY", READ_ONLY_STYLE, essential=True, droppable=False))
