@@ -13,6 +13,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
+from ..commands.config_keys import withheld_notice
 from ..commands.plant import (
     MetricsAddress,
     MqttAddress,
@@ -48,6 +49,8 @@ def _plant_options(args: argparse.Namespace, notices: list[str]) -> dict[str, An
     from ..engine.config import load_config
 
     config = load_config()
+    if (withheld := withheld_notice(config.withheld)) is not None:  # a served console's
+        notices.append(withheld)
     given = getattr(args, "mqtt", None)
     cell_publish = getattr(args, "cell_publish", None)
     address: MqttAddress | None = None

@@ -134,6 +134,16 @@ def _target_settles(args: argparse.Namespace) -> bool:
     return in_cell is not False and (in_cell is True or settle_target(checked))
 
 
+def _withheld() -> str | None:
+    """Which settings of the config file the sessions do not read (they reach the
+    network or the files), as each session says it; None: none."""
+    from ..commands.config_keys import withheld_notice
+    from ..engine.config import load_config
+    from ..engine.where import Where
+
+    return withheld_notice(load_config(where=Where.SERVED).withheld)
+
+
 def missing_extra() -> str | None:
     """The module of the extra that cannot be imported, if one cannot."""
     import importlib
@@ -160,6 +170,8 @@ def serve_console(args: argparse.Namespace) -> int:
             file=sys.stderr,
         )
         return 2
+    if (withheld := _withheld()) is not None:  # each session says it too, in its console
+        print(f"rac-console: {withheld}", file=sys.stderr)
     import asyncio
 
     from ..serve.command import session_argv, session_environment

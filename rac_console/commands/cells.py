@@ -20,6 +20,7 @@ from dataclasses import dataclass
 
 from ..protocol import InputError
 from ..protocol.text import terminal_safe
+from .config_keys import CELL_KEYS
 from .names import case_collision, find_name
 
 #: A cell holds at most this many targets (a robot cell has two to six controllers).
@@ -29,7 +30,7 @@ MOST_WATCHED = 4096
 #: ``--cell demo`` with no [cell.demo] in the config: simulators playing a handshake.
 DEMO_CELL = "demo"
 _NAME = re.compile(r"[A-Za-z0-9_][A-Za-z0-9_.:-]*", re.ASCII)
-_CELL_KEYS = ("targets", "watch", "publish")
+_CELL_KEYS = tuple(CELL_KEYS)  # each with its reach, declared there
 
 
 @dataclass(frozen=True)

@@ -27,6 +27,7 @@ from dataclasses import dataclass, field
 from ..protocol import InputError
 from ..protocol.text import terminal_safe
 from .cells import CellSpec, parse_cells
+from .config_keys import MQTT_KEYS, TARGET_KEYS
 from .names import case_collision, find_name
 from .plant import KEEPALIVE, KEEPALIVE_RANGE, NO_CREDENTIALS, Credentials, publish_setting
 from .policy import (
@@ -43,10 +44,10 @@ DEFAULT_PORT = 5006
 #: ``connect sim`` and the status line's name for the built-in simulator.
 SIMULATOR_NAME = "sim"
 
-_PROFILE_KEYS = ("host", "port", "label", "colour", "color", "writes", "allow", "publish")
+_PROFILE_KEYS = tuple(TARGET_KEYS)  # each with its reach, declared there
 _KEYS_TEXT = "host, port, label, colour (or color), writes, allow, publish"
 _TOP_KEYS = ("target", "settings", "cell", "mqtt")
-_MQTT_KEYS = ("username", "password", "ca_file", "keepalive")
+_MQTT_KEYS = tuple(MQTT_KEYS)
 _NAME = re.compile(r"[A-Za-z0-9_][A-Za-z0-9_-]*", re.ASCII)
 _BARE_KEY = re.compile(r"[A-Za-z0-9_-]+", re.ASCII)
 _COLOUR_NAME = re.compile(r"[A-Za-z][A-Za-z0-9_]*", re.ASCII)

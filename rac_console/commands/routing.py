@@ -18,6 +18,7 @@ from ..protocol import InputError
 from .cells import not_open, split_address
 from .language import Command, Raw, Use, Wait
 from .names import find_name
+from .reach import Reach as Reach  # declared there, for the config file's keys too
 
 
 class Scope(Enum):
@@ -35,15 +36,6 @@ class WriteTrait(Enum):
     NEVER = "never"
     ALWAYS = "always"  # put
     UNLESS_GET = "unless a well-formed GET"  # a raw line, send
-
-
-class Reach(Enum):
-    """What a command reaches besides its target: a console served to a browser runs
-    only those that reach nothing else of the machine serving it."""
-
-    TARGET = "its target only"
-    FILES = "a file on this machine"  # save, load, log, record, transcript
-    NETWORK = "another host"  # connect, publish
 
 
 @dataclass(frozen=True)

@@ -32,7 +32,7 @@ from ..commands.language import (
     is_raw_line,
     split_word,
 )
-from ..commands.routing import Reach, Route, Traits, plan
+from ..commands.routing import Route, Traits, plan
 from ..protocol import KINDS, InputError
 from ..protocol.text import close_match
 from .context import CommandContext, JobContext
@@ -42,6 +42,7 @@ from .events import Feedback, Message
 from .where import AT_A_TERMINAL as AT_A_TERMINAL
 from .where import EVERYWHERE as EVERYWHERE
 from .where import Where as Where
+from .where import reaches
 
 #: (completion text, what it means)
 Option = tuple[str, str]
@@ -156,9 +157,7 @@ class Spec(Generic[C, T]):
     def runs_in(self, where: Where) -> bool:
         """Whether it runs ``where``: a place it declares, and in a served console only
         when it reaches nothing but its target (no file, no other host)."""
-        if where is Where.SERVED and self.traits.reaches is not Reach.TARGET:
-            return False
-        return where in self.where
+        return where in self.where and reaches(where, self.traits.reaches)
 
     def command_of(self, command: object) -> T:
         """``command`` as its handler takes it (TypeError: this entry does not run it)."""
