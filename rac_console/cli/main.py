@@ -141,8 +141,14 @@ def make_cell(args: argparse.Namespace) -> Cell:
     one); InputError when a file named cannot be opened."""
     from ..engine import DEFAULT_INTERVAL, EngineOptions
     from ..engine.cell import Cell, member_name
+    from ..engine.poll_bounds import bounds_for
     from ..engine.where import Where
+    from ..present.served import served
 
+    # A console served to a browser runs only what reaches its targets and nothing
+    # else of this machine (no file, no other host): the specs' Traits.reaches; and it
+    # polls them within serve's bounds.
+    where = Where.REPL if args.command is not None else Where.SERVED if served() else Where.CONSOLE
     options = EngineOptions(
         timeout=args.timeout,
         interval=DEFAULT_INTERVAL if args.interval is None else args.interval,
@@ -151,13 +157,9 @@ def make_cell(args: argparse.Namespace) -> Cell:
         record=args.record,
         transcript=args.transcript,
         log_csv=getattr(args, "log_csv", None),
+        bounds=bounds_for(where),
         **getattr(args, "plant", {}),
     )
-    from ..present.served import served
-
-    # A console served to a browser runs only what reaches its targets and nothing
-    # else of this machine (no file, no other host): the specs' Traits.reaches.
-    where = Where.REPL if args.command is not None else Where.SERVED if served() else Where.CONSOLE
     members = getattr(args, "cell_targets", None) or [(member_name(args.target), args.target)]
     return Cell(members, options=options, where=where)
 

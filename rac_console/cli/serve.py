@@ -11,6 +11,7 @@ from __future__ import annotations
 import argparse
 import sys
 
+from ..engine.poll_bounds import SERVED_MAX_ROWS, SERVED_MIN_INTERVAL
 from .options import port_number, seconds_of, whole_of
 
 SERVE_HELP = "serve the console to a browser, behind a one-time link (pip install rac-console[web])"
@@ -89,6 +90,21 @@ def serve_options(sub: argparse.ArgumentParser) -> None:
         default=1,
         metavar="N",
         help="consoles open at once (default 1); one more gets a page saying so",
+    )
+    server.add_argument(
+        "--min-interval",
+        type=seconds_of(allow_zero=True),
+        default=SERVED_MIN_INTERVAL,
+        metavar="SECONDS",
+        help=f"least time between polls a session may ask for, interval or every "
+        f"(default {SERVED_MIN_INTERVAL:g}; 0: back to back)",
+    )
+    server.add_argument(
+        "--max-rows",
+        type=whole_of(""),
+        default=SERVED_MAX_ROWS,
+        metavar="N",
+        help=f"most rows a session may watch per target (default {SERVED_MAX_ROWS})",
     )
 
 
@@ -179,7 +195,7 @@ def serve_console(args: argparse.Namespace) -> int:
 
     options = ServeOptions(
         argv=session_argv(words, args.allow_writes),
-        environment=session_environment(),
+        environment=session_environment(args.min_interval, args.max_rows),
         bind=args.serve_bind,
         port=args.serve_port,
         max_sessions=args.max_sessions,

@@ -114,7 +114,9 @@ class CommandContext(JobContext, Protocol):
 
     def watch(self, variables: Sequence[VarRef], label: str, every: float | None) -> int:
         """Watch ``variables`` (a label or ``every`` given again updates a row), shown and
-        polled at once; how many were not watched before."""
+        polled at once; how many were not watched before. InputError, nothing changed,
+        past the engine's bounds (a served console's: ``every`` under its floor, more
+        rows than its cap)."""
         ...
 
     def unwatch(self, variables: Sequence[VarRef]) -> list[VarRef]:
@@ -131,7 +133,8 @@ class CommandContext(JobContext, Protocol):
         ...
 
     def set_interval(self, seconds: float) -> None:
-        """Poll every ``seconds`` from now on (the next cycle starts at once)."""
+        """Poll every ``seconds`` from now on (the next cycle starts at once); InputError,
+        nothing changed, under the engine's bounds' floor."""
         ...
 
     def pause_polling(self, paused: bool) -> bool:

@@ -152,6 +152,7 @@ class Engine:
                 self._publisher,
                 self._csv,
                 interval=options.interval,
+                bounds=options.bounds,
                 cycles=options.cycles,
                 publish_status=self.publish_status,
                 cut_cycles=options.cut_cycles,

@@ -152,7 +152,7 @@ class EngineContext:
 
     def watch(self, variables: Sequence[VarRef], label: str, every: float | None) -> int:
         poller, publisher = self._parts.poller, self._parts.publisher
-        added = poller.watch.add(list(variables), label, every)
+        added = poller.add_rows(list(variables), label, every)  # bounded there
         for var in variables:
             publisher.show_row(poller.watch.rows[var])
         poller.see(list(variables))
@@ -172,8 +172,7 @@ class EngineContext:
         return self._parts.poller.interval
 
     def set_interval(self, seconds: float) -> None:
-        self._parts.poller.interval = seconds
-        self._parts.poller.wake()
+        self._parts.poller.set_interval(seconds)  # bounded there
 
     def pause_polling(self, paused: bool) -> bool:
         poller = self._parts.poller

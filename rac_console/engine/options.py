@@ -14,6 +14,7 @@ from typing import TYPE_CHECKING
 from ..commands.plant import NO_CREDENTIALS, Credentials, MqttAddress
 from ..commands.policy import TargetProfile, WritePolicy, Writes
 from ..commands.target import Target
+from .poll_bounds import UNBOUNDED, PollBounds
 
 if TYPE_CHECKING:
     from ..plant.metrics import MetricsBoard
@@ -43,6 +44,8 @@ class EngineOptions:
     credentials: Credentials = NO_CREDENTIALS
     metrics: MetricsBoard | None = None
     plant_name: str | None = None
+    #: How much polling may be asked of the controller (a served console's bounds).
+    bounds: PollBounds = UNBOUNDED
 
 
 _TARGET_WORDS = ("read_only", "policy", "profile", "profiles")

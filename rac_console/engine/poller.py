@@ -17,6 +17,7 @@ from ..session import BadReply, ConnectFailed, Reply, RequestTimeout, TransportE
 from .csvsink import CsvSink
 from .events import Connection, Cycle, Reading
 from .link import Link
+from .poll_bounds import UNBOUNDED, PollBounds
 from .publisher import Publisher
 from .schedule import Schedule
 from .watch import WatchList, WatchRow
@@ -34,6 +35,7 @@ class Poller:
         csv: CsvSink,
         *,
         interval: float,
+        bounds: PollBounds = UNBOUNDED,
         cycles: bool,
         publish_status: Callable[[bool], None],
         cut_cycles: bool = False,
@@ -45,7 +47,9 @@ class Poller:
         first failed exchange (the rest are marked SKIPPED), so a script watching a dead
         controller waits out one timeout a cycle, not one a variable. ``max_cycles``:
         polling pauses after that many cycles (``watch --count N``). ``readings``: each
-        Cycle also carries how each read went (the CLI's lines are made of them)."""
+        Cycle also carries how each read went (the CLI's lines are made of them).
+        ``bounds``: the least interval and the most rows it takes (:meth:`set_interval`,
+        :meth:`add_rows`); it starts at the floor if ``interval`` is under it."""
         self._link = link
         self._cut_cycles = cut_cycles
         self._keep_readings = cycles and readings
@@ -56,7 +60,8 @@ class Poller:
         self.publish_status = publish_status
         self._publisher = publisher
         self.csv = csv
-        self.interval = interval
+        self.bounds = bounds
+        self.interval = bounds.interval_from(interval)
         self.publish_cycles = cycles
         self.watch = WatchList()
         self.paused = False
@@ -80,6 +85,21 @@ class Poller:
         more = {(v.kind.code, v.index) for v in variables} - self.seen
         if more:
             self.seen = self.seen | more
+
+    def set_interval(self, seconds: float) -> None:
+        """Poll every ``seconds`` from now on; InputError under the bounds' floor."""
+        self.bounds.check_period(seconds, "interval")
+        self.interval = seconds
+        self.wake()
+
+    def add_rows(self, variables: list[VarRef], label: str, every: float | None) -> int:
+        """Watch ``variables`` (see :meth:`.watch.WatchList.add`); InputError, with no
+        row added, when ``every`` is under the bounds' floor or the rows pass the cap."""
+        if every is not None:
+            self.bounds.check_period(every, "every")
+        new = len(set(variables) - self.watch.rows.keys())
+        self.bounds.check_rows(len(self.watch.rows), new)
+        return self.watch.add(variables, label, every)
 
     def wake(self) -> None:
         """The watch list, interval, pause or target changed: poll (or retry) now."""

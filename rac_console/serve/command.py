@@ -12,6 +12,7 @@ from __future__ import annotations
 import sys
 from collections.abc import Sequence
 
+from ..engine.poll_bounds import SERVED_MAX_ROWS, SERVED_MIN_INTERVAL, served_environment
 from ..present.served import SERVED_ENV as SERVED_ENV
 from ..present.served import WEB_DRIVER as WEB_DRIVER
 from ..present.served import served as served
@@ -30,7 +31,9 @@ def session_argv(
     return (python or sys.executable, "-P", "-m", "rac_console", *target_words, *read_only)
 
 
-def session_environment() -> dict[str, str]:
+def session_environment(
+    min_interval: float = SERVED_MIN_INTERVAL, max_rows: int = SERVED_MAX_ROWS
+) -> dict[str, str]:
     """What a session's environment adds to the server's (textual-serve adds the
-    driver, the size and the colours)."""
-    return {SERVED_ENV: "1"}
+    driver, the size and the colours): that it is served, and its poll bounds."""
+    return {SERVED_ENV: "1", **served_environment(min_interval, max_rows)}
