@@ -21,7 +21,15 @@ import pytest
 
 from rac_console.serve.early_keys import LOST_KEYS_ID
 from tests.support.drivers import Screen, profile
-from tests.support.serving import DEADLINE, Served, sim_value, start_serve, start_sim, until
+from tests.support.serving import (
+    DEADLINE,
+    Served,
+    consoles_of,
+    sim_value,
+    start_serve,
+    start_sim,
+    until,
+)
 
 pytest.importorskip("textual_serve", reason="needs the extra web")
 playwright_api = pytest.importorskip("playwright.sync_api", reason="needs playwright")
@@ -130,8 +138,8 @@ def open_console(context: Any, served: Served) -> ServedPage:
 class ForeignSite:
     """Another origin on the same host: a page whose script tries the console's socket."""
 
-    def __init__(self, port: int, key: str) -> None:
-        body = FOREIGN_PAGE.replace("PORT", str(port)).replace("KEY", key).encode()
+    def __init__(self, port: int, key: str, page: str = FOREIGN_PAGE) -> None:
+        body = page.replace("PORT", str(port)).replace("KEY", key).encode()
 
         class Handler(http.server.BaseHTTPRequestHandler):
             def do_GET(self) -> None:
@@ -279,3 +287,81 @@ def test_a_key_planted_in_the_address_does_not_replace_the_one_kept(env, running
     console = ServedPage(planted)
     console.until("rac-console", "connected")
     assert planted.evaluate("localStorage.getItem('rac-console-key')") == key
+
+
+#: A page of another port of this host whose button opens the console in a popup (one
+#: click: popups need one). Same site, so the browser sends the console's cookie along,
+#: and the popup is the console's own page: its storage holds the key.
+POPUP_PAGE = """<!DOCTYPE html><html><body>
+<button id="open" onclick="window.popup = window.open('http://127.0.0.1:PORT/', 'console')">
+open</button></body></html>"""
+
+
+def console_sockets(page: Any) -> int:
+    """How many sockets the page opened (TEE counts them)."""
+    return int(page.evaluate("window.__racOpened ?? 0"))
+
+
+def tab(context: Any, url: str) -> ServedPage:
+    """A new tab of ``context`` (whose every page tees its sockets) at ``url``, as typed."""
+    page = context.new_page()
+    page.goto(url, wait_until="domcontentloaded", timeout=DEADLINE * 1000)
+    return ServedPage(page)
+
+
+def closed_with(page: Any) -> str:
+    """What the page's "session ended" box says, once it shows."""
+    page.wait_for_function("document.body.classList.contains('-closed')", timeout=DEADLINE * 1000)
+    return str(page.inner_text(".closed-dialog .message"))
+
+
+def test_a_page_of_another_port_cannot_keep_the_operator_out(env, running, browser):
+    """A service on another port of this host opens the console in a popup while the
+    operator's tab is closed: the popup gets no console (another page opened it, which
+    the browser says), and the operator, opening the console's address again, gets it."""
+    served = start_serve(env, running, "--max-sessions", "1")
+    context = browser.new_context()
+    context.add_init_script(TEE)  # the popup's too
+    operator = tab(context, served.url)
+    operator.until("rac-console", "connected")
+    operator.page.close()
+    until(lambda: consoles_of(served.running.process.pid) == [], "the operator's console ended")
+    foreign = ForeignSite(served.port, "", POPUP_PAGE)
+    try:
+        page = context.new_page()
+        page.goto(f"http://127.0.0.1:{foreign.port}/", timeout=DEADLINE * 1000)
+        with page.expect_popup() as opened:
+            page.click("#open")
+        popup = opened.value
+        popup.wait_for_load_state("domcontentloaded", timeout=DEADLINE * 1000)
+        # The operator types the console's address in a new tab.
+        again = tab(context, served.origin + "/")
+        again.until("rac-console", "connected")
+        assert console_sockets(popup) == 0, popup.content()
+        assert "opened by another page" in popup.inner_text("body")
+        assert len(consoles_of(served.running.process.pid)) == 1
+    finally:
+        foreign.close()
+
+
+def test_the_newest_page_takes_the_console_and_the_older_page_says_so(env, running, browser):
+    """Two tabs of the operator's browser, one slot: the newer tab gets the console, the
+    older one says it was taken by another page, and its reload takes the console back
+    (the other tab then says so). Never two consoles at once."""
+    served = start_serve(env, running, "--max-sessions", "1")
+    server = served.running.process.pid
+    context = browser.new_context()
+    context.add_init_script(TEE)
+    first = tab(context, served.url)
+    first.until("rac-console", "connected")
+    second = tab(context, served.origin + "/")
+    second.until("rac-console", "connected")
+    assert "Taken by another page" in closed_with(first.page)
+    assert len(consoles_of(server)) == 1
+    first.page.reload(wait_until="domcontentloaded", timeout=DEADLINE * 1000)
+    back = ServedPage(first.page)  # a new page: a new screen
+    back.until("rac-console", "connected")
+    back.type_line("get I 1")
+    back.until("I1 = 1")
+    assert "Taken by another page" in closed_with(second.page)
+    assert len(consoles_of(server)) == 1

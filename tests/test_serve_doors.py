@@ -9,12 +9,12 @@ from __future__ import annotations
 
 import socket
 import sys
-import time
 import tomllib
 from pathlib import Path
 
 import pytest
 
+from rac_console.serve.page import TAKEN_CODE, TAKEN_REASON
 from tests.support.serving import (
     DEADLINE,
     Console,
@@ -148,32 +148,27 @@ def test_a_screen_size_no_screen_has_is_brought_within_bounds(env, running) -> N
 
 @pytest.mark.slow
 def test_sessions_never_outnumber_max_sessions(env, running) -> None:
-    """A session's slot comes back once its console has ended, not when its socket
-    closed: opening and closing sockets in a loop never runs two consoles at once."""
+    """Sockets opened in a loop, each taking the slot from the one before (the newest
+    page wins): a console starts only once the one it displaced has ended, so never two
+    run at once, and the newest socket gets the console."""
     served = start_serve(env, running)
     login = spend_link(served)
     server = served.running.process.pid
-
-    def when_free() -> Handshake:
-        """A session, as soon as the server lets one in (503 until then)."""
-        end = time.monotonic() + DEADLINE
-        while True:
-            made = Handshake(served.port, own(served, login.cookie), path=login.socket)
-            if made.status == 101:
-                return made
-            made.close()
-            assert made.status == 503
-            assert time.monotonic() < end, "the slot never came back"
-
-    for _ in range(3):
-        first = when_free()
-        until(lambda: len(consoles_of(server)) == 1, "the session's console")
-        first.close()
-        again = when_free()
-        try:
+    path = f"{login.socket}?width=100&height=30"
+    sockets = []
+    try:
+        for _ in range(5):
+            sockets.append(Console(served.port, path, own(served, login.cookie)))
+            assert sockets[-1].status == 101
             assert len(consoles_of(server)) <= 1
-        finally:
-            again.close()
+        for older in sockets[:-1]:
+            assert older.close_frame() == (TAKEN_CODE, TAKEN_REASON)
+            assert len(consoles_of(server)) <= 1
+        sockets[-1].until("connected")
+        assert len(consoles_of(server)) == 1
+    finally:
+        for made in sockets:
+            made.close()
 
 
 @pytest.mark.slow

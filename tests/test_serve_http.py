@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import importlib.metadata
 import inspect
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -17,10 +18,13 @@ import pytest
 from rac_console.serve import guard as guard_module
 from rac_console.serve.command import SERVED_ENV, WEB_DRIVER, served, session_argv
 from rac_console.serve.guard import Guard, Login, Refusal, Slots, split_host
+from rac_console.serve.page import INLINE_HANDLER, TAKEN_CODE, TAKEN_REASON
 from tests.support.drivers import cli, one_error_line, profile
 from tests.support.serving import (
+    Console,
     Handshake,
     Served,
+    consoles_of,
     cookie_of,
     handshake,
     request,
@@ -154,44 +158,44 @@ def test_the_socket_takes_only_its_own_origin(env, running) -> None:
 
 
 @pytest.mark.slow
-def test_one_session_too_many_gets_a_page_saying_so(env, running) -> None:
+def test_one_session_more_takes_the_slot_and_the_older_is_told(env, running) -> None:
+    """The newest page holding the key takes the slot: the older session's socket is
+    closed saying so (its page shows it), its console ends before the new one starts."""
     served = start_serve(env, running)
     login = spend_link(served)
-    cookie = login.cookie
-    own = with_cookie(served, cookie, Origin=served.origin)
-    first = Handshake(served.port, own, path=login.socket)
+    own = with_cookie(served, login.cookie, Origin=served.origin)
+    server = served.running.process.pid
+    first = Console(served.port, f"{login.socket}?width=100&height=30", own)
+    second: Console | None = None
     try:
-        assert first.status == 101
-        assert handshake(served.port, own, login.socket) == 503
-        busy = request(served.port, "/", with_cookie(served, cookie))
-        assert busy.status == 503
-        assert "already open in 1 session" in busy.text
-        assert busy.header("retry-after") == "5"
+        first.until("connected")
+        assert request(served.port, "/", with_cookie(served, login.cookie)).status == 200
+        second = Console(served.port, f"{login.socket}?width=100&height=30", own)
+        assert second.status == 101
+        assert first.close_frame() == (TAKEN_CODE, TAKEN_REASON)
+        second.until("connected")
+        assert len(consoles_of(server)) == 1
     finally:
         first.close()
-    # The slot comes back when the session's console has gone.
-    until(
-        lambda: request(served.port, "/", with_cookie(served, cookie)).status == 200,
-        "the slot given back",
-    )
-    second = Handshake(served.port, own, path=login.socket)
-    second.close()
-    assert second.status == 101
+        if second is not None:
+            second.close()
 
 
 @pytest.mark.slow
 def test_max_sessions_lets_that_many_in(env, running) -> None:
     served = start_serve(env, running, "--max-sessions", "2")
     login = spend_link(served)
-    cookie = login.cookie
-    own = with_cookie(served, cookie, Origin=served.origin)
-    sessions = [
-        Handshake(served.port, own, path=login.socket),
-        Handshake(served.port, own, path=login.socket),
-    ]
+    own = with_cookie(served, login.cookie, Origin=served.origin)
+    sessions = [Console(served.port, f"{login.socket}?width=100&height=30", own) for _ in "ab"]
     try:
-        assert [s.status for s in sessions] == [101, 101]
-        assert handshake(served.port, own, login.socket) == 503
+        for session in sessions:
+            session.until("connected")
+        sessions.append(Console(served.port, f"{login.socket}?width=100&height=30", own))
+        assert sessions[0].close_frame() == (TAKEN_CODE, TAKEN_REASON)  # the oldest
+        sessions[2].until("connected")
+        sessions[1].type_line("get I 1")
+        sessions[1].until("I1 = 1")  # the one in between kept its console
+        assert len(consoles_of(served.running.process.pid)) == 2
     finally:
         for session in sessions:
             session.close()
@@ -417,12 +421,25 @@ def test_two_guards_have_two_tokens() -> None:
     assert Guard(1, ["a"]).token != Guard(1, ["a"]).token
 
 
-def test_slots() -> None:
+def test_slots_go_to_the_newest_holders_and_consoles_never_outnumber_them() -> None:
     slots = Slots(2)
-    assert slots.take() and slots.take() and not slots.take()
-    assert slots.full
-    slots.give_back()
-    assert not slots.full and slots.take()
+    assert slots.claim("a") == [] and slots.claim("b") == []
+    assert slots.may_start("a") and slots.may_start("b")
+    slots.started()
+    slots.started()
+    assert slots.claim("c") == ["a"]  # the oldest loses its slot
+    assert not slots.holds("a") and slots.holds("c")
+    assert not slots.may_start("c")  # a's console still runs
+    slots.leave("a", started=True)
+    assert slots.may_start("c")
+    slots.started()
+    assert slots.claim("d") == ["b"]
+    assert slots.claim("e") == ["c"]
+    assert not slots.may_start("d") and not slots.may_start("e")  # b's and c's end first
+    slots.leave("b", started=True)
+    assert slots.may_start("d") and slots.may_start("e")
+    slots.started()
+    assert not slots.may_start("e")  # one console still ending: c's
     with pytest.raises(ValueError):
         Slots(0)
 
@@ -499,13 +516,19 @@ def test_the_private_parts_relied_on_are_where_they_were() -> None:
     template = (Path(made.templates_path) / "app_index.html").read_text(encoding="utf-8")
     for variable in ("font_size", "app_websocket_url", "config.static.url", "application.name"):
         assert variable in template, variable
+    assert INLINE_HANDLER in template and template.count("<head>") == 1  # page.dress
+    assert re.findall(r"<(?:script|style)\b[^>]*>", template) == [
+        '<script src="{{ config.static.url }}js/textual.js">',
+        "<style>",
+        "<script>",
+    ]
     for file in ("js/textual.js", "css/xterm.css"):
         assert (Path(made.statics_path) / file).is_file(), file
     script = (Path(made.statics_path) / "js/textual.js").read_text(encoding="utf-8")
     for part in ("window.onload=", "xterm-helper-textarea", "new WebSocket("):
         assert script.count(part) == 1, part  # what early_keys.py's script counts on
     assert 'this.socket.send(JSON.stringify(["stdin"' in script
-    assert len(RELIES_ON) == 12  # a new reliance gets its check here
+    assert len(RELIES_ON) == 13  # a new reliance gets its check here
 
 
 @pytest.mark.slow

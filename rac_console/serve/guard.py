@@ -16,6 +16,12 @@ Every request is judged in this order, and the first refusal answers it:
 3. **The cookie** (403): every other request, pages, files and the WebSocket, needs
    the cookie (HttpOnly, SameSite=Strict). 403, not 401: a cookie is no HTTP
    authentication scheme, there is no challenge to send; the page says what to do.
+   **The page's opener** (403, the page only): a page another site sent the browser to
+   (``Sec-Fetch-Site: same-site`` or ``cross-site``: a popup or a link of a service on
+   another port of this host, which the cookie follows) is not the operator's: it gets
+   a page saying so, never the console. The operator's own ways in (the link, the
+   address typed, a bookmark, a reload of the console's page) say ``none`` or
+   ``same-origin``; a browser that sends no such header is let in (rule 6 then).
 4. **Origin** (403, the WebSocket only): exactly this server's own origin
    (``http://`` + the Host just checked). No Origin, or ``null``, is refused as well.
 5. **The key** (403, the WebSocket only): the socket's address is ``/ws/KEY``, the
@@ -23,7 +29,11 @@ Every request is judged in this order, and the first refusal answers it:
    so another web service on this machine gets the cookie too, and a program can send
    any Origin: the key is what it lacks. The page keeps it in its own origin's storage,
    which no other port's page can read.
-6. **A session slot** (503, with a page): at most ``max_sessions`` consoles at once.
+6. **A session slot**: at most ``max_sessions`` sessions hold one, and the newest page
+   holding the key takes one: past the limit the oldest session is closed and its page
+   says it was taken by another page, so a reload always takes the console back. Its
+   console is ended before the new one starts: never more than ``max_sessions``
+   consoles at once.
 
 Secrets are compared as bytes in constant time; one that is not ASCII is simply wrong.
 """
@@ -33,8 +43,8 @@ from __future__ import annotations
 import hmac
 import ipaddress
 import secrets
-from collections.abc import Iterable
-from dataclasses import dataclass
+from collections.abc import Hashable, Iterable
+from dataclasses import dataclass, field
 
 #: The statuses, as the README gives them.
 MISDIRECTED = 421
@@ -53,10 +63,12 @@ WILDCARDS = frozenset({"0.0.0.0", "::", ""})
 
 @dataclass(frozen=True)
 class Refusal:
-    """A request turned away: its status and one sentence for the page."""
+    """A request turned away: its status, one sentence for the page, and its kind (what
+    serve's standard error counts refusals by: a reason may quote the request)."""
 
     status: int
     reason: str
+    kind: str = field(default="", compare=False)
 
 
 def new_secret() -> str:
@@ -82,6 +94,8 @@ def split_host(header: str) -> tuple[str, int | None] | None:
         name, rest = text[1:end], text[end + 1 :]
         if rest and not rest.startswith(":"):
             return None
+        if not is_ipv6(name):  # brackets hold an IPv6 address, nothing else ([127.0.0.1])
+            return None
         port_text = rest[1:] if rest else None
     else:
         name, colon, port_text_or_empty = text.rpartition(":")
@@ -99,6 +113,13 @@ def split_host(header: str) -> tuple[str, int | None] | None:
     if not name:
         return None
     return name, None if port_text is None else int(port_text)
+
+
+def is_ipv6(text: str) -> bool:
+    try:
+        return isinstance(ipaddress.ip_address(text), ipaddress.IPv6Address)
+    except ValueError:
+        return False
 
 
 def plain_address(address: str) -> str:
@@ -125,26 +146,41 @@ def url_host(name: str) -> str:
 
 
 class Slots:
-    """How many sessions run, and how many may."""
+    """Who holds a slot, oldest first, and how many consoles run (a console still ending
+    counts). The newest holder wins: one more than ``most`` displaces the oldest, so the
+    operator's reload always takes the console back from whatever page held it; a holder
+    starts its console only once fewer than ``most`` run."""
 
     def __init__(self, most: int) -> None:
         if most < 1:
             raise ValueError("at least one session")
         self.most = most
-        self.taken = 0
+        self.consoles = 0
+        self._holders: list[Hashable] = []
 
-    @property
-    def full(self) -> bool:
-        return self.taken >= self.most
+    def claim(self, holder: Hashable) -> list[Hashable]:
+        """``holder`` holds a slot now; the holders it displaced (oldest first)."""
+        self._holders.append(holder)
+        displaced = self._holders[: -self.most]
+        del self._holders[: -self.most]
+        return displaced
 
-    def take(self) -> bool:
-        if self.full:
-            return False
-        self.taken += 1
-        return True
+    def holds(self, holder: Hashable) -> bool:
+        return holder in self._holders
 
-    def give_back(self) -> None:
-        self.taken = max(0, self.taken - 1)
+    def may_start(self, holder: Hashable) -> bool:
+        """``holder`` still holds its slot and a console may start for it."""
+        return self.holds(holder) and self.consoles < self.most
+
+    def started(self) -> None:
+        self.consoles += 1
+
+    def leave(self, holder: Hashable, started: bool) -> None:
+        """``holder`` is gone, its console (if ``started``) ended."""
+        if holder in self._holders:
+            self._holders.remove(holder)
+        if started:
+            self.consoles = max(0, self.consoles - 1)
 
 
 @dataclass(frozen=True)
@@ -188,10 +224,10 @@ class Guard:
         """None when ``header`` names this server (see the module's docstring)."""
         parts = split_host(header or "")
         if parts is None:
-            return Refusal(MISDIRECTED, "this request has no Host this server answers to")
+            return Refusal(MISDIRECTED, "this request has no Host this server answers to", "host")
         name, port = parts
         if (port if port is not None else 80) != self.port:
-            return Refusal(MISDIRECTED, f"this server listens on port {self.port}")
+            return Refusal(MISDIRECTED, f"this server listens on port {self.port}", "host")
         allowed = set(self.names)
         if local_address:
             local = plain_address(local_address)
@@ -203,13 +239,16 @@ class Guard:
                 MISDIRECTED,
                 f"{name!r} is not a name of this server: open the address rac-console "
                 "serve printed",
+                "host",
             )
         return None
 
     def check_origin(self, origin: str | None, host_header: str) -> Refusal | None:
         """None when ``origin`` is this server's own: ``http://`` and the Host the
         request came with (checked before)."""
-        refused = Refusal(FORBIDDEN, "the console's socket is opened only by its own page")
+        refused = Refusal(
+            FORBIDDEN, "the console's socket is opened only by its own page", "origin"
+        )
         if not origin or not origin.lower().startswith("http://"):  # "null" too
             return refused
         theirs = split_host(origin[len("http://") :])
@@ -240,6 +279,7 @@ class Guard:
                 FORBIDDEN,
                 "this link is not valid (each link opens once): start rac-console serve "
                 "again for a new one",
+                "token",
             )
         self._token_spent = True
         login = Login(new_secret(), new_secret())
@@ -262,6 +302,7 @@ class Guard:
             FORBIDDEN,
             "the console's socket opens from its own page, with the key the link gave "
             "it: open the link rac-console serve printed",
+            "key",
         )
 
     def check_cookie(self, value: str | None) -> Refusal | None:
@@ -270,4 +311,19 @@ class Guard:
         return Refusal(
             FORBIDDEN,
             "open the link rac-console serve printed (with its token) in this browser first",
+            "cookie",
+        )
+
+    def check_opener(self, fetch_site: str | None) -> Refusal | None:
+        """None when the console's page was not opened by another site's page (the
+        browser's ``Sec-Fetch-Site``; see the module's docstring)."""
+        if (fetch_site or "").strip().lower() not in ("same-site", "cross-site"):
+            return None
+        return Refusal(
+            FORBIDDEN,
+            "this page was opened by another page (a popup or a link of a web service "
+            "on another port or another host), and the console does not open there: "
+            "type its address in the address bar or use a bookmark (a reload of this "
+            "tab keeps the other page as its opener)",
+            "opener",
         )

@@ -2,7 +2,8 @@
 textual-serve's routes, the headers every answer carries, and the URL printed once.
 
 The decisions are :mod:`.guard`'s; what is borrowed from textual-serve is
-:mod:`.textual_serve_parts`'s; this module only wires them to aiohttp.
+:mod:`.textual_serve_parts`'s; what it says on its standard error goes through
+:mod:`.said`; this module only wires them to aiohttp.
 """
 
 from __future__ import annotations
@@ -16,37 +17,37 @@ import sys
 from collections.abc import Awaitable, Callable, Sequence
 from dataclasses import dataclass, field
 
-from aiohttp import web
+from aiohttp import web, web_response
 from aiohttp.typedefs import Middleware
 
-from ..protocol.text import terminal_safe
 from .guard import BUSY, WILDCARDS, Guard, Refusal, is_loopback, url_host
+from .page import DOWNLOAD_POLICY, policy
+from .said import Said, listen
+from .seats import Seats
 from .textual_serve_parts import GuardedServer
 
 #: The port ``serve`` listens on unless told another.
 DEFAULT_PORT = 8006
 
+#: What the ``Server`` header says: no version of aiohttp or Python (aiohttp's default
+#: names both; its own answers to requests it cannot read use it too).
+SERVER_NAME = "rac-console"
+
 #: Sent with every answer: no address (the token's, once) leaves in a Referer; nothing
-#: is loaded from or sent to anywhere else (textual-serve's page asks Google for a font:
-#: refused here, the console falls back to a local monospace); no page may frame it (a
-#: frame would get the cookie and the socket, and the keys of whoever clicks in it).
+#: runs inline nor is loaded from anywhere else (:func:`.page.policy`: the page's own
+#: answer adds its nonce); no page may frame it (a frame would get the cookie and the
+#: socket, and the keys of whoever clicks in it).
 HEADERS = {
     "Referrer-Policy": "no-referrer",
     "X-Content-Type-Options": "nosniff",
     "X-Frame-Options": "DENY",
     "Cache-Control": "no-store",
-    "Content-Security-Policy": (
-        "default-src 'self'; script-src 'self' 'unsafe-inline'; "
-        "style-src 'self' 'unsafe-inline'; img-src 'self' data:; font-src 'self' data:; "
-        "connect-src 'self'; base-uri 'none'; form-action 'none'; frame-ancestors 'none'"
-    ),
+    "Content-Security-Policy": policy(),
+    "Server": SERVER_NAME,
 }
 
 #: How long an idle kept-alive connection stays open (aiohttp's default is an hour).
 KEEPALIVE_SECONDS = 15.0
-
-#: How often the "already open" page asks again.
-RETRY_SECONDS = 5
 
 
 @dataclass(frozen=True)
@@ -72,40 +73,29 @@ def page(status: int, title: str, text: str, extra_head: str = "") -> web.Respon
 
 
 def refusal_page(refusal: Refusal) -> web.Response:
-    titles = {421: "Misdirected request", 403: "Not allowed", 503: "Already open"}
-    return page(refusal.status, titles.get(refusal.status, "Refused"), refusal.reason)
+    titles = {421: "Misdirected request", 403: "Not allowed"}
+    title = "Opened by another page" if refusal.kind == "opener" else None
+    return page(refusal.status, title or titles.get(refusal.status, "Refused"), refusal.reason)
 
 
-def said_refusal(request: web.Request, refusal: Refusal, detail: str = "") -> web.Response:
-    """The refusal's page, and one line on this server's standard error: whoever runs
-    it sees who was turned away and why (what came from the request escaped)."""
+def said_refusal(
+    said: Said, request: web.Request, refusal: Refusal, detail: str = ""
+) -> web.Response:
+    """The refusal's page, and a line on this server's standard error (one a kind every
+    10 s, :mod:`.said`): whoever runs it sees who was turned away and why (what came
+    from the request escaped there)."""
     peer = request.remote or "?"
     path = request.path
     for secret in ("/ws/", "/download/"):  # a key or a download's key: never printed
         if path.startswith(secret):
             path = secret + "…"
-    what = terminal_safe(f"{request.method} {path}"[:200])
-    more = f" ({terminal_safe(detail[:200])})" if detail else ""
-    print(
-        f"rac-console serve: refused {what} from {peer}: {refusal.status}, {refusal.reason}{more}",
-        file=sys.stderr,
-        flush=True,
+    what = f"{request.method} {path}"[:200]
+    more = f" ({detail[:200]})" if detail else ""
+    said.say(
+        f"{refusal.status} {refusal.kind or refusal.reason}",
+        f"refused {what} from {peer}: {refusal.status}, {refusal.reason}{more}",
     )
     return refusal_page(refusal)
-
-
-def busy_page(slots: int) -> web.Response:
-    sessions = "1 session" if slots == 1 else f"{slots} sessions"
-    response = page(
-        BUSY,
-        "Already open",
-        f"The console is already open in {sessions}, as many as this server allows "
-        f"(rac-console serve --max-sessions N). This page tries again every "
-        f"{RETRY_SECONDS} seconds.",
-        extra_head=f"<meta http-equiv='refresh' content='{RETRY_SECONDS}'>",
-    )
-    response.headers["Retry-After"] = str(RETRY_SECONDS)
-    return response
 
 
 def local_address(request: web.Request) -> str | None:
@@ -128,17 +118,18 @@ def make_middleware(server: ConsoleServer) -> Middleware:
         guard = server.guard
         if guard is None:  # listening, the link not made yet: nobody can hold it
             return page(BUSY, "Starting", "The server is starting: try again.")
+        said = server.said
         host = request.headers.get("Host")
         refused = guard.check_host(host, local_address(request))
         if refused is not None:
-            return said_refusal(request, refused, f"Host {host!r}")
+            return said_refusal(said, request, refused, f"Host {host!r}")
         cookie = request.cookies.get(guard.cookie_name)
         if request.path == "/" and "token" in request.query and request.method == "GET":
             if guard.has_cookie(cookie):
                 return web.Response(status=303, headers={"Location": "/"})
             bought = guard.exchange(request.query["token"])
             if isinstance(bought, Refusal):
-                return said_refusal(request, bought)
+                return said_refusal(said, request, bought)
             # The key rides in the fragment: the browser keeps it, no request carries it.
             response = web.Response(status=303, headers={"Location": f"/#key={bought.key}"})
             response.set_cookie(
@@ -146,16 +137,18 @@ def make_middleware(server: ConsoleServer) -> Middleware:
             )
             return response
         refused = guard.check_cookie(cookie)
+        if refused is None and request.path == "/":
+            refused = guard.check_opener(request.headers.get("Sec-Fetch-Site"))
         if refused is not None:
-            return said_refusal(request, refused)
-        if request.path == "/" and guard.slots.full:
-            return busy_page(guard.slots.most)
+            return said_refusal(said, request, refused)
         return await handler(request)
 
     return middleware
 
 
-async def add_headers(_: web.Request, response: web.StreamResponse) -> None:
+async def add_headers(request: web.Request, response: web.StreamResponse) -> None:
+    if request.path.startswith("/download/"):  # a screenshot's SVG: no script, no origin
+        response.headers["Content-Security-Policy"] = DOWNLOAD_POLICY
     for name, value in HEADERS.items():
         response.headers.setdefault(name, value)
 
@@ -172,8 +165,9 @@ def own_names(bind: str) -> tuple[str, list[str]]:
 class ConsoleServer:
     """The server, started and stopped; ``url`` is the one to open (with its token)."""
 
-    def __init__(self, options: ServeOptions) -> None:
+    def __init__(self, options: ServeOptions, said: Said | None = None) -> None:
         self.options = options
+        self.said = said or Said()
         self.guard: Guard | None = None
         self.url = ""
         self._runner: web.AppRunner | None = None
@@ -212,14 +206,19 @@ class ConsoleServer:
         port = int(runner.addresses[0][1])  # --port 0: the one taken
         shown, names = own_names(options.bind)
         guard = self.guard = Guard(port, names, options.max_sessions)
-        textual.session_ended = guard.slots.give_back
+        textual.seats = Seats(
+            guard.slots,
+            lambda: self.said.say(
+                "taken", "a session was taken by a newer page (its page says so)"
+            ),
+        )
         textual.key_start = lambda request: guard.key_start(request.cookies.get(guard.cookie_name))
         self.url = f"http://{url_host(shown)}:{port}/?token={guard.token}"
         return self.url
 
     def _admit(self, request: web.Request, key: str | None) -> web.StreamResponse | None:
         """The socket's own checks, after the middleware's: an upgrade asked for, its
-        Origin, the cookie's key, a free slot (taken here)."""
+        Origin, the cookie's key (a slot is then taken, :mod:`.seats`)."""
         guard = self.guard
         assert guard is not None  # the middleware let the request through
         if not web.WebSocketResponse().can_prepare(request).ok:
@@ -227,12 +226,10 @@ class ConsoleServer:
         origin = request.headers.get("Origin")
         refused = guard.check_origin(origin, request.host)
         if refused is not None:
-            return said_refusal(request, refused, f"Origin {origin!r}")
+            return said_refusal(self.said, request, refused, f"Origin {origin!r}")
         refused = guard.check_key(request.cookies.get(guard.cookie_name), key)
         if refused is not None:
-            return said_refusal(request, refused)
-        if not guard.slots.take():
-            return busy_page(guard.slots.most)
+            return said_refusal(self.said, request, refused)
         return None
 
     async def stop(self) -> None:
@@ -262,7 +259,20 @@ def announce(options: ServeOptions, server: ConsoleServer, out: Callable[[str], 
 
 async def serve(options: ServeOptions) -> int:
     """Serve until SIGINT or SIGTERM: 0, or 3 after one line when it cannot listen."""
-    server = ConsoleServer(options)
+    said = Said()
+    loop = asyncio.get_running_loop()
+    unlisten = listen(said, loop)
+    # aiohttp's own answers (a 400 for a request it cannot read) name it too
+    web_response.SERVER_SOFTWARE = SERVER_NAME  # type: ignore[attr-defined]
+    try:
+        return await _serve(options, said, loop)
+    finally:
+        unlisten()
+        said.close()
+
+
+async def _serve(options: ServeOptions, said: Said, loop: asyncio.AbstractEventLoop) -> int:
+    server = ConsoleServer(options, said)
     try:
         await server.start()
     except (OSError, OverflowError, UnicodeError, ValueError) as exc:
@@ -273,7 +283,6 @@ async def serve(options: ServeOptions) -> int:
         )
         return 3
     stop = asyncio.Event()
-    loop = asyncio.get_running_loop()
     for signum in (signal.SIGINT, signal.SIGTERM):
         with contextlib.suppress(NotImplementedError, AttributeError, ValueError):
             loop.add_signal_handler(signum, stop.set)

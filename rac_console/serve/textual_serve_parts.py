@@ -10,9 +10,11 @@ What it changes, and why:
 - :class:`GuardedServer` keeps textual-serve's page (its template, its static files,
   its message loop between the socket and the console, its downloads) and replaces
   ``_make_app``: the routes it serves, a static route that never lists a folder, the
-  page's WebSocket address taken from the request's own Host, and a socket handler that
-  starts an :class:`ExecAppService`. The checks themselves live in :mod:`.guard` and
-  :mod:`.server`, which hand this module their middleware.
+  page's WebSocket address taken from the request's own Host (the page dressed by
+  :mod:`.page`: our scripts, a nonce on every inline script and style), and a socket
+  handler that starts an :class:`ExecAppService` once the session sits in a slot
+  (:mod:`.seats`). The checks themselves live in :mod:`.guard` and :mod:`.server`,
+  which hand this module their middleware.
 """
 
 from __future__ import annotations
@@ -33,6 +35,8 @@ from textual_serve.server import Server
 
 from ..present.served import within_screen
 from .early_keys import EARLY_KEYS_SCRIPT
+from .page import dress, new_nonce, policy
+from .seats import Seat, Seats
 
 log = logging.getLogger("rac_console.serve")
 
@@ -52,6 +56,7 @@ RELIES_ON = (
     "textual_serve.server.Server.handle_download, .download_manager, .debug",
     "textual_serve.server.Server.statics_path, .templates_path",
     "templates/app_index.html: font_size, app_websocket_url, config.static.url, application.name",
+    'templates/app_index.html: inline <script> and <style> only as such, onClick="refresh()"',
     "static/js/textual.js, static/css/xterm.css",
     "static/js/textual.js: the terminal (its .xterm-helper-textarea) made in window.onload, "
     "its socket a window.WebSocket sent to as keys come (early_keys.py)",
@@ -123,15 +128,24 @@ class ExecAppService(AppService):
 
     async def stop(self) -> None:
         """Ask the console to quit; kill it if it has not within :data:`QUIT_WAIT`."""
-        with contextlib.suppress(Exception):  # gone already, or deaf: killed below
+        try:
             await asyncio.wait_for(super().stop(), QUIT_WAIT)
-        await self.end()
+        except Exception:  # gone already, or deaf: killed at once
+            await self.end(grace=0.0)
+        else:  # it quit: its output closed, its exit is on the way
+            await self.end()
 
-    async def end(self) -> None:
-        """Kill the console if it still runs, and wait for it."""
+    async def end(self, grace: float = QUIT_WAIT) -> None:
+        """Wait up to ``grace`` for the console to end, kill it if it still runs, and
+        wait for it. The wait comes first: a kill looks for the process with a
+        ``waitpid`` of its own, which can reap a console that just ended before
+        asyncio's watcher does ("Unknown child process pid" on stderr)."""
         process = self._process
         if process is None:
             return
+        if process.returncode is None and grace > 0:
+            with contextlib.suppress(TimeoutError):
+                await asyncio.wait_for(asyncio.shield(process.wait()), grace)
         if process.returncode is None:
             with contextlib.suppress(ProcessLookupError):
                 process.kill()
@@ -165,11 +179,11 @@ class GuardedServer(Server):
         self.response_prepare = on_response_prepare
         self.services: set[ExecAppService] = set()
         #: Called with the socket's request and the key in its address before a session
-        #: starts: a refusal, or None when the session may start (it then holds a slot
-        #: until ``session_ended``).
+        #: starts: a refusal, or None when the session may start.
         self.admit: Callable[[web.Request, str | None], web.StreamResponse | None]
         self.admit = lambda _request, _key: None
-        self.session_ended: Callable[[], None] = lambda: None
+        #: The session slots (the newest page holding the key takes one).
+        self.seats: Seats | None = None
         #: The first characters of the key of the request's cookie ("" without one).
         self.key_start: Callable[[web.Request], str] = lambda _request: ""
 
@@ -200,40 +214,50 @@ class GuardedServer(Server):
             "application": {"name": self.title},
         }
         response = aiohttp_jinja2.render_template("app_index.html", request, context)
-        assert response.text is not None and response.text.count("</body>") == 1
+        assert response.text is not None
         script = KEY_SCRIPT.replace("KEY_START", self.key_start(request))
-        response.text = response.text.replace("</body>", script + EARLY_KEYS_SCRIPT + "</body>")
+        nonce = new_nonce()
+        response.text = dress(response.text, [script, EARLY_KEYS_SCRIPT], nonce)
+        response.headers["Content-Security-Policy"] = policy(nonce)
         return response
 
     async def static_file(self, request: web.Request) -> web.StreamResponse:
         """A file of textual-serve's static folder; a folder, or anything outside it, is
         not found (never a listing)."""
         root = Path(self.statics_path).resolve()
-        wanted = (root / request.match_info["path"]).resolve()
-        if not wanted.is_relative_to(root) or not wanted.is_file():
+        try:  # a NUL byte in the path is no file (resolve raises ValueError)
+            wanted = (root / request.match_info["path"]).resolve()
+            found = wanted.is_relative_to(root) and wanted.is_file()
+        except (OSError, ValueError):
+            found = False
+        if not found:
             raise web.HTTPNotFound(text="not found")
         return web.FileResponse(wanted)
 
     async def session(self, request: web.Request) -> web.StreamResponse:
         """textual-serve's handle_websocket, starting an :class:`ExecAppService` once
-        ``admit`` let the session in. Its slot is given back once its console has ended
-        (not when the socket closed: sockets opened and closed in a loop would start
-        consoles faster than they end)."""
+        ``admit`` let the session in and it holds a slot (see :mod:`.seats`). The slot is
+        given back once its console has ended (not when the socket closed: sockets
+        opened and closed in a loop would start consoles faster than they end)."""
         refused = self.admit(request, request.match_info.get("key"))
         if refused is not None:
             return refused
-        try:
-            return await self._run_session(request)
-        finally:
-            self.session_ended()
-
-    async def _run_session(self, request: web.Request) -> web.WebSocketResponse:
         websocket = web.WebSocketResponse(heartbeat=15)
+        seat = Seat(websocket)
+        try:
+            await websocket.prepare(request)
+            if self.seats is None or await self.seats.sit(seat):
+                await self._run_session(request, websocket)
+        finally:
+            if self.seats is not None:
+                await self.seats.leave(seat)
+        return websocket
+
+    async def _run_session(self, request: web.Request, websocket: web.WebSocketResponse) -> None:
         width = _whole(request.query.get("width"), 80)
         height = _whole(request.query.get("height"), 24)
         service: ExecAppService | None = None
         try:
-            await websocket.prepare(request)
             service = ExecAppService(
                 self.argv,
                 self.environment,
@@ -254,7 +278,6 @@ class GuardedServer(Server):
             if service is not None:
                 await service.stop()
                 self.services.discard(service)
-        return websocket
 
     async def _end_sessions(self, _: web.Application) -> None:
         await asyncio.gather(*(service.stop() for service in list(self.services)))

@@ -309,6 +309,22 @@ class Console:
         """Read frames until the screen shows one of ``texts``; the screen."""
         return self._until(lambda shown: any(t in shown for t in texts), texts, deadline)
 
+    def close_frame(self, deadline: float = DEADLINE) -> tuple[int, str]:
+        """Read frames until the server closes the socket: its close code and reason."""
+        end = time.monotonic() + deadline
+        while True:
+            try:
+                frame = self._frame(end)
+            except TimeoutError:
+                frame = None
+            if frame is None or time.monotonic() > end:
+                raise AssertionError("the server did not close the socket")
+            opcode, payload = frame
+            if opcode == 0x8:
+                self.closed = True
+                code = int.from_bytes(payload[:2], "big") if len(payload) >= 2 else 1005
+                return code, payload[2:].decode("utf-8", "replace")
+
     def until_message(self, wanted: Callable[[object], bool], deadline: float = DEADLINE) -> None:
         """Read frames until a JSON message that ``wanted`` holds for has come."""
         end = time.monotonic() + deadline
