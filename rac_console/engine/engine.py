@@ -30,7 +30,7 @@ from .options import EngineOptions, options_of, target_of
 from .outbox import Outbox
 from .readout import status_of
 from .status import Status, described, status_before_start
-from .where import Where
+from .where import UNLISTED_SIMULATOR, Where
 
 if TYPE_CHECKING:
     from ..commands.language import Command
@@ -146,6 +146,7 @@ class Engine:
                 options.timeout,
                 went_down=self._went_down,
                 connecting=self._connecting,
+                unlisted_simulator=self.where in UNLISTED_SIMULATOR,
             )
             self._poller: Poller = Poller(
                 self._link,

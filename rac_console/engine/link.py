@@ -30,9 +30,13 @@ class Link:
         *,
         went_down: Callable[[], None],
         connecting: Callable[[], None],
+        unlisted_simulator: bool = False,
     ) -> None:
         """``went_down``: the connection is gone (figures measured on it go);
-        ``connecting``: a connect starts (the status says so at once)."""
+        ``connecting``: a connect starts (the status says so at once);
+        ``unlisted_simulator``: the built-in simulator listens on no port, reached over
+        a socket pair of this process (see :data:`.where.UNLISTED_SIMULATOR`)."""
+        self._unlisted = unlisted_simulator
         self._publisher = publisher
         self.timeout = timeout
         self._went_down = went_down
@@ -61,17 +65,23 @@ class Link:
         """A session to ``target`` (not yet connected); the simulator starts here when
         the target names no host."""
         host, port = target.host, target.port
+        opener = None
         if host is None:
             from ..sim.thread import SimulatorThread
 
-            self.simulator = SimulatorThread().start()
+            self.simulator = SimulatorThread(listen=not self._unlisted).start()
             host, port = self.simulator.host, self.simulator.port
+            opener = self.simulator.connect if self._unlisted else None
         self.host, self.port = host, port
         self.opened += 1
         self.backoff, self.early_drop, self.lost = Backoff(), False, False
         self.ever_connected = False
         session = Session(
-            host, port, timeout=self.timeout, unreachable_hint=target.unreachable_hint
+            host,
+            port,
+            timeout=self.timeout,
+            unreachable_hint=target.unreachable_hint,
+            opener=opener,
         )
         session.add_frame_observer(self._publisher.frame)
         session.add_state_observer(self._on_state)

@@ -28,6 +28,11 @@ class Where(Enum):
 #: reach more of the machine serving it than its target (their spec's Traits.reaches).
 AT_A_TERMINAL = frozenset({Where.CONSOLE, Where.REPL, Where.SERVED})
 EVERYWHERE = frozenset(Where)
+#: Where the built-in simulator (no -H) listens on no port: the console reaches it over a
+#: socket pair of its own process, so no other process or user of the machine serving
+#: it can read or write it, whatever the session may write. Elsewhere it listens on
+#: 127.0.0.1, where the user's other tools can reach it (the command line says where).
+UNLISTED_SIMULATOR = frozenset({Where.SERVED})
 
 
 def reaches(where: Where, reach: Reach) -> bool:

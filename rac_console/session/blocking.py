@@ -74,10 +74,14 @@ class Session:
         connect_timeout: float | None = None,
         max_line: int = MAX_REPLY_LINE,
         unreachable_hint: str | None = None,
+        opener: Callable[[], socket.socket] | None = None,
     ) -> None:
         """``unreachable_hint`` is added to a failure to connect (a bare name that is
-        no profile: ``no profile named cel3 in FILE``)."""
+        no profile: ``no profile named cel3 in FILE``). ``opener`` makes each connection
+        in place of a TCP connect to ``host:port`` (the built-in simulator's socket
+        pair, which listens nowhere)."""
         self.host = host
+        self._opener = opener
         self.unreachable_hint = unreachable_hint
         self.port = port
         self.timeout = timeout
@@ -380,7 +384,11 @@ class Session:
             raise Disconnected("the session was stopped")
         self._set_state("connecting")
         try:
-            sock = socket.create_connection((self.host, self.port), self.connect_timeout)
+            sock = (
+                self._opener()
+                if self._opener is not None
+                else socket.create_connection((self.host, self.port), self.connect_timeout)
+            )
         except (OSError, UnicodeError, ValueError) as exc:  # TimeoutError is an OSError
             self._set_state("closed")
             hint = f" ({self.unreachable_hint})" if self.unreachable_hint else ""

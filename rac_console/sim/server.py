@@ -77,6 +77,8 @@ class SimulatorServer:
     answers ``SIM:`` lines like any unknown command; ``notify`` receives the lines a
     user should read (rate-limited; none are shown without it). ``fast_lane=False``
     serves every session through an asyncio transport, as where there is no epoll.
+    ``listen=False`` listens on no port: its clients are the connections handed to
+    :meth:`take` (one end of a socket pair made in this process), and no one else's.
     """
 
     def __init__(
@@ -91,6 +93,7 @@ class SimulatorServer:
         control: bool = True,
         notify: Callable[[str], None] | None = None,
         fast_lane: bool = True,
+        listen: bool = True,
     ) -> None:
         self.host = host
         self.port = port
@@ -117,6 +120,7 @@ class SimulatorServer:
         self._stopped: asyncio.Event | None = None
         self._fast_lane = fast_lane
         self._lane: FastLane | None = None
+        self._listens = listen
 
     @property
     def plan(self) -> FaultPlan:
@@ -178,8 +182,9 @@ class SimulatorServer:
 
     async def start(self) -> SimulatorServer:
         loop = asyncio.get_running_loop()
-        self._sockets = await _listen(loop, self.host, self.port)
-        self.port = self._sockets[0].getsockname()[1]
+        if self._listens:
+            self._sockets = await _listen(loop, self.host, self.port)
+            self.port = self._sockets[0].getsockname()[1]
         self._stopped = asyncio.Event()
         if self._fast_lane:
             self._lane = FastLane.open(self, loop)
@@ -240,6 +245,19 @@ class SimulatorServer:
                 self._admit(self._lane, conn)
                 continue
             self._connect(conn, None)  # and accept the next
+
+    def take(self, conn: socket.socket) -> None:
+        """Serve ``conn`` as a client just accepted: a connection made in this process
+        (one end of a socket pair), which no port was opened for. On the loop's thread."""
+        for option in (socket.SO_SNDBUF, socket.SO_RCVBUF):  # as a listener's clients get
+            with contextlib.suppress(OSError):
+                conn.setsockopt(socket.SOL_SOCKET, option, SOCKET_BUFFER)
+        if self._stopped is None or self._stopped.is_set():
+            conn.close()  # not serving: the client sees its connection closed
+        elif self._lane is not None and self.plain:
+            self._admit(self._lane, conn)
+        else:
+            self._connect(conn, None)
 
     def _admit(self, lane: FastLane, conn: socket.socket) -> None:
         """A new client on the fast lane, unless max_sessions are open."""

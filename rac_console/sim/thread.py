@@ -1,13 +1,16 @@
 """The simulator on a thread of its own, for callers without an event loop.
 
 The console's engine and the one-shot CLI talk to the built-in simulator over a real
-loopback socket; the simulator's asyncio server runs here, on its own loop, so the
-caller's blocking session never shares a thread with it.
+socket (loopback TCP, or a socket pair that no other process can reach); the
+simulator's asyncio server runs here, on its own loop, so the caller's blocking session
+never shares a thread with it.
 """
 
 from __future__ import annotations
 
 import asyncio
+import errno
+import socket
 import threading
 from collections.abc import Awaitable, Callable
 from typing import Any, TypeVar
@@ -49,11 +52,25 @@ class LoopThread:
 
 
 class SimulatorThread(LoopThread):
-    """``start()`` returns once the simulator listens; ``host``/``port`` say where."""
+    """``start()`` returns once the simulator listens; ``host``/``port`` say where.
+    ``listen=False``: it listens on no port, and :meth:`connect` is the only way in."""
 
-    def __init__(self) -> None:
+    def __init__(self, listen: bool = True) -> None:
         super().__init__("rac-sim")
-        self.server = SimulatorServer()
+        self.server = SimulatorServer(listen=listen)
+
+    def connect(self) -> socket.socket:
+        """A connection to the simulator that only this process holds: one end of a
+        socket pair, the other served as a client. ConnectionRefusedError once the
+        simulator has stopped."""
+        ours, theirs = socket.socketpair()
+        try:
+            self._loop.call_soon_threadsafe(self.server.take, theirs)
+        except RuntimeError:  # its loop is closed
+            ours.close()
+            theirs.close()
+            raise ConnectionRefusedError(errno.ECONNREFUSED, "the simulator has stopped") from None
+        return ours
 
     @property
     def host(self) -> str:
