@@ -44,8 +44,9 @@ def test_a_served_session_asking_for_4096_rows_back_to_back_stays_within_the_bou
     served = start_serve(env, running, before=("-H", f"127.0.0.1:{controller.port}"))
     console = open_console(served, 160, 50)
     console.until("SERVED", "connected")
-    for first in range(0, 4096, 256):
+    for first in range(0, 4096, 256):  # each line answered before the next, as typed
         console.type_line(f"watch I {first}-{first + 255}")
+        console.until(f"› watch I {first}-{first + 255}")
     console.type_line("interval 0")
     shown = console.until(
         ROWS_REFUSED.format(SERVED_MAX_ROWS), INTERVAL_REFUSED.format(SERVED_MIN_INTERVAL)
