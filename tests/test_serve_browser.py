@@ -48,6 +48,10 @@ TEE = """
   const decoder = new TextDecoder();
   window.__racReceived = [];
   window.__racOpened = 0;
+  window.__racBlocked = [];  // what the page's content security policy refused
+  document.addEventListener("securitypolicyviolation", (event) => {
+    window.__racBlocked.push(event.effectiveDirective + " " + (event.blockedURI || "inline"));
+  });
   class Tee extends Real {
     constructor(...args) {
       super(...args);
@@ -184,6 +188,10 @@ def test_the_console_renders_and_takes_keys_through_the_link(env, running, brows
     console.type_line("get I 1")
     console.until("I1 = 1")
     page.screenshot(path=str(tmp_path / "console.png"))
+    # No 'unsafe-inline': the page's own scripts and styles ran (the nonce); only the
+    # font textual-serve asks Google for was refused.
+    blocked = page.evaluate("window.__racBlocked")
+    assert [b for b in blocked if "fonts.googleapis.com" not in b] == [], blocked
     # The link opens once: a second browser with it gets nothing.
     other = browser.new_context().new_page()
     answer = other.goto(served.url, timeout=DEADLINE * 1000)

@@ -18,6 +18,7 @@ pty).
 from __future__ import annotations
 
 import asyncio
+import codecs
 import contextlib
 import io
 import json
@@ -638,10 +639,12 @@ class Running:
         wrap: Sequence[str] = (),
         program: Sequence[str] = RAC,
         cwd: Path | None = None,
+        err_rate: int | None = None,
     ) -> None:
         """``program`` with ``args``, behind ``wrap`` when given (``ip netns exec B``:
         a command that runs it in place of itself, so that a signal reaches it), in
-        ``cwd`` when given."""
+        ``cwd`` when given; its stderr read at ``err_rate`` bytes a second when given
+        (a terminal or an ssh link that does not keep up)."""
         self.process = subprocess.Popen(
             [*wrap, *program, *args],
             env=environment,
@@ -656,14 +659,40 @@ class Running:
         self.err: list[str] = []
         self._lines: queue.Queue[None] = queue.Queue()
         self._lock = threading.Lock()
-        for stream, kept in ((self.process.stdout, self.out), (self.process.stderr, self.err)):
-            threading.Thread(target=self._read, args=(stream, kept), daemon=True).start()
+        threading.Thread(
+            target=self._read, args=(self.process.stdout, self.out), daemon=True
+        ).start()
+        if err_rate is None:
+            reading = threading.Thread(target=self._read, args=(self.process.stderr, self.err))
+        else:
+            reading = threading.Thread(target=self._read_slowly, args=(err_rate,))
+        reading.daemon = True
+        reading.start()
 
     def _read(self, stream: object, kept: list[str]) -> None:
         for line in stream:  # type: ignore[attr-defined]
             with self._lock:
                 kept.append(line.rstrip("\n"))
             self._lines.put(None)
+
+    def _read_slowly(self, rate: int) -> None:
+        """stderr, a tenth of ``rate`` bytes every tenth of a second, split into lines."""
+        stream = self.process.stderr
+        assert stream is not None
+        decoder = codecs.getincrementaldecoder("utf-8")("backslashreplace")
+        pending = ""
+        while chunk := stream.buffer.read1(max(1, rate // 10)):  # type: ignore[attr-defined]
+            pending += decoder.decode(chunk)
+            *lines, pending = pending.split("\n")
+            with self._lock:
+                self.err.extend(lines)
+            if lines:
+                self._lines.put(None)
+            time.sleep(0.1)
+        if pending:
+            with self._lock:
+                self.err.append(pending)
+        self._lines.put(None)
 
     def wait_for(self, what: str, holds: Callable[[], bool], deadline: float = 20) -> None:
         until = time.monotonic() + deadline

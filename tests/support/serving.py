@@ -63,10 +63,22 @@ def start_serve(
     cwd: Path | None = None,
     program: Sequence[str] = RAC,
     wrap: Sequence[str] = (),
+    err_rate: int | None = None,
 ) -> Served:
-    """``rac-console [BEFORE] serve --port 0 ARGS`` (in ``cwd``, as ``program``), once it
-    printed its link."""
-    run = Running(env, *before, "serve", "--port", "0", *args, cwd=cwd, program=program, wrap=wrap)
+    """``rac-console [BEFORE] serve --port 0 ARGS`` (in ``cwd``, as ``program``, its
+    stderr read at ``err_rate`` bytes a second when given), once it printed its link."""
+    run = Running(
+        env,
+        *before,
+        "serve",
+        "--port",
+        "0",
+        *args,
+        cwd=cwd,
+        program=program,
+        wrap=wrap,
+        err_rate=err_rate,
+    )
     running.append(run)
     run.wait_for("the link", lambda: any(line.startswith("http://") for line in run.out))
     url = next(line for line in run.out if line.startswith("http://"))
