@@ -45,6 +45,8 @@ from .replay import ReplayController
 from .session import CONTROL_PREFIX, SimSession
 
 LOOPBACK = "127.0.0.1"
+#: A client's connection, as :meth:`SimulatorServer.connect` hands it out.
+Connection = socket.socket
 SOCKET_BUFFER = 16 * 1024  # SO_SNDBUF and SO_RCVBUF of each connection (Linux doubles it)
 BACKLOG = 1024
 SHED_AFTER_IDLE = 1.0  # out of descriptors, only a session idle this long is closed
@@ -121,6 +123,7 @@ class SimulatorServer:
         self._fast_lane = fast_lane
         self._lane: FastLane | None = None
         self._listens = listen
+        self._loop: asyncio.AbstractEventLoop | None = None  # serving on it, once started
 
     @property
     def plan(self) -> FaultPlan:
@@ -181,7 +184,7 @@ class SimulatorServer:
     # ------------------------------------------------------------- serving
 
     async def start(self) -> SimulatorServer:
-        loop = asyncio.get_running_loop()
+        loop = self._loop = asyncio.get_running_loop()
         if self._listens:
             self._sockets = await _listen(loop, self.host, self.port)
             self.port = self._sockets[0].getsockname()[1]
@@ -245,6 +248,22 @@ class SimulatorServer:
                 self._admit(self._lane, conn)
                 continue
             self._connect(conn, None)  # and accept the next
+
+    def connect(self) -> Connection:
+        """(Any thread, once started.) A connection to this simulator that only this
+        process holds: one end of a socket pair, the other served as a client (see
+        :meth:`take`). ConnectionRefusedError once it has stopped."""
+        loop = self._loop
+        ours, theirs = socket.socketpair()
+        try:
+            if loop is None:
+                raise RuntimeError("not started")
+            loop.call_soon_threadsafe(self.take, theirs)
+        except RuntimeError:  # not started, or its loop is closed
+            ours.close()
+            theirs.close()
+            raise ConnectionRefusedError(errno.ECONNREFUSED, "the simulator has stopped") from None
+        return ours
 
     def take(self, conn: socket.socket) -> None:
         """Serve ``conn`` as a client just accepted: a connection made in this process

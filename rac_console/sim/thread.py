@@ -9,13 +9,11 @@ never shares a thread with it.
 from __future__ import annotations
 
 import asyncio
-import errno
-import socket
 import threading
 from collections.abc import Awaitable, Callable
 from typing import Any, TypeVar
 
-from .server import SimulatorServer
+from .server import Connection, SimulatorServer
 
 T = TypeVar("T")
 
@@ -59,18 +57,10 @@ class SimulatorThread(LoopThread):
         super().__init__("rac-sim")
         self.server = SimulatorServer(listen=listen)
 
-    def connect(self) -> socket.socket:
-        """A connection to the simulator that only this process holds: one end of a
-        socket pair, the other served as a client. ConnectionRefusedError once the
-        simulator has stopped."""
-        ours, theirs = socket.socketpair()
-        try:
-            self._loop.call_soon_threadsafe(self.server.take, theirs)
-        except RuntimeError:  # its loop is closed
-            ours.close()
-            theirs.close()
-            raise ConnectionRefusedError(errno.ECONNREFUSED, "the simulator has stopped") from None
-        return ours
+    def connect(self) -> Connection:
+        """A connection to the simulator that only this process holds (see
+        :meth:`.server.SimulatorServer.connect`)."""
+        return self.server.connect()
 
     @property
     def host(self) -> str:
