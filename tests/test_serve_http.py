@@ -1,8 +1,9 @@
 """``rac-console serve`` without a browser: each refusal with the status the README gives
 (403 without the token or the cookie, 421 for a foreign Host, 403 for a foreign or
-missing Origin on the socket, 404 for a folder of /static/, 503 for one session too
-many), the token bought once for a cookie, the headers; the guard's pure decisions; the
-command a session runs; and the parts of textual-serve that are relied on."""
+missing Origin on the socket, 404 for a folder of /static/, one session more taking the
+slot of the oldest), the token bought once for a cookie, the headers; the guard's pure
+decisions; the command a session runs; and the parts of textual-serve that are relied
+on."""
 
 from __future__ import annotations
 
