@@ -14,7 +14,7 @@ from rac_console.protocol import parse_request, parse_response
 from rac_console.session import Frame
 from rac_console.tui.app import RacConsoleApp
 from rac_console.tui.frame_lines import HEX_SEPARATOR
-from rac_console.tui.frame_log import KEPT, FrameLog
+from rac_console.tui.frame_log import KEPT, MAX_LINES, FrameLog
 from tests.support.drivers import make_app, results_text, rows_read, type_line, until
 
 REPLY = parse_response("0,3,1")
@@ -236,3 +236,38 @@ async def test_results_written_before_the_pane_has_a_size_are_kept_once() -> Non
         text = "\n".join(strip.text for strip in log.lines)
         assert [text.count(f"entry {n} ") for n in range(3)] == [1, 1, 1], text
         assert all(strip.cell_length <= log.scrollable_content_region.width for strip in log.lines)
+
+
+# ------------------------------------------------------------- frozen (F4)
+
+
+@pytest.mark.slow  # 5,000 lines drawn and more
+async def test_a_frozen_log_keeps_its_lines_in_view_while_the_oldest_are_dropped() -> None:
+    """F4 freezes the view on the lines shown; past MAX_LINES the log drops its oldest
+    lines, and the view slid down by as many (the time shown ran on while it said
+    FROZEN): it stays on the same lines until they are dropped themselves."""
+    from textual.app import App, ComposeResult
+
+    class Pane(App[None]):
+        def compose(self) -> ComposeResult:
+            yield FrameLog()
+
+    def flushes(count: int, start: float) -> None:
+        """``count`` flushes of 250 exchanges: 500 lines, all drawn."""
+        for n in range(count):
+            add_exchanges(log, 250, poll=False, start=start + n)
+            log.flush()
+
+    app = Pane()
+    async with app.run_test(size=(100, 20)) as pilot:
+        log = app.query_one(FrameLog)
+        flushes(MAX_LINES // 500, 1_700_000_000)
+        await until(pilot, lambda: log.line_count >= MAX_LINES - 500, "the log full")
+        log.auto_scroll = False  # F4
+        log.scroll_to(y=log.max_scroll_y - 100, animate=False, immediate=True)
+        await pilot.pause()
+        shown = log.lines[int(log.scroll_y)]
+        for n in range(3):  # 1,500 lines more: as many of the oldest dropped
+            flushes(1, 1_700_000_100 + n)
+            await pilot.pause()
+            assert log.lines[int(log.scroll_y)] == shown, f"the view slid after flush {n}"

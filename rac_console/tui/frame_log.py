@@ -286,9 +286,15 @@ class FrameLog(InlineWidthLog):
             # Log follows only when the view already sat at the end, and any layout
             # change (a resize, the candidate list) moves the end away from the view:
             # follow by this widget's own flag instead, until F4 freezes it.
+            before = self.line_count
             self.write_lines(lines, scroll_end=False)
             if self.auto_scroll:
                 self.scroll_end(animate=False, immediate=True, x_axis=False)
+            elif dropped := before + len(lines) - self.line_count:
+                # Past MAX_LINES the oldest lines go: a frozen view stays on its lines
+                # (until they go themselves), it does not slide on to newer ones.
+                y = max(0.0, self.scroll_y - dropped)
+                self.scroll_to(y=y, animate=False, immediate=True)
         return len(events)
 
     def _keep(self, events: list[Event]) -> tuple[int, list[Drawn]]:
