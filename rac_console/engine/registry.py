@@ -29,6 +29,7 @@ from ..commands.language import (
     Simple,
     Step,
     WatchFile,
+    check_length,
     is_raw_line,
     split_word,
 )
@@ -261,6 +262,7 @@ class Registry:
 
     def parse(self, line: str) -> Command | None:
         """One line of the command language; None for a blank line or a ``#`` comment."""
+        check_length(line)
         stripped = line.strip()
         if not stripped or stripped.startswith("#"):
             return None

@@ -14,7 +14,7 @@ from rich.console import Console
 from rich.text import Text
 
 from ..commands.cells import split_address
-from ..commands.language import VarRef
+from ..commands.language import MAX_LINE, VarRef
 from ..commands.outcome import Outcome
 from ..protocol import Variant, vt_name
 from ..protocol.text import describe_response, quoted_text, terminal_safe, terminal_safe_lines
@@ -163,9 +163,24 @@ def print_outcome(out: Console, err: Console, outcome: Outcome, prefix: str = ""
         print_error(err, error_text(outcome, prefix))
 
 
+def too_long_text(count: int | None) -> str:
+    """What a command line says of characters typed or pasted past its end (``count``
+    of them, when known)."""
+    if count is None:
+        were = "what was typed or pasted past that was"
+    elif count == 1:
+        were = "1 character typed or pasted past that was"
+    else:
+        were = f"{count:,} characters typed or pasted past that were"
+    return f"the command line holds at most {MAX_LINE:,} characters: {were} not taken"
+
+
 def echo_text(line: str, target: str | None = None) -> Text:
     """A line echoed over its result: ``› get I 1``; in a cell, after the target it ran
-    on (``robotB › put I 10 5``: an ``@robotB`` is said by the name)."""
+    on (``robotB › put I 10 5``: an ``@robotB`` is said by the name). A line too long
+    to run is shown by its start and its length."""
+    if len(line) > MAX_LINE:
+        line = f"{line[:60]}… ({len(line):,} characters)"
     if target is None:
         return Text(f"› {terminal_safe(line)}", style="bold cyan")
     if line.lstrip().startswith("@"):

@@ -18,10 +18,12 @@ from prompt_toolkit.layout.processors import (
 from prompt_toolkit.lexers import Lexer
 from prompt_toolkit.styles import Style
 
+from ..commands.language import MAX_LINE
 from ..engine import ConfirmWrite, Status
 from ..present.cell_status import Badge, cell_status_text
 from ..present.completion import complete, hint
 from ..present.history import History
+from ..present.render import too_long_text
 from ..present.status import ink_on, label_text, profile_colour, target_label
 from ..present.tokens import tokenize
 from ..protocol.text import terminal_safe
@@ -220,3 +222,34 @@ class SharedSuggest(AutoSuggest):
         text = document.text.rsplit("\n", 1)[-1]
         line = self._shared.suggest(text)
         return Suggestion(line[len(text) :]) if line is not None else None
+
+
+class LineCap:
+    """The prompt's line holds at most :data:`MAX_LINE` characters, as the console's
+    does (a prompt-toolkit buffer has no bound): what is typed or pasted past that is
+    not taken, and ``say`` is told once while the line stays full."""
+
+    def __init__(self, say: Callable[[str], object]) -> None:
+        self._say = say
+        self._said = False
+
+    def attach(self, buffer: Buffer) -> None:
+        buffer.on_text_insert += self.inserted
+        buffer.on_text_changed += self.changed
+
+    def inserted(self, buffer: Buffer) -> None:
+        """Text was just inserted before the cursor: what is past the room goes."""
+        text, cursor = buffer.text, buffer.cursor_position
+        over = len(text) - MAX_LINE
+        if over <= 0:
+            return
+        start = max(0, cursor - over)
+        kept = text[:start] + text[cursor:]
+        buffer.set_document(Document(kept[:MAX_LINE], min(start, MAX_LINE)), bypass_readonly=True)
+        if not self._said:
+            self._said = True
+            self._say(too_long_text(None))
+
+    def changed(self, buffer: Buffer) -> None:
+        if len(buffer.text) < MAX_LINE:
+            self._said = False

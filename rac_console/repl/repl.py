@@ -49,6 +49,7 @@ from .asking import ask_write
 from .prompt_parts import (
     STYLE,
     HintProcessor,
+    LineCap,
     RacCompleter,
     RacLexer,
     SharedHistory,
@@ -113,6 +114,9 @@ class Repl(BatchReader):
             style=STYLE,
             input=input,
             output=output,
+        )
+        LineCap(lambda text: self._print(notice_text(text, error=True))).attach(
+            self.prompt.default_buffer
         )
 
     # ------------------------------------------------------------- prompt

@@ -15,6 +15,7 @@ from textual.message import Message
 from textual.suggester import Suggester
 from textual.widgets import Input
 
+from ..commands.language import MAX_LINE
 from . import keys
 from .compat import input_suggestion, key_bindings
 
@@ -112,13 +113,22 @@ class CommandLine(Input):
             super().__init__()
             self.count = count
 
+    class TooLong(Message):
+        """(line → console) Characters were typed or pasted past :data:`MAX_LINE`: the
+        console asks :meth:`refused` how many (one line for a burst of them)."""
+
     def __init__(
         self, history: History, seen: Callable[[], Iterable[tuple[str, int]]], **kwargs: object
     ) -> None:
         suggester = HintSuggester(history, lambda *hint: self.post_message(self.Hint(*hint)))
         # Focus coming back (F6, Enter on a table row) leaves the cursor where it is: a
         # selected line would be replaced whole by the next key typed.
-        super().__init__(suggester=suggester, select_on_focus=False, **kwargs)  # type: ignore[arg-type]
+        super().__init__(
+            suggester=suggester,
+            select_on_focus=False,
+            max_length=MAX_LINE,
+            **kwargs,  # type: ignore[arg-type]
+        )
         self.history = history
         self._seen = seen
         self._position: int | None = None
@@ -129,6 +139,28 @@ class CommandLine(Input):
         self._held: list[events.Key | events.Paste] | None = None  # None: not holding
         self._dropping = False  # a question is up: keys typed ahead of it are dropped
         self._dropped = 0
+        self._refused = 0  # characters not taken: the line was full
+
+    def replace(self, text: str, start: int, end: int) -> None:
+        """Textual's, with the text cut to what the line still has room for: a key
+        past :data:`MAX_LINE` costs nothing (a value is not made to be refused), and the
+        console is told once for a burst of them."""
+        value = self.value
+        start, end = sorted((max(0, start), min(len(value), end)))
+        room = MAX_LINE - (len(value) - (end - start))
+        if len(text) > room:
+            if not self._refused:
+                self.post_message(self.TooLong())
+            self._refused += len(text) - max(room, 0)
+            text = text[: max(room, 0)]
+            if not text and start == end:
+                return
+        super().replace(text, start, end)
+
+    def refused(self) -> int:
+        """How many characters were not taken since it was last asked."""
+        count, self._refused = self._refused, 0
+        return count
 
     def hold(self) -> None:
         """Hold the keys that come from now (a write started by a key elsewhere)."""

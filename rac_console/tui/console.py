@@ -269,6 +269,13 @@ class ConsoleScreen(Screen[None]):
         if not self.lines.dropped(event.count):  # else said after the line's answer
             self.show(Message(dropped_text(event.count)))
 
+    @on(CommandLine.TooLong)
+    def line_too_long(self) -> None:
+        from ..present.render import too_long_text
+
+        if count := self.panes.command_line.refused():
+            self.show(Message(too_long_text(count), "error"))
+
     @on(CommandLine.Completions)
     def list_completions(self, event: CommandLine.Completions) -> None:
         self.mount_hidden_panes()
