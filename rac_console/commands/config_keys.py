@@ -105,6 +105,6 @@ def withheld_notice(withheld: Withheld) -> str | None:
     if len(named) > MOST_NAMED:
         named[MOST_NAMED:] = [f"{len(named) - MOST_NAMED} more tables"]
     return (
-        f"the config file's {'; '.join(named)}: not read in a served console, which "
-        "reaches its controller and nothing else"
+        "not read in a served console, which reaches its controller and nothing else: "
+        f"the config file's {'; '.join(named)}"
     )
