@@ -137,8 +137,11 @@ class ConfirmWriteScreen(ModalScreen[bool]):
         ready = self.accepting
         if ready != self._ready_shown:
             self._ready_shown = ready
-            self.query_one("#confirm-keys", Static).update(READY_KEYS if ready else WAITING_KEYS)
-            self.query_one("#confirm-yes", Button).disabled = not ready
+            # A tick may come as the screen closes, its widgets gone: none to update then.
+            for keys in self.query("#confirm-keys").results(Static):
+                keys.update(READY_KEYS if ready else WAITING_KEYS)
+            for button in self.query("#confirm-yes").results(Button):
+                button.disabled = not ready
 
     def on_key(self, event: events.Key) -> None:
         event.stop()
