@@ -120,11 +120,10 @@ class Said:
         """One line of ``kind`` (escaped here), said now or counted; never waits."""
         line = LEAD + terminal_safe(text)
         with self._wake:
-            now = self._clock()
-            said = self._tally.say(kind, line, now)
-            if said is not None:
+            said = self._tally.say(kind, line, self._clock())
+            if said is not None:  # a line held back wakes nobody: its window's end will
                 self._queue(said)
-            self._wake.notify()
+                self._wake.notify()
 
     def _queue(self, line: str) -> None:
         data = (line + "\n").encode("utf-8", "replace")
@@ -204,7 +203,8 @@ def _malformed(exc: BaseException | None) -> tuple[str, str] | None:
     if not isinstance(exc, HttpProcessingError):
         return None
     why = (exc.message or type(exc).__name__).strip().splitlines()
-    return "malformed", f"refused a malformed request: {exc.code}, {why[0] if why else ''}"
+    first = why[0].rstrip(" :") if why else ""
+    return "malformed", f"refused a malformed request: {exc.code}, {first}"
 
 
 def _exception(exc: BaseException | None) -> str:
