@@ -55,6 +55,7 @@ TEE = """
   class Tee extends Real {
     constructor(...args) {
       super(...args);
+      window.__racSocket = this;  // the newest: a test sends on it as the page would
       this.addEventListener("open", () => { window.__racOpened += 1; });
       this.addEventListener("message", (event) => {
         if (typeof event.data !== "string") {
@@ -373,3 +374,23 @@ def test_the_newest_page_takes_the_console_and_the_older_page_says_so(env, runni
     back.until("I1 = 1")
     assert "Taken by another page" in closed_with(second.page)
     assert len(consoles_of(server)) == 1
+
+
+def test_a_console_at_its_memory_limit_ends_and_its_page_says_why(env, running, browser, tmp_path):
+    """The session's console passes its memory limit (a screen of 1,000 x 1,000 and a
+    watch, under a limit of 128 MiB): the page's "session ended" box says why."""
+    served = start_serve(env, running, "--session-memory", "128")
+    console = open_console(browser.new_context(), served)
+    console.until("connected")
+    resize = "['resize', {width: 1000, height: 1000}]"
+    console.page.evaluate(f"window.__racSocket.send(JSON.stringify({resize}))")
+    console.type_line("watch T 0-255")
+    closed = "document.body.classList.contains('-closed')"
+    until(lambda: bool(console.page.evaluate(closed)), "the session ended")
+    said = console.page.inner_text(".closed-dialog .message")
+    console.page.screenshot(path=str(tmp_path / "ended.png"))
+    assert said == (
+        "Session ended: the console reached its memory limit of 128 MiB and ended "
+        "(rac-console serve --session-memory)."
+    )
+    until(lambda: consoles_of(served.running.process.pid) == [], "the console gone")

@@ -501,8 +501,13 @@ def test_the_private_parts_relied_on_are_where_they_were() -> None:
     source = inspect.getsource(AppService)
     for name in ("self._process", "self._stdin", "self._task"):
         assert name in source, name
-    for method in ("start", "stop", "run"):
+    for method in ("start", "stop", "run", "send_bytes", "send_meta"):
         assert inspect.iscoroutinefunction(getattr(AppService, method)), method
+    assert list(inspect.signature(AppService.send_bytes).parameters) == ["self", "data"]
+    from textual_serve.download_manager import Download, DownloadManager
+
+    assert isinstance(DownloadManager()._active_downloads, dict)
+    assert "app_service" in inspect.signature(Download).parameters
     server_init = inspect.signature(Server.__init__).parameters
     assert {"command", "host", "port", "title", "public_url"} <= set(server_init)
     assert list(inspect.signature(Server._process_messages).parameters) == [
@@ -529,7 +534,7 @@ def test_the_private_parts_relied_on_are_where_they_were() -> None:
     for part in ("window.onload=", "xterm-helper-textarea", "new WebSocket("):
         assert script.count(part) == 1, part  # what early_keys.py's script counts on
     assert 'this.socket.send(JSON.stringify(["stdin"' in script
-    assert len(RELIES_ON) == 13  # a new reliance gets its check here
+    assert len(RELIES_ON) == 14  # a new reliance gets its check here
 
 
 @pytest.mark.slow

@@ -12,6 +12,7 @@ import argparse
 import sys
 
 from ..engine.poll_bounds import SERVED_MAX_ROWS, SERVED_MIN_INTERVAL
+from ..present.served_bounds import DEFAULT_MEMORY_MIB, LEAST_MEMORY_MIB
 from .options import port_number, seconds_of, whole_of
 
 SERVE_HELP = "serve the console to a browser, behind a one-time link (pip install rac-console[web])"
@@ -106,6 +107,24 @@ def serve_options(sub: argparse.ArgumentParser) -> None:
         metavar="N",
         help=f"most rows a session may watch per target (default {SERVED_MAX_ROWS})",
     )
+    server.add_argument(
+        "--session-memory",
+        type=memory_mib,
+        default=DEFAULT_MEMORY_MIB,
+        metavar="MIB",
+        help=f"most memory each session's console may take, in MiB (default "
+        f"{DEFAULT_MEMORY_MIB}; 0: no limit); at it the session ends and its page says why",
+    )
+
+
+def memory_mib(text: str) -> int:
+    """``--session-memory``: 0 (no limit), or a whole number of MiB from
+    :data:`LEAST_MEMORY_MIB` up (a console takes about 90 at start)."""
+    if text.isascii() and text.isdigit() and (int(text) == 0 or int(text) >= LEAST_MEMORY_MIB):
+        return int(text)
+    raise argparse.ArgumentTypeError(
+        f"give a number of MiB from {LEAST_MEMORY_MIB} up, or 0 for no limit, got {text!r}"
+    )
 
 
 def target_words(args: argparse.Namespace) -> list[str]:
@@ -195,7 +214,7 @@ def serve_console(args: argparse.Namespace) -> int:
 
     options = ServeOptions(
         argv=session_argv(words, args.allow_writes),
-        environment=session_environment(args.min_interval, args.max_rows),
+        environment=session_environment(args.min_interval, args.max_rows, args.session_memory),
         bind=args.serve_bind,
         port=args.serve_port,
         max_sessions=args.max_sessions,

@@ -16,6 +16,7 @@ from ..engine.poll_bounds import SERVED_MAX_ROWS, SERVED_MIN_INTERVAL, served_en
 from ..present.served import SERVED_ENV as SERVED_ENV
 from ..present.served import WEB_DRIVER as WEB_DRIVER
 from ..present.served import served as served
+from ..present.served_bounds import DEFAULT_MEMORY_MIB, MEMORY_ENV
 
 
 def session_argv(
@@ -32,8 +33,12 @@ def session_argv(
 
 
 def session_environment(
-    min_interval: float = SERVED_MIN_INTERVAL, max_rows: int = SERVED_MAX_ROWS
+    min_interval: float = SERVED_MIN_INTERVAL,
+    max_rows: int = SERVED_MAX_ROWS,
+    memory_mib: int = DEFAULT_MEMORY_MIB,
 ) -> dict[str, str]:
     """What a session's environment adds to the server's (textual-serve adds the
-    driver, the size and the colours): that it is served, and its poll bounds."""
-    return {SERVED_ENV: "1", **served_environment(min_interval, max_rows)}
+    driver, the size and the colours): that it is served, its poll bounds, and its
+    memory limit (none for 0)."""
+    memory = {MEMORY_ENV: str(memory_mib << 20)} if memory_mib else {}
+    return {SERVED_ENV: "1", **served_environment(min_interval, max_rows), **memory}

@@ -18,6 +18,10 @@ from collections.abc import Sequence
 TAKEN_CODE = 4001
 TAKEN_REASON = "taken by another page"
 
+#: The close code of a session whose console ended without being asked to (its memory
+#: limit, a crash): the reason, which says why, is shown in the "session ended" box.
+ENDED_CODE = 4002
+
 #: What the page says, in its "session ended" box, when its session was taken.
 TAKEN_TEXT = (
     "Taken by another page: the console was opened in another tab or window of this "
@@ -46,7 +50,8 @@ DOWNLOAD_POLICY = (
 INLINE_HANDLER = ' onClick="refresh()"'
 
 #: Listens on textual-serve's buttons, and says on the page why its session closed when
-#: a newer page took it (the socket's close code); put in the page after the key's.
+#: a newer page took it or its console ended (the socket's close code and reason); put
+#: in the page after the key's.
 _SCRIPT = """<script>
 (() => {
   for (const button of document.querySelectorAll("button")) {
@@ -57,6 +62,10 @@ _SCRIPT = """<script>
     constructor(...args) {
       super(...args);
       this.addEventListener("close", (event) => {
+        if (event.code === ENDED_CODE) {
+          const ended = document.querySelector(".closed-dialog .message");
+          if (ended) ended.textContent = "Session ended: " + event.reason + ".";
+        }
         if (event.code !== TAKEN_CODE) return;
         const message = document.querySelector(".closed-dialog .message");
         if (message) message.textContent = "TAKEN_TEXT";
@@ -71,7 +80,11 @@ _SCRIPT = """<script>
 </script>
 """
 
-PAGE_SCRIPT = _SCRIPT.replace("TAKEN_CODE", str(TAKEN_CODE)).replace("TAKEN_TEXT", TAKEN_TEXT)
+PAGE_SCRIPT = (
+    _SCRIPT.replace("TAKEN_CODE", str(TAKEN_CODE))
+    .replace("TAKEN_TEXT", TAKEN_TEXT)
+    .replace("ENDED_CODE", str(ENDED_CODE))
+)
 
 #: First in the page's head, before textual.js loads: the ``<style>`` elements the page's
 #: own scripts make (xterm.js's theme and cell sizes, the CSS bundled in textual.js)

@@ -22,7 +22,9 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import logging
+import time
 from collections.abc import Awaitable, Callable, Mapping, Sequence
+from functools import partial
 from pathlib import Path
 from typing import Any
 
@@ -34,8 +36,9 @@ from textual_serve.app_service import AppService
 from textual_serve.server import Server
 
 from ..present.served import within_screen
+from ..present.served_bounds import DROPPED_META, MEMORY_ENV, SentBudget, ended_text
 from .early_keys import EARLY_KEYS_SCRIPT
-from .page import dress, new_nonce, policy
+from .page import ENDED_CODE, dress, new_nonce, policy
 from .seats import Seat, Seats
 
 log = logging.getLogger("rac_console.serve")
@@ -50,7 +53,9 @@ RELIES_ON = (
     "textual_serve.app_service.AppService._open_app_process(width, height) -> Process",
     "textual_serve.app_service.AppService._build_environment(width, height) -> dict",
     "textual_serve.app_service.AppService._process, ._stdin, ._task",
-    "textual_serve.app_service.AppService.start, .stop, .run",
+    "textual_serve.app_service.AppService.start, .stop, .run, .send_bytes(data), .send_meta",
+    "textual_serve.download_manager.DownloadManager._active_downloads: key -> Download "
+    "(.app_service)",
     "textual_serve.server.Server.__init__(command, host, port, title, public_url)",
     "textual_serve.server.Server._process_messages(websocket, app_service)",
     "textual_serve.server.Server.handle_download, .download_manager, .debug",
@@ -98,6 +103,11 @@ class ExecAppService(AppService):
         super().__init__(shlex.join(argv), **options)  # the string is only shown
         self.argv = tuple(argv)
         self.extra_environment = dict(environment)
+        self.sent = SentBudget(time.monotonic())
+        #: Called with why, when the console ended without being asked to (it ran out
+        #: of memory, it crashed): the page's socket is closed, saying so.
+        self.ended: Callable[[str], Awaitable[object]] | None = None
+        self._stopping = False
 
     def _build_environment(self, width: int = 80, height: int = 24) -> dict[str, str]:
         return super()._build_environment(width, height) | self.extra_environment
@@ -122,18 +132,46 @@ class ExecAppService(AppService):
         if type(width) is int and type(height) is int:
             await super().set_terminal_size(within_screen(width), within_screen(height))
 
+    async def send_bytes(self, data: bytes) -> bool:
+        """What the page typed, within the session's bounds (``present/served_bounds.py``):
+        a message too big or too fast is dropped, and the console told, which says so."""
+        if self.sent.allows(len(data), time.monotonic()):
+            return await super().send_bytes(data)
+        return await self.send_meta({"type": DROPPED_META, "bytes": len(data)})
+
+    async def run(self) -> None:
+        """textual-serve's, until the console's output ends; then, if it ended without
+        being asked to, why is said to ``ended`` (its memory limit, a crash)."""
+        await super().run()
+        process = self._process
+        if process is None or self._stopping or self.ended is None:
+            return
+        with contextlib.suppress(TimeoutError):
+            await asyncio.wait_for(asyncio.shield(process.wait()), QUIT_WAIT)
+        limit = self.extra_environment.get(MEMORY_ENV, "")
+        mib = int(limit) >> 20 if limit.isdigit() else None
+        why = ended_text(process.returncode, mib)
+        if why is not None and not self._stopping:
+            await self.ended(why)
+
     @property
     def pid(self) -> int | None:
         return None if self._process is None else self._process.pid
 
     async def stop(self) -> None:
-        """Ask the console to quit; kill it if it has not within :data:`QUIT_WAIT`."""
+        """Ask the console to quit; kill it if it has not within :data:`QUIT_WAIT`. The
+        files it offered for download go with it (the server kept them, and the session,
+        for a download that can no longer come)."""
+        self._stopping = True
         try:
             await asyncio.wait_for(super().stop(), QUIT_WAIT)
         except Exception:  # gone already, or deaf: killed at once
             await self.end(grace=0.0)
         else:  # it quit: its output closed, its exit is on the way
             await self.end()
+        downloads = self._download_manager._active_downloads
+        for key in [key for key, download in downloads.items() if download.app_service is self]:
+            del downloads[key]
 
     async def end(self, grace: float = QUIT_WAIT) -> None:
         """Wait up to ``grace`` for the console to end, kill it if it still runs, and
@@ -267,6 +305,7 @@ class GuardedServer(Server):
                 download_manager=self.download_manager,
                 debug=self.debug,
             )
+            service.ended = partial(_say_ended, websocket)
             self.services.add(service)
             await service.start(width, height)
             await self._process_messages(websocket, service)
@@ -281,6 +320,14 @@ class GuardedServer(Server):
 
     async def _end_sessions(self, _: web.Application) -> None:
         await asyncio.gather(*(service.stop() for service in list(self.services)))
+
+
+async def _say_ended(websocket: web.WebSocketResponse, why: str) -> None:
+    """Close the page's socket with :data:`~.page.ENDED_CODE` and ``why``, which the
+    page shows in its "Session ended" box (a close reason is at most 123 bytes)."""
+    reason = why.encode("utf-8")[:123].decode("utf-8", "ignore").encode("utf-8")
+    with contextlib.suppress(Exception):
+        await websocket.close(code=ENDED_CODE, message=reason)
 
 
 def _whole(text: str | None, default: int) -> int:

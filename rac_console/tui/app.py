@@ -29,11 +29,12 @@ from ..present.glyphs import ascii_wanted
 from ..present.heap import keep_full_collections_rare
 from . import keys
 from .ascii_screen import ascii_driver
-from .bounded_driver import bounded_driver
+from .bounded_driver import InputDropped, bounded_driver
 from .console import ConsoleScreen, SettingChanged
 from .file_writes import FileWrites
 from .frame_log import FrameLog
 from .hangup import HANGUP_STATUS, TerminalWatch
+from .memory_limit import bound_memory, is_memory_error, out_of_memory
 from .palette import ConsoleCommands, Providers, deliver_screenshot
 from .settings import SettingsKeeper
 from .watchdog import WATCH_EVERY, Watchdog
@@ -229,6 +230,24 @@ class RacConsoleApp(App[int]):
     def setting_changed(self) -> None:
         self.kept.changed()
 
+    @on(InputDropped)
+    def input_dropped(self, event: InputDropped) -> None:
+        """Keys or a message from the browser were dropped (a served console's bounds)."""
+        from ..present.served_bounds import keys_dropped_text, sent_dropped_text
+
+        keys_dropped, bytes_dropped = event.dropped.take()
+        if bytes_dropped:
+            self.main_screen.show(Message(sent_dropped_text(bytes_dropped), "error"))
+        if keys_dropped:
+            self.main_screen.show(Message(keys_dropped_text(keys_dropped), "error"))
+
+    def _handle_exception(self, error: Exception) -> None:
+        """A served console out of memory ends at once (see memory_limit.py): Textual's
+        report of the error would allocate, and can fail there and hang the console."""
+        if self.served and is_memory_error(error):
+            out_of_memory()
+        super()._handle_exception(error)
+
     @on(Worker.StateChanged)
     def worker_failed(self, event: Worker.StateChanged) -> None:
         """A bug must not end the session at the cell: say so and carry on."""
@@ -269,8 +288,9 @@ def run_console(
     app.after_first_paint = after_first_paint
     if ascii_wanted():  # RAC_CONSOLE_ASCII=1, or Windows' old console host
         app.driver_class = ascii_driver(app.driver_class)
-    if served:  # a resize typed in as keys is clamped too (see bounded_driver.py)
+    if served:  # what the browser sends is bounded (see bounded_driver.py), and memory
         app.driver_class = bounded_driver(app.driver_class)
+        bound_memory()
     keep_full_collections_rare()  # the start-up's objects frozen: no key waits on a full pass
     try:
         status = app.run() or 0

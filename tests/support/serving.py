@@ -250,8 +250,10 @@ class Console:
         head = bytes([0x81])
         if len(payload) < 126:
             head += bytes([0x80 | len(payload)])
-        else:
+        elif len(payload) < 1 << 16:
             head += bytes([0x80 | 126]) + len(payload).to_bytes(2, "big")
+        else:
+            head += bytes([0x80 | 127]) + len(payload).to_bytes(8, "big")
         masked = bytes(b ^ mask[i % 4] for i, b in enumerate(payload))
         self.sock.sendall(head + mask + masked)
 
@@ -272,7 +274,8 @@ class Console:
         return 2 + size, int.from_bytes(buffer[2 : 2 + size], "big")
 
     def _frame(self, deadline: float) -> tuple[int, bytes] | None:
-        """The next frame the server sent (opcode, payload); None once it closed."""
+        """The next frame the server sent (opcode, payload); None once it closed. A ping
+        is answered, as a browser does (serve closes a socket that does not, in 15 s)."""
         while True:
             head = self._head()
             if head is not None and len(self._buffer) >= head[0] + head[1]:
@@ -280,6 +283,11 @@ class Console:
                 opcode = self._buffer[0] & 0x0F
                 payload = self._buffer[at : at + length]
                 self._buffer = self._buffer[at + length :]
+                if opcode == 0x9 and len(payload) < 126:
+                    mask = os.urandom(4)
+                    masked = bytes(b ^ mask[i % 4] for i, b in enumerate(payload))
+                    self.sock.sendall(bytes([0x8A, 0x80 | len(payload)]) + mask + masked)
+                    continue
                 return opcode, payload
             self.sock.settimeout(max(0.01, deadline - time.monotonic()))
             chunk = self.sock.recv(65536)
