@@ -76,7 +76,9 @@ def test_benchmark_smoke_run_reports_every_figure(tmp_path: Path) -> None:
     figures = json.loads(out.read_text())
     expected = FIGURES + (C_FIGURES if figures["meta"]["c_compiled"] else ())
     for key in expected:
-        assert figures[key] > 0, key
+        # CPU is read in clock ticks (10 ms): a process a smoke run keeps busy for less
+        # than one, on a busy machine, reads 0. Every other figure is there and positive.
+        assert figures[key] >= 0 if key.endswith("_cpu_us") else figures[key] > 0, key
     header = next(line for line in result.stdout.splitlines() if line.startswith("| path"))
     cells = [cell.strip() for cell in header.strip("|").split("|")]
     assert cells == ["path", "req/s", "µs CPU/request", "ratio", "target", "met?"]

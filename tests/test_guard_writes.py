@@ -135,7 +135,7 @@ def test_a_timed_out_put_is_unknown_and_lands_nowhere_after_the_result(
     proxy: HoldingProxy,
 ) -> None:
     before = _sim_value(sim, 10)
-    args = ["-H", "127.0.0.1", "-p", str(proxy.port), "--timeout", "0.5"]
+    args = ["-H", "127.0.0.1", "-p", str(proxy.port), "--timeout", "2.0"]
     result = cli(env, *args, "put", "I", "10", "4242", "--json")
     assert proxy.held.is_set()
     proxy.release()  # the result is reported: now the network lets the PUT go
@@ -155,7 +155,7 @@ def test_a_timed_out_put_is_unknown_in_plain_text_too(
     sim: SimulatorThread,
     proxy: HoldingProxy,
 ) -> None:
-    args = ["-H", "127.0.0.1", "-p", str(proxy.port), "--timeout", "0.5"]
+    args = ["-H", "127.0.0.1", "-p", str(proxy.port), "--timeout", "2.0"]
     result = cli(env, *args, "put", "I", "10", "4242")
     proxy.release()
     assert result.returncode == 3
@@ -168,7 +168,7 @@ def test_a_timed_out_put_is_unknown_in_plain_text_too(
 def test_the_console_says_a_timed_out_put_is_unknown(
     sim: SimulatorThread, proxy: HoldingProxy
 ) -> None:
-    engine = Engine("127.0.0.1", proxy.port, interval=0.05, timeout=0.5)
+    engine = Engine("127.0.0.1", proxy.port, interval=0.05, timeout=2.0)
     engine.start()
     try:
         front = Front(engine)
