@@ -42,9 +42,8 @@ DROPPED_META = "rac-console-dropped"
 #: bytes (absent: no limit).
 MEMORY_ENV = "RAC_CONSOLE_MEMORY"
 #: What each session may take unless ``serve --session-memory`` says otherwise, in MiB:
-#: a served console's data is about 90 MB at start; a watched row's trend keeps up to
-#: 1,624 samples, about 0.9 MB for a T row, so 256 rows of T (serve's default cap) reach
-#: about 330 MB (docs/cli.md has the measures).
+#: a served console's data is about 85 MB at start and 156 MB after 13 minutes of 256
+#: rows of T (serve's default cap); a row's trend keeps up to 0.9 MB (docs/cli.md).
 DEFAULT_MEMORY_MIB = 1024
 #: The least limit ``serve`` takes, in MiB (0 aside: no limit).
 LEAST_MEMORY_MIB = 128
