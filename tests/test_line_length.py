@@ -10,7 +10,7 @@ from pathlib import Path
 import pytest
 from textual import events
 
-from rac_console.commands.language import MAX_LINE
+from rac_console.commands.line import MAX_LINE
 from rac_console.protocol.request import MAX_FRAME
 from rac_console.tui.app import RacConsoleApp
 from rac_console.tui.command_line import CommandLine

@@ -29,10 +29,10 @@ from ..commands.language import (
     Simple,
     Step,
     WatchFile,
-    check_length,
     is_raw_line,
     split_word,
 )
+from ..commands.line import check_length
 from ..commands.routing import Route, Traits, plan
 from ..protocol import KINDS, InputError
 from ..protocol.text import close_match

@@ -14,7 +14,8 @@ from rich.console import Console
 from rich.text import Text
 
 from ..commands.cells import split_address
-from ..commands.language import MAX_LINE, VarRef
+from ..commands.language import VarRef
+from ..commands.line import MAX_LINE
 from ..commands.outcome import Outcome
 from ..protocol import Variant, vt_name
 from ..protocol.text import describe_response, quoted_text, terminal_safe, terminal_safe_lines

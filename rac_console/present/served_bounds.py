@@ -20,7 +20,7 @@ minutes of a core. So:
 
 from __future__ import annotations
 
-from ..commands.language import MAX_LINE
+from ..commands.line import MAX_LINE
 
 #: The most bytes one ``stdin`` message may hold (a paste of about 2,000 lines).
 MESSAGE_MOST = 64 * 1024

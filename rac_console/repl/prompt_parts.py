@@ -18,7 +18,7 @@ from prompt_toolkit.layout.processors import (
 from prompt_toolkit.lexers import Lexer
 from prompt_toolkit.styles import Style
 
-from ..commands.language import MAX_LINE
+from ..commands.line import MAX_LINE
 from ..engine import ConfirmWrite, Status
 from ..present.cell_status import Badge, cell_status_text
 from ..present.completion import complete, hint

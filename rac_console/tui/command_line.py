@@ -15,7 +15,7 @@ from textual.message import Message
 from textual.suggester import Suggester
 from textual.widgets import Input
 
-from ..commands.language import MAX_LINE
+from ..commands.line import MAX_LINE
 from . import keys
 from .compat import input_suggestion, key_bindings
 
