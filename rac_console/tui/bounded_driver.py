@@ -11,7 +11,8 @@
   :data:`~..present.served_bounds.KEYS_PER_SECOND`) are dropped here, before they are
   queued, and the console says how many (:class:`InputDropped`). A paste is one event
   and goes whole; input serve dropped (a message too big or too fast) is said the same
-  way, serve telling the driver with a meta message.
+  way, serve telling the driver with a meta message. The mouse's moves and wheel steps
+  have a budget of the same size, and past it are dropped unsaid.
 - **Deliveries.** A screenshot is delivered to the browser through the driver, which
   keeps the file until the browser has downloaded it: one the browser never asks for
   stayed for good (3 to 13 MB each). At most :data:`DELIVERIES_KEPT` wait; a newer one
@@ -38,6 +39,18 @@ from ..present.served_bounds import DROPPED_META, KEYS_AT_ONCE, KEYS_PER_SECOND,
 DELIVERIES_KEPT = 3
 #: How long after input was first dropped the console says so (with all dropped since).
 SAY_AFTER = 0.5
+
+
+#: The mouse's events bounded as keys are (each one a hover or a scroll to work out): its
+#: moves and its wheel, not its buttons (a press kept and its release dropped would leave
+#: a button held).
+MOVES = (
+    events.MouseMove,
+    events.MouseScrollDown,
+    events.MouseScrollUp,
+    events.MouseScrollLeft,
+    events.MouseScrollRight,
+)
 
 
 def bounded(size: Size) -> Size:
@@ -89,6 +102,7 @@ def bounded_driver(base: type[Driver]) -> type[Driver]:
         def __init__(self, *args: Any, **kwargs: Any) -> None:
             super().__init__(*args, **kwargs)
             self._keys = Budget(KEYS_AT_ONCE, KEYS_PER_SECOND, time.monotonic())
+            self._moves = Budget(KEYS_AT_ONCE, KEYS_PER_SECOND, time.monotonic())
             self._dropped = Dropped(lambda dropped: self._app.post_message(InputDropped(dropped)))
             self._started: set[str] = set()  # deliveries a download has asked for
             self._delivering = threading.Lock()
@@ -99,6 +113,8 @@ def bounded_driver(base: type[Driver]) -> type[Driver]:
             elif isinstance(message, events.Key) and not self._keys.take(1, time.monotonic()):
                 self._dropped.add(keys=1)
                 return
+            elif isinstance(message, MOVES) and not self._moves.take(1, time.monotonic()):
+                return  # a move or a wheel's step: nothing a person misses, and unsaid
             super().process_message(message)
 
         def on_meta(self, packet_type: str, payload: dict[str, object]) -> None:
