@@ -87,9 +87,13 @@ def test_32_kib_typed_as_keys_leave_the_console_small_and_a_get_answered(env, ru
         console.send("stdin", "a" * min(8000, 32 * 1024 - start))
     with contextlib.suppress(AssertionError):  # the old console said nothing: typed on
         console.until("keys were dropped: a served console takes 1024 keys at once")
-    console.send("stdin", "\x15")  # Ctrl+U: the a's that were taken, gone
-    console.type_line("get I 1")
-    console.until("I1 = 1")  # it took two minutes of a core
+    for _ in range(20):  # typed again until taken, as a person would: a key that came
+        console.send("stdin", "\x15")  # right behind the flood may be dropped with it
+        console.type_line("get I 1")  # (Ctrl+U: the a's that were taken, gone)
+        with contextlib.suppress(AssertionError):
+            console.until("I1 = 1", deadline=1)
+            break
+    assert "I1 = 1" in "\n".join(console.screen.lines())  # it took up to two minutes
     assert status_of(pid, "VmRSS") < 250  # it was 705 MB
 
 
