@@ -261,6 +261,7 @@ async def test_a_frozen_log_keeps_its_lines_in_view_while_the_oldest_are_dropped
     app = Pane()
     async with app.run_test(size=(100, 20)) as pilot:
         log = app.query_one(FrameLog)
+        await until(pilot, lambda: log.size.height > 0, "the log laid out")
         flushes(MAX_LINES // 500, 1_700_000_000)
         await until(pilot, lambda: log.line_count >= MAX_LINES - 500, "the log full")
         log.auto_scroll = False  # F4

@@ -225,7 +225,13 @@ class FrameLog(InlineWidthLog):
         if self._hex_view and self._width_now() != self._hex_width:
             self._redraw()
         if self.auto_scroll:
-            self.call_after_refresh(self.scroll_end, animate=False, x_axis=False)
+            self.call_after_refresh(self._follow)
+
+    def _follow(self) -> None:
+        """To the end, unless F4 froze the view meanwhile (a resize's refresh comes
+        after the key that came after it)."""
+        if self.auto_scroll:
+            self.scroll_end(animate=False, x_axis=False)
 
     def add(self, event: Frame | Note | Alert, target: str | None = None) -> None:
         """Queue one event drained from the engine's outbox; cheap, written at the next flush.

@@ -214,8 +214,10 @@ ANSWERABLE = "[y/N]"
 
 
 def question_keys(screen: ConfirmWriteScreen) -> str:
-    """The question's keys line, as shown."""
-    return str(screen.query_one("#confirm-keys", Static).content)
+    """The question's keys line, as shown ("" while the question is still being built,
+    or has closed: no keys line to read)."""
+    shown = screen.query("#confirm-keys").results(Static)
+    return next((str(keys.content) for keys in shown), "")
 
 
 async def answerable(pilot: Pilot[Any], screen: ConfirmWriteScreen) -> None:
