@@ -10,6 +10,7 @@ shorter than a limit, so the console's drawing is judged with them all lost.
 
 from __future__ import annotations
 
+import gc
 import json
 import shutil
 import subprocess
@@ -213,3 +214,24 @@ def test_the_soak_in_a_real_terminal_keeps_drawing_with_short_timers_lost(tmp_pa
     assert seen["keys"] >= 2 and seen["keys_unanswered"] == 0, seen
     assert all(seen["changes"].get(what, 0) >= 5 for what in ("F0", "J0", "log")), seen
     assert seen["said_engine_stopped"] == 0, seen
+
+
+async def test_the_footers_old_keys_go_with_each_line_run(tmp_path: Path) -> None:
+    """Each line run changes the keys shown (Esc cancels), and the footer is composed
+    again: Textual kept every old key, data-bound to the footer's ``compact``, until that
+    changed, which it never does: about 430 KB a line, for as long as the console ran."""
+    from textual.widgets._footer import FooterKey
+
+    def live_keys() -> int:
+        gc.collect()
+        return sum(isinstance(thing, FooterKey) for thing in gc.get_objects())
+
+    async def steps(pilot: Pilot[Any], app: RacConsoleApp) -> None:
+        await connected(pilot, app)
+        await answered(pilot, app, 50)
+        before = live_keys()
+        for n in range(30):
+            await answered(pilot, app, 51 + n % 40)
+        assert live_keys() <= 2 * before, (before, live_keys())
+
+    await run_console(tmp_path, steps)

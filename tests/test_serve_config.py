@@ -42,7 +42,7 @@ def hostile_config(
 [mqtt]
 username = "plant"
 password = "secret"
-ca_file = "{ca_file}"
+ca_file = '{ca_file}'  # a literal string: a Windows path holds backslashes
 keepalive = 5
 
 [target.pubA]

@@ -121,3 +121,16 @@ class InlineWidthLog(Log):
     def _update_size(self, updates: int, lines: list[str]) -> None:  # type: ignore[override]
         if lines:
             self._update_maximum_width(updates, self.lines_width(lines))
+
+
+def forget_closed_watchers(node: DOMNode) -> None:
+    """Drop the watchers of ``node``'s reactives whose watching node has closed.
+
+    Textual keeps each watcher (``data_bind``, ``watch``) in the watched object's
+    ``__watchers`` until that reactive next changes; a footer's keys are data-bound to
+    its ``compact``, which never changes, so every recompose (each change of the keys
+    shown, at every line run) left its old keys held: about 430 KB a line, for good.
+    Checked with Textual 8.2.8."""
+    watchers: dict[str, list[tuple[DOMNode, object]]] = getattr(node, "__watchers", {})
+    for watching in watchers.values():
+        watching[:] = [(n, call) for n, call in watching if not (n._closing or n._closed)]

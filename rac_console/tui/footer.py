@@ -14,7 +14,7 @@ from textual.app import ComposeResult
 from textual.widget import Widget
 from textual.widgets import Footer
 
-from .compat import footer_key_text, footer_ready, is_palette_key
+from .compat import footer_key_text, footer_ready, forget_closed_watchers, is_palette_key
 
 #: The palette key's width besides its text: the bar at its left.
 PALETTE_BAR = 1
@@ -34,6 +34,7 @@ class FittingFooter(Footer):
         self._width = 0
 
     def compose(self) -> ComposeResult:
+        forget_closed_watchers(self)  # the keys of the last compose, gone (see there)
         widgets = list(super().compose())
         width = self.size.width or self.app.size.width
         self._width = width
