@@ -43,6 +43,7 @@ READ_EVERY = 1.0
 KEY_EVERY = 10.0
 KEY_DEADLINE = 30.0
 GAP_TARGET = 4.0
+MEMORY_MARKS = (1, 10, 30, 45)  # minutes at which the memory is said on the way
 #: A row of the table, by its name: what follows its trend's sparkline is its value.
 ROW = re.compile(r"^\W*(F0|J0)\s.*$", re.MULTILINE)
 SPARKLINE = re.compile(r"[▁▂▃▄▅▆▇█]+")
@@ -79,6 +80,7 @@ class Figures:
     rss_after_first_minute_mb: float = 0.0
     rss_end_mb: float = 0.0
     rss_max_mb: float = 0.0
+    rss_at_minute_mb: dict[int, float] = field(default_factory=dict)
     said_behind: int = 0
     said_engine_stopped: int = 0
 
@@ -196,10 +198,10 @@ def run(console: Soak, seconds: float, figures: Figures) -> None:
                 last[what] = (value, now)
         if now >= next_key:
             figures.keys += 1
-            value = 1000 + figures.keys
+            answer = f"→ {1000 + figures.keys}"
             typed = time.monotonic()
-            console.type(f"put I 50 {value}")
-            if console.until(lambda s, v=value: f"→ {v}" in s, KEY_DEADLINE) is None:
+            console.type(f"put I 50 {1000 + figures.keys}")
+            if console.until(lambda s, a=answer: a in s, KEY_DEADLINE) is None:
                 figures.keys_unanswered += 1
             else:
                 answers.append(time.monotonic() - typed)
@@ -217,6 +219,10 @@ def run(console: Soak, seconds: float, figures: Figures) -> None:
         figures.rss_after_first_minute_mb = round(after_minute[0], 1)
         figures.rss_end_mb = round(rss[-1][1], 1)
         figures.rss_max_mb = round(max(mb for _, mb in rss), 1)
+        for minute in MEMORY_MARKS:
+            marked = [mb for at, mb in rss if at >= minute * 60]
+            if marked:
+                figures.rss_at_minute_mb[minute] = round(marked[0], 1)
 
 
 def main() -> None:
@@ -249,6 +255,9 @@ def main() -> None:
         f"  memory: {figures.rss_after_first_minute_mb} MB after the first minute, "
         f"{figures.rss_end_mb} MB at the end ({growth:+.1%}), {figures.rss_max_mb} MB at most"
     )
+    if figures.rss_at_minute_mb:
+        marks = ", ".join(f"{mb} MB at {m} min" for m, mb in figures.rss_at_minute_mb.items())
+        print(f"  memory on the way: {marks}")
     print(
         f"  the status line said the screen was behind in {figures.said_behind} reads, "
         f"the engine stopped in {figures.said_engine_stopped}"
