@@ -176,6 +176,10 @@ def soak(seconds: float, size: tuple[int, int], lose_below: float | None) -> Fig
     return figures
 
 
+def shows(text: str) -> Callable[[str], bool]:
+    return lambda screen: text in screen
+
+
 def run(console: Soak, seconds: float, figures: Figures) -> None:
     start = time.monotonic()
     last: dict[str, tuple[str, float]] = {}
@@ -201,7 +205,7 @@ def run(console: Soak, seconds: float, figures: Figures) -> None:
             answer = f"→ {1000 + figures.keys}"
             typed = time.monotonic()
             console.type(f"put I 50 {1000 + figures.keys}")
-            if console.until(lambda s, a=answer: a in s, KEY_DEADLINE) is None:
+            if console.until(shows(answer), KEY_DEADLINE) is None:
                 figures.keys_unanswered += 1
             else:
                 answers.append(time.monotonic() - typed)
