@@ -13,7 +13,7 @@ import sys
 from collections.abc import Callable
 from typing import TYPE_CHECKING
 
-from ..commands.cells import DEMO_CELL, not_open, split_hosts
+from ..commands.cells import not_open, split_hosts
 from ..commands.names import find_name
 from ..protocol import InputError
 from ..protocol.text import terminal_safe
@@ -118,50 +118,28 @@ def _members(args: argparse.Namespace) -> Members | None:
         raise InputError(f"--cell {cell} and -H {args.host}: give one (a cell names its targets)")
     if args.port is not None:
         raise InputError("-p applies to one target; in a cell each profile has its port")
-    from ..commands.target import one_controller_each
-    from ..commands.target import resolve_target as resolve_target_of
+    from ..commands.target import cell_targets
     from ..engine.config import load_config
     from ..session.endpoints import addresses
-    from .target import host_and_port
 
     config = load_config()
     where = str(config.path) if config.found else f"{config.path} (no such file)"
-
-    def resolved(name: str) -> Target:
-        host, port = host_and_port(name, None)  # a profile, HOST, HOST:PORT or [v6]:PORT
-        if host is None or host == "sim":
-            raise InputError("-H names controllers; sim is not one (try --cell demo)")
-        return resolve_target_of(
-            host,
-            port,
-            profiles=config.profiles,
-            read_only_flag=bool(args.read_only),
-            resolve=addresses,
-            config_where=where,
-        )
-
+    found = cell_targets(
+        hosts,
+        cell,
+        profiles=config.profiles,
+        cells=config.cells,
+        addresses=addresses,
+        read_only_flag=bool(args.read_only),
+        config_where=where,
+    )
     args.cell_watch = ()
-    if hosts is not None:
-        return one_controller_each([_named(name, resolved(name)) for name in hosts], addresses)
-    assert cell is not None
-    found = find_name(config.cells, cell)
-    spec = config.cells[found] if found is not None else None
-    if spec is None and cell.casefold() == DEMO_CELL:
+    if found.demo:
         return _demo(args)
-    if spec is None:
-        known = ", ".join(sorted(config.cells)) or f"none in {where}"
-        raise InputError(
-            f"no cell named {cell} (cells: {known}); name one with [cell.{cell}] and "
-            f'targets = ["cell3", "cell4"], or try --cell {DEMO_CELL}'
-        )
-    args.cell_watch = spec.watch
-    args.cell_publish = spec.publish
-    return one_controller_each([_named(name, resolved(name)) for name in spec.targets], addresses)
-
-
-def _named(typed: str, target: Target) -> tuple[str, Target]:
-    """A member's name: its profile's, else the address as typed."""
-    return (target.profile.name if target.profile is not None else typed), target
+    if found.spec is not None:
+        args.cell_watch = found.spec.watch
+        args.cell_publish = found.spec.publish
+    return found.members
 
 
 def _demo(args: argparse.Namespace) -> Members:

@@ -14,7 +14,7 @@ from collections.abc import Callable, Iterator
 from contextlib import ExitStack, contextmanager
 from typing import TYPE_CHECKING
 
-from ..commands.target import Target
+from ..commands.target import Target, host_and_port
 from ..commands.target import resolve_target as resolve_target_of
 from ..engine.config import load_config
 from ..protocol.errors import InputError
@@ -39,23 +39,6 @@ def resolve_target(args: argparse.Namespace) -> Target:
         resolve=_addresses,
         config_where=where,
     )
-
-
-def host_and_port(host: str | None, port: int | None) -> tuple[str | None, int | None]:
-    """``-H HOST:PORT`` (or ``[v6]:PORT``) as ``connect`` reads it, ``-H NAME:PORT``
-    too; ``-p`` with a port in ``-H`` too is refused unless both say the same."""
-    if host is None or not (host.startswith("[") or host.count(":") == 1):
-        return host, port
-    from ..commands.language import parse_connect
-
-    address = parse_connect(host)
-    if not address.port_given:
-        return address.host, port
-    if port is not None and port != address.port:
-        raise InputError(
-            f"-H {terminal_safe(host)} and -p {port} name two ports: give the port once"
-        )
-    return address.host, address.port
 
 
 def _addresses(host: str) -> frozenset[str] | None:

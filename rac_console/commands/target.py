@@ -16,6 +16,7 @@ from ..protocol.text import close_match, endpoint, terminal_safe
 from .policy import TargetProfile, WritePolicy, Writes
 
 if TYPE_CHECKING:  # matching a name to a profile loads with the first host named
+    from .cells import CellSpec
     from .profiles import Addresses
 
 DEFAULT_PORT = 5006
@@ -161,3 +162,78 @@ def no_profile_hint(
         return f"no profile named {host} in {config_where}{meant}"
     known = f"profiles: {', '.join(sorted(profiles))}" if profiles else "the config file names none"
     return f"no profile named {host} ({known}){meant}"
+
+
+def host_and_port(host: str | None, port: int | None) -> tuple[str | None, int | None]:
+    """``-H HOST:PORT`` (or ``[v6]:PORT``) as ``connect`` reads it, ``-H NAME:PORT``
+    too; ``-p`` with a port in ``-H`` too is refused unless both say the same."""
+    if host is None or not (host.startswith("[") or host.count(":") == 1):
+        return host, port
+    from .language import parse_connect
+
+    address = parse_connect(host)
+    if not address.port_given:
+        return address.host, port
+    if port is not None and port != address.port:
+        raise InputError(
+            f"-H {terminal_safe(host)} and -p {port} name two ports: give the port once"
+        )
+    return address.host, address.port
+
+
+@dataclass(frozen=True)
+class CellTargets:
+    """The targets a cell names, each with its rules; or, for the demo cell with no
+    ``[cell.demo]`` in the config file, none: its simulators are the front end's to start."""
+
+    members: list[tuple[str, Target]]
+    spec: CellSpec | None = None  # the [cell.NAME] table that named them
+    demo: bool = False
+
+
+def cell_targets(
+    hosts: Sequence[str] | None,
+    cell: str | None,
+    *,
+    profiles: Mapping[str, TargetProfile],
+    cells: Mapping[str, CellSpec],
+    addresses: Addresses,
+    read_only_flag: bool = False,
+    config_where: str | None = None,
+) -> CellTargets:
+    """A cell's targets: the ``hosts`` given (profiles' names or addresses, ``-H a,b``),
+    or the cell named ``cell`` in the config file; each resolved as ``-H`` resolves one
+    and named by its profile (else as typed). InputError for a cell that is not there, a
+    name that is no controller, or two names reaching one controller."""
+    from .cells import DEMO_CELL
+    from .names import find_name
+
+    def resolved(name: str) -> tuple[str, Target]:
+        host, port = host_and_port(name, None)  # a profile, HOST, HOST:PORT or [v6]:PORT
+        if host is None or host == "sim":
+            raise InputError("a cell's targets are controllers; sim is not one (try --cell demo)")
+        target = resolve_target(
+            host,
+            port,
+            profiles=profiles,
+            read_only_flag=read_only_flag,
+            resolve=addresses,
+            config_where=config_where,
+        )
+        return (target.profile.name if target.profile is not None else name), target
+
+    if hosts is not None:
+        return CellTargets(one_controller_each([resolved(name) for name in hosts], addresses))
+    assert cell is not None
+    found = find_name(cells, cell)
+    spec = cells[found] if found is not None else None
+    if spec is None and cell.casefold() == DEMO_CELL:
+        return CellTargets([], demo=True)
+    if spec is None:
+        known = ", ".join(sorted(cells)) or f"none in {config_where}"
+        raise InputError(
+            f"no cell named {cell} (cells: {known}); name one with [cell.{cell}] and "
+            f'targets = ["cell3", "cell4"], or try --cell {DEMO_CELL}'
+        )
+    members = [resolved(name) for name in spec.targets]
+    return CellTargets(one_controller_each(members, addresses), spec)

@@ -6,7 +6,8 @@
   answers so many lines a connection and hangs up (``answers``; 0: at once). A reply
   may close the connection (:data:`CLOSE`) or reset it (:data:`RESET`) instead.
 - the replies: :func:`fixed_reply`, :class:`Answering` (changed while the server runs),
-  :func:`sample_reply` (the vendor's samples), :func:`reset_first`;
+  :func:`sample_reply` (the vendor's samples), :func:`reset_first`, :class:`Memory` (a
+  controller that keeps what is written, or swallows or ignores PUTs);
 - :class:`Valve`: a path to the simulator whose answers the test lets through, counting
   the requests that reached it;
 - :class:`FaultServer`: an asyncio server running a test's handler per connection, for
@@ -101,6 +102,44 @@ def reset_first(*prefixes: bytes, then: Reply) -> Reply:
         return then(line)
 
     return reply
+
+
+class Memory:
+    """A controller's variables as a reply, judged from its side: a PUT of
+    ``PUT:RC8:<index>:<type>:<variant>`` keeps the variant and answers S_OK; a GET answers
+    the variant kept (for an I never written: the index itself, ``3,<index>``, so an
+    answer names its request). ``puts``: what a PUT does instead: ``"swallow"`` (taken,
+    never answered) or ``"ignore"`` (S_OK, and the old value kept); ``hold``: a GET of
+    this line waits until the event is set before it is answered."""
+
+    def __init__(
+        self,
+        puts: Literal["keep", "swallow", "ignore"] = "keep",
+        hold: tuple[bytes, threading.Event] | None = None,
+    ) -> None:
+        self.puts = puts
+        self.hold = hold
+        self.held: dict[tuple[bytes, bytes], bytes] = {}
+        self._lock = threading.Lock()
+
+    def __call__(self, line: bytes) -> Answer:
+        word, _, rest = line.partition(b":")
+        parts = rest.split(b":", 3)  # RC8, index, type, value
+        if len(parts) < 3 or parts[0] != b"RC8":
+            return b"-2147024809\r"  # E_INVALIDARG
+        key = (parts[1], parts[2])
+        if word == b"PUT" and len(parts) == 4:
+            if self.puts == "swallow":
+                return None
+            if self.puts == "keep":
+                with self._lock:
+                    self.held[key] = parts[3]
+            return b"0\r"
+        if self.hold is not None and line == self.hold[0]:
+            self.hold[1].wait(30)
+        with self._lock:
+            value = self.held.get(key, b"3," + parts[1] if parts[2] == b"I" else None)
+        return b"0," + value + b"\r" if value is not None else b"-2147024809\r"
 
 
 def _reset(conn: socket.socket) -> None:

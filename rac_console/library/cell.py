@@ -1,0 +1,172 @@
+"""A cell for a Python script: several controllers, one connection each, and lines
+routed by ``@NAME`` as the console routes them (``rac.cell("line2")``).
+
+The targets are those ``--cell NAME`` or ``-H a,b`` would open, each under its own
+profile's rules; ``"demo"`` with no ``[cell.demo]`` in the config file starts the
+console's demo simulators in this process. A line goes where the console's planner
+says: ``@robotA put I 10 5`` to robotA, a line without ``@NAME`` to the current target
+(``use NAME`` changes it).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator, Mapping, Sequence
+from typing import TYPE_CHECKING
+
+from ..commands.language import Get, Put, Raw
+from ..commands.names import find_name
+from ..commands.routing import Nothing, OnTarget, SwitchCurrent
+from ..commands.routing import Refused as RefusedRoute
+from ..commands.target import Target, cell_targets
+from ..protocol import InputError
+from ..session import DEFAULT_TIMEOUT
+from .connection import Confirm, Connection
+from .errors import Refused
+from .results import Sent, Value, Written
+from .target import ConfigPath, check_timeout, loaded, open_session
+
+if TYPE_CHECKING:
+    from ..sim.cell import SimulatedCellThread
+
+#: What a line of a cell may run from a script: one exchange on one target, or ``use``.
+RUNS = "get, put, send, a raw GET:/PUT: line, or use NAME"
+
+
+def cell(
+    targets: str | Sequence[str],
+    *,
+    timeout: float = DEFAULT_TIMEOUT,
+    read_only: bool = False,
+    confirm: Confirm | None = None,
+    yes: bool = False,
+    config: ConfigPath = None,
+) -> Cell:
+    """The cell ``targets`` names: a ``[cell.NAME]`` of the config file (``"demo"``: the
+    demo simulators when the file names none), or a list of targets (profiles' names or
+    addresses, as ``-H a,b``). Every target is connected before this returns; the
+    options apply to each as :func:`~rac_console.connect` applies them."""
+    seconds = check_timeout(timeout)
+    settings = loaded(config)
+    where = str(settings.path) if settings.found else f"{settings.path} (no such file)"
+    hosts = None
+    if not isinstance(targets, str):
+        hosts = list(targets)
+        if not hosts or not all(isinstance(name, str) for name in hosts):
+            raise Refused(f"a cell is a [cell.NAME]'s name or a list of targets, not {targets!r}")
+    from ..session.endpoints import addresses
+
+    try:
+        found = cell_targets(
+            hosts,
+            targets if isinstance(targets, str) else None,
+            profiles=settings.profiles,
+            cells=settings.cells,
+            addresses=addresses,
+            read_only_flag=bool(read_only),
+            config_where=where,
+        )
+    except InputError as exc:
+        raise Refused(str(exc)) from None
+    simulated = None
+    members = found.members
+    if found.demo:
+        simulated, members = _demo(bool(read_only))
+    connections: dict[str, Connection] = {}
+    try:
+        for name, target in members:
+            session, _ = open_session(target, seconds)
+            connections[name] = Connection(target, session, confirm=confirm, yes=yes)
+    except BaseException:
+        for opened in connections.values():
+            opened.close()
+        if simulated is not None:
+            simulated.stop()
+        raise
+    return Cell(connections, simulated)
+
+
+def _demo(read_only: bool) -> tuple[SimulatedCellThread, list[tuple[str, Target]]]:
+    """The console's demo cell: simulators playing a handshake, in this process."""
+    from ..sim.cell import SimulatedCellThread
+
+    simulated = SimulatedCellThread().start()
+    members = [
+        (name, Target(host, port, read_only=read_only, read_only_flag=read_only, simulated=True))
+        for name, host, port in simulated.cell.addresses
+    ]
+    return simulated, members
+
+
+class Cell(Mapping[str, Connection]):
+    """The cell's connections by name (``cell["robotA"]``, any case), and :meth:`run` for
+    lines routed by ``@NAME``. A context manager; :meth:`close` closes every connection."""
+
+    def __init__(
+        self, connections: dict[str, Connection], simulated: SimulatedCellThread | None = None
+    ) -> None:
+        self._connections = connections
+        self._simulated = simulated
+        self._names = tuple(connections)
+        self.current = self._names[0]  # where a line without @NAME runs
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        """The targets' names, in the cell's order."""
+        return self._names
+
+    def __getitem__(self, name: str) -> Connection:
+        found = find_name(self._names, name) if isinstance(name, str) else None
+        if found is None:
+            raise KeyError(
+                f"no target named {name!r} in this cell; it holds {', '.join(self._names)}"
+            )
+        return self._connections[found]
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self._names)
+
+    def __len__(self) -> int:
+        return len(self._names)
+
+    def __repr__(self) -> str:
+        return f"<rac.Cell {', '.join(self._names)} (current {self.current})>"
+
+    def use(self, name: str) -> None:
+        """Lines without ``@NAME`` run on ``name`` from now on (the console's ``use``)."""
+        self.run(f"use {name}")
+
+    def run(self, line: str) -> Value | Written | Sent | None:
+        """One line of the console's language, routed as the console routes it: a get's
+        value, a put's :class:`Written`, a raw line's :class:`Sent`; None for ``use``, a
+        blank line or a comment. Lines that run elsewhere than one target (a chained
+        wait, publish) and commands other than these are Refused: call the connection's
+        methods (``cell["robotA"].watch(...)``) for the rest."""
+        from ..engine.commands import BUILTIN
+
+        if not isinstance(line, str):
+            raise Refused(f"a line is text such as '@robotA get I 10', not {line!r}")
+        route = BUILTIN.plan(line, self._names, self.current)
+        match route:
+            case Nothing():
+                return None
+            case RefusedRoute(text=text):
+                raise Refused(text)
+            case SwitchCurrent(name=name):
+                self.current = name
+                return None
+            case OnTarget(name=name, command=Get() | Put() | Raw() as command):
+                return self._connections[name]._command(command)
+        raise Refused(f"a cell's line in a script runs {RUNS}, not {line.strip()!r}")
+
+    def close(self) -> None:
+        """Close every connection (and the demo's simulators)."""
+        for connection in self._connections.values():
+            connection.close()
+        if self._simulated is not None:
+            self._simulated.stop()
+
+    def __enter__(self) -> Cell:
+        return self
+
+    def __exit__(self, *exc_info: object) -> None:
+        self.close()

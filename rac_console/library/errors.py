@@ -1,0 +1,87 @@
+"""The library's exceptions, each saying what the console says, and what each means for
+the controller: whether anything was sent, and whether a write may have happened.
+
+:class:`RacError` is the package's own base (every error rac_console raises), so
+``except rac.RacError`` catches all of them.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+from ..protocol.errors import RacError
+from ..protocol.hresult import hresult_name
+
+if TYPE_CHECKING:
+    from .results import Written
+
+__all__ = [
+    "ConnectionFailed",
+    "ControllerError",
+    "OutcomeUnknown",
+    "RacError",
+    "ReadBackMismatch",
+    "Refused",
+    "Timeout",
+]
+
+
+class Refused(RacError):
+    """Nothing was sent: read-only, a profile's rules (``allow``, a ``confirm`` profile
+    with no answer), a value or a line that cannot be written, a closed connection, a
+    broken config file. The message says why, and how to write it, as the console does."""
+
+
+class ControllerError(RacError):
+    """The controller answered an error HRESULT: ``code`` (an int) and ``name``
+    (``E_INVALIDARG``). For a write, ``written`` holds what the read-back found."""
+
+    def __init__(self, message: str, code: int, written: Written | None = None) -> None:
+        super().__init__(message)
+        self.code = code
+        self.name = hresult_name(code)
+        self.written = written
+
+
+class OutcomeUnknown(RacError):
+    """A write went out and no answer came (a timeout, the connection cut): it may have
+    been applied or may still arrive. It is never sent again; ``written`` holds the value
+    before and, when the read after it answered, what the controller held then."""
+
+    def __init__(self, message: str, written: Written | None = None) -> None:
+        super().__init__(message)
+        self.written = written
+
+
+class ReadBackMismatch(RacError):
+    """The controller answered S_OK, but the read-back does not show the value written:
+    it holds another value (``written.verified`` False), or the read-back failed
+    (``written.read_back`` None). The CLI exits 1 for it; a script should not go on as
+    if the write were done."""
+
+    def __init__(self, message: str, written: Written) -> None:
+        super().__init__(message)
+        self.written = written
+
+
+class ConnectionFailed(RacError, ConnectionError):
+    """No connection could be opened, or it ended (or carried a reply that cannot be read)
+    before a read's answer: nothing was written. ``hint`` is what ``rac-console check``
+    says to check for such a failure; ``problem`` names it in a word (``refused``,
+    ``timed out``, ...; None when the connection ended after it was opened)."""
+
+    def __init__(
+        self,
+        message: str,
+        *,
+        problem: str | None = None,
+        hint: str | None = None,
+    ) -> None:
+        super().__init__(message)
+        self.problem = problem
+        self.hint = hint
+
+
+class Timeout(RacError, TimeoutError):
+    """A read got no answer within the timeout: nothing was written (a write that got no
+    answer is :class:`OutcomeUnknown`)."""
