@@ -182,8 +182,8 @@ def test_a_malformed_file_is_refused_in_one_line_naming_it() -> None:
 @pytest.mark.parametrize(
     "text",
     [
-        'settings = { theme = "nord" }\n',
-        'settings.theme = "nord"\n',
+        "settings = 3\n",  # not a table (an inline table or dotted keys are: test_settings_toml)
+        "[[settings]]\ntheme = 'nord'\n",  # an array of tables
     ],
 )
 def test_settings_the_console_cannot_rewrite_safely_are_left_alone(text: str) -> None:
@@ -191,12 +191,15 @@ def test_settings_the_console_cannot_rewrite_safely_are_left_alone(text: str) ->
         update_settings_text(text, {"theme": "dracula"}, SOURCE)
     assert "\n" not in str(caught.value)
     assert str(caught.value).startswith(SOURCE)
+    assert str(caught.value).endswith(
+        "cannot be rewritten safely: write them as a [settings] table with one key = value a line"
+    )
 
 
 def test_a_value_over_several_lines_is_replaced_whole() -> None:
     text = '[settings]\ntheme = """\nnord"""  # multi\nio_grid = true\n'
     new = update_settings_text(text, {"theme": "dracula"}, SOURCE)
-    assert new == '[settings]\ntheme = "dracula"\nio_grid = true\n'
+    assert new == '[settings]\ntheme = "dracula"  # multi\nio_grid = true\n'  # its comment kept
 
 
 def test_a_sub_table_of_settings_is_not_the_settings_table() -> None:
@@ -235,7 +238,8 @@ def test_a_theme_the_console_does_not_have_is_said_and_ignored() -> None:
 @pytest.mark.slow
 def test_the_text_logic_imports_no_io_and_no_toolkit() -> None:
     probe = (
-        "import sys, rac_console.commands.settings\n"
+        "import sys, rac_console.commands.settings as s\n"
+        "s.update_settings_text('[settings]\\n# c\\n', {'theme': 'nord'}, 'f')\n"  # tomlkit too
         "bad = [m for m in ('asyncio', 'socket', 'threading', 'textual', 'rich',"
         " 'prompt_toolkit') if m in sys.modules]\n"
         "print(','.join(bad))"
