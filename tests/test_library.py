@@ -308,3 +308,22 @@ def test_a_watch_refuses_what_the_console_would(recording) -> None:
         with pytest.raises(rac.Refused, match="watch needs a variable"):
             rc.watch()
     assert server.lines == []
+
+
+def test_an_s_ok_whose_read_back_gets_no_answer_is_not_taken_for_a_write(recording) -> None:
+    memory = Memory()
+    gets = 0
+
+    def answers(line: bytes) -> bytes | None:
+        nonlocal gets
+        gets += line.startswith(b"GET")
+        return None if gets == 2 else memory(line)  # type: ignore[return-value]
+
+    server = recording(answers)
+    with (
+        rac.connect(HOST, port=server.port, timeout=0.5) as rc,
+        pytest.raises(rac.ReadBackMismatch, match="read back failed: no reply") as caught,
+    ):
+        rc.put("I", 10, 5)
+    assert caught.value.written == rac.Written("I10", 5, 10, None, None)
+    assert server.lines == [b"GET:RC8:10:I:", b"PUT:RC8:10:I:3,5", b"GET:RC8:10:I:"]

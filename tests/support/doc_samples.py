@@ -12,13 +12,17 @@ A fenced block is a checked sample when the line before its fence is a mark::
                                           "$ echo $?" shows the previous one's status
     <!-- sample: console: put I 10 5 -->  what the console's results pane shows for
                                           that line typed
+    <!-- sample: python -->               a Python script (the library): it runs with
+                                          the built-in simulator, exits 0 and says
+                                          nothing on stderr; what it checks, it asserts
 
 and, after ``;``, ``numbers vary`` (the simulator's moving values: every number is
 compared as a number, not by its value) or ``5999 is a free port`` (the sample's port
 5999 is one nothing listens on: the test gives it a free one). A sample that cannot be
 checked here says why: ``<!-- sample not checked: needs a controller -->``; a block that
 starts with ``$ `` or ``sim> `` and carries neither mark is a sample nobody checks, which
-the test refuses. Marks are HTML comments: GitHub shows none of them.
+the test refuses, as is a ```python block with no mark. Marks are HTML comments: GitHub
+shows none of them.
 
 Round-trip times, clock times, the simulator's port and a watch row's age vary from run
 to run: they are compared normalised (``0.22 ms`` as ``<ms> ms``); ``...`` in a sample's
@@ -36,9 +40,11 @@ from typing import Literal
 ROOT = Path(__file__).resolve().parent.parent.parent
 #: The pages whose samples are checked against the program.
 PAGES = ("README.md", "docs/cli.md", "docs/repl.md")
+#: The pages whose Python samples (the library's) are run.
+PYTHON_PAGES = ("README.md", "docs/library.md")
 
-Kind = Literal["repl", "cli", "console"]
-_KINDS: dict[str, Kind] = {"repl": "repl", "cli": "cli", "console": "console"}
+Kind = Literal["repl", "cli", "console", "python"]
+_KINDS: dict[str, Kind] = {"repl": "repl", "cli": "cli", "console": "console", "python": "python"}
 
 _FENCE = re.compile(r"^(```|~~~)")
 _MARK = re.compile(r"^<!--\s*sample(?P<not>\s+not checked)?\s*:\s*(?P<body>.*?)\s*-->\s*$")
@@ -92,7 +98,8 @@ def read_page(page: str, text: str | None = None) -> Found:
         block = tuple(lines[at + 1 : end])
         mark = _MARK.match(lines[at - 1]) if at > 0 else None
         if mark is None:
-            if block and block[0].startswith(("$ ", "sim> ")):
+            python = lines[at][3:].strip().lower() in ("python", "py")
+            if python or (block and block[0].startswith(("$ ", "sim> "))):
                 found.unmarked.append(at + 1)
         elif mark.group("not"):
             found.unchecked.append((at + 1, mark.group("body")))
@@ -107,7 +114,9 @@ def _sample(page: str, line: int, body: str, block: tuple[str, ...]) -> Sample:
     word, _, typed = (part.strip() for part in what.partition(":"))
     kind = _KINDS.get(word)
     if kind is None or (kind == "console") != bool(typed):
-        raise ValueError(f"{page}:{line}: a sample is repl, cli or console: LINE, not {what!r}")
+        raise ValueError(
+            f"{page}:{line}: a sample is repl, cli or console: LINE (or python), not {what!r}"
+        )
     numbers_vary, ports = False, []
     for option in options:
         if option == "numbers vary":
