@@ -118,6 +118,22 @@ def test_the_floor_benchmark_reports_every_side_against_the_bare_loop(tmp_path: 
     assert figures["new.bare.rate_to_bare"] == 1.0
 
 
+def test_the_library_benchmark_prints_every_side_and_the_overhead(env: dict[str, str]) -> None:
+    result = subprocess.run(
+        [sys.executable, "library_get.py", "--rounds", "1", "--requests", "200"],
+        cwd=BENCHMARKS,
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+    assert result.returncode == 0, result.stderr[-2000:]
+    rows = {line.split()[0]: line.split()[1:] for line in result.stdout.splitlines()[2:6]}
+    assert set(rows) == {"bare", "session", "library", "aio"}
+    assert all(float(cells[0].replace(",", "")) > 0 for cells in rows.values())
+    assert "library over Session.get: " in result.stdout and "µs a get" in result.stdout
+
+
 @needs_mosquitto
 @pytest.mark.skipif(
     shutil.which("cc") is None and shutil.which("gcc") is None, reason="no C compiler"
