@@ -13,24 +13,23 @@ that means the write may have happened (check it with a get).
 from __future__ import annotations
 
 import asyncio
-from collections.abc import AsyncIterator, Callable, Generator, Sequence
+from collections.abc import AsyncIterator, Callable, Generator
 from concurrent.futures import ThreadPoolExecutor
-from functools import partial
-from typing import Any, Literal, TypeVar, overload
+from functools import partial, wraps
+from typing import Any, Generic, Literal, ParamSpec, Self, TypeVar, overload
 
 from .commands.language import VarRef
 from .library.cell import Cell
 from .library.cell import cell as open_cell
-from .library.connection import EVERY, Confirm, Connection, watch_list, watch_period
+from .library.connection import EVERY, Connection, watch_list, watch_period
 from .library.connection import connect as open_connection
 from .library.errors import Refused
 from .library.results import Reading, Sent, Value, Written
-from .library.target import ConfigPath
-from .session import DEFAULT_TIMEOUT
 
 __all__ = ["AsyncCell", "AsyncConnection", "cell", "connect"]
 
 T = TypeVar("T")
+P = ParamSpec("P")
 Opened = TypeVar("Opened", Connection, Cell)
 
 
@@ -76,25 +75,28 @@ def _close_opened(future: asyncio.Future[Any]) -> None:
         future.result().close()
 
 
-class AsyncConnection:
-    """One controller, awaited: ``await rc.get(...)``, ``put``, ``send``, ``async for
-    reading in rc.watch(...)``. Opened by ``async with`` or ``await``."""
+class _Awaited(Generic[Opened]):
+    """What a connection and a cell share awaited: opened by ``async with`` or ``await``
+    on a thread of their own, and closed there once every call asked before has run."""
 
-    def __init__(self, opening: Callable[[], Connection]) -> None:
-        self._opening = opening
+    #: How a call made before the opening names the way to open it.
+    _OPEN_FIRST = "not connected yet: async with rac.aio.connect(...) as rc"
+
+    def __init__(self, opening: Callable[[], Opened]) -> None:
+        self._opening: Callable[[], Opened] = opening
         self._thread = _Thread()
-        self._connection: Connection | None = None
+        self._value: Opened | None = None
 
-    async def open(self) -> AsyncConnection:
-        """Connect (once); ConnectionFailed or Refused as :func:`rac_console.connect`."""
-        if self._connection is None:
-            self._connection = await self._thread.open(self._opening)
+    async def open(self) -> Self:
+        """Connect (once); ConnectionFailed or Refused as the library's own."""
+        if self._value is None:
+            self._value = await self._thread.open(self._opening)
         return self
 
-    def __await__(self) -> Generator[Any, None, AsyncConnection]:
+    def __await__(self) -> Generator[Any, None, Self]:
         return self.open().__await__()
 
-    async def __aenter__(self) -> AsyncConnection:
+    async def __aenter__(self) -> Self:
         return await self.open()
 
     async def __aexit__(self, *exc_info: object) -> None:
@@ -102,15 +104,24 @@ class AsyncConnection:
 
     async def close(self) -> None:
         """Close once every call asked before has run."""
-        connection = self._connection
-        await self._thread.close(connection.close if connection is not None else None)
+        value = self._value
+        await self._thread.close(value.close if value is not None else None)
+
+    @property
+    def _opened(self) -> Opened:
+        if self._value is None:
+            raise Refused(self._OPEN_FIRST)
+        return self._value
+
+
+class AsyncConnection(_Awaited[Connection]):
+    """One controller, awaited: ``await rc.get(...)``, ``put``, ``send``, ``async for
+    reading in rc.watch(...)``. Opened by ``async with`` or ``await``."""
 
     @property
     def connection(self) -> Connection:
         """The connection below (its host, port, profile, writes)."""
-        if self._connection is None:
-            raise Refused("not connected yet: async with rac.aio.connect(...) as rc")
-        return self._connection
+        return self._opened
 
     @overload
     async def get(self, kind: Literal["I", "i"], index: int) -> int: ...
@@ -159,93 +170,47 @@ class AsyncConnection:
                 due = loop.time()
 
 
-def connect(
-    target: str,
-    *,
-    port: int | None = None,
-    timeout: float = DEFAULT_TIMEOUT,
-    read_only: bool = False,
-    confirm: Confirm | None = None,
-    yes: bool = False,
-    config: ConfigPath = None,
-) -> AsyncConnection:
+def _awaited(
+    opening: Callable[P, Opened], face: Callable[[Callable[[], Opened]], T], doc: str
+) -> Callable[P, T]:
+    """``opening``'s parameters (one signature for both faces), its result opened awaited
+    (``face``)."""
+
+    @wraps(opening)
+    def awaited(*args: P.args, **kwargs: P.kwargs) -> T:
+        return face(partial(opening, *args, **kwargs))
+
+    awaited.__doc__ = doc
+    return awaited
+
+
+connect = _awaited(
+    open_connection,
+    AsyncConnection,
     """:func:`rac_console.connect`, awaited: ``async with rac.aio.connect("sim") as rc``
-    (or ``rc = await rac.aio.connect("sim")``, then ``await rc.close()``). ``confirm`` is
-    called on the connection's thread."""
-    return AsyncConnection(
-        partial(
-            open_connection,
-            target,
-            port=port,
-            timeout=timeout,
-            read_only=read_only,
-            confirm=confirm,
-            yes=yes,
-            config=config,
-        )
-    )
+    (or ``rc = await rac.aio.connect("sim")``, then ``await rc.close()``); the same
+    parameters. ``confirm`` is called on the connection's thread.""",
+)
 
 
-class AsyncCell:
+class AsyncCell(_Awaited[Cell]):
     """:class:`rac_console.Cell`, awaited: ``await cell.run("@robotA put I 10 5")``. Its
     lines run one at a time on one thread of the cell's, in the order they start."""
 
-    def __init__(self, opening: Callable[[], Cell]) -> None:
-        self._opening = opening
-        self._thread = _Thread()
-        self._cell: Cell | None = None
-
-    async def open(self) -> AsyncCell:
-        if self._cell is None:
-            self._cell = await self._thread.open(self._opening)
-        return self
-
-    def __await__(self) -> Generator[Any, None, AsyncCell]:
-        return self.open().__await__()
-
-    async def __aenter__(self) -> AsyncCell:
-        return await self.open()
-
-    async def __aexit__(self, *exc_info: object) -> None:
-        await self.close()
-
-    async def close(self) -> None:
-        cell = self._cell
-        await self._thread.close(cell.close if cell is not None else None)
+    _OPEN_FIRST = "not connected yet: async with rac.aio.cell(...) as cell"
 
     @property
     def names(self) -> tuple[str, ...]:
         return self._opened.names
-
-    @property
-    def _opened(self) -> Cell:
-        if self._cell is None:
-            raise Refused("not connected yet: async with rac.aio.cell(...) as cell")
-        return self._cell
 
     async def run(self, line: str) -> Value | Written | Sent | None:
         """:meth:`rac_console.Cell.run`, awaited: one line at a time, in order."""
         return await self._thread.call(self._opened.run, line)
 
 
-def cell(
-    targets: str | Sequence[str],
-    *,
-    timeout: float = DEFAULT_TIMEOUT,
-    read_only: bool = False,
-    confirm: Confirm | None = None,
-    yes: bool = False,
-    config: ConfigPath = None,
-) -> AsyncCell:
-    """:func:`rac_console.cell`, awaited: ``async with rac.aio.cell("demo") as cell``."""
-    return AsyncCell(
-        partial(
-            open_cell,
-            targets,
-            timeout=timeout,
-            read_only=read_only,
-            confirm=confirm,
-            yes=yes,
-            config=config,
-        )
-    )
+cell = _awaited(
+    open_cell,
+    AsyncCell,
+    """:func:`rac_console.cell`, awaited: ``async with rac.aio.cell("demo") as cell``; the
+    same parameters.""",
+)

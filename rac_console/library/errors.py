@@ -9,21 +9,11 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
-from ..protocol.errors import RacError
+from ..protocol.errors import RacError as RacError  # the package's base, named here too
 from ..protocol.hresult import hresult_name
 
 if TYPE_CHECKING:
     from .results import Written
-
-__all__ = [
-    "ConnectionFailed",
-    "ControllerError",
-    "OutcomeUnknown",
-    "RacError",
-    "ReadBackMismatch",
-    "Refused",
-    "Timeout",
-]
 
 
 class Refused(RacError):
