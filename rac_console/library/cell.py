@@ -23,7 +23,7 @@ from ..session import DEFAULT_TIMEOUT
 from .connection import Confirm, Connection
 from .errors import Refused
 from .results import Sent, Value, Written
-from .target import ConfigPath, check_timeout, loaded, open_session
+from .target import ConfigPath, check_timeout, config_named, loaded, open_session
 
 if TYPE_CHECKING:
     from ..sim.cell import SimulatedCellThread
@@ -47,7 +47,7 @@ def cell(
     options apply to each as :func:`~rac_console.connect` applies them."""
     seconds = check_timeout(timeout)
     settings = loaded(config)
-    where = str(settings.path) if settings.found else f"{settings.path} (no such file)"
+    where = config_named(settings)
     hosts = None
     if not isinstance(targets, str):
         hosts = list(targets)

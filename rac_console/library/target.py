@@ -42,6 +42,11 @@ def loaded(config: ConfigPath) -> Config:
         raise Refused(str(exc)) from None
 
 
+def config_named(config: Config) -> str:
+    """The config file as a message names it (``... (no such file)`` when there is none)."""
+    return str(config.path) if config.found else f"{config.path} (no such file)"
+
+
 def resolve(target: str, port: int | None, read_only: bool, config: Config) -> Target:
     """The target ``target`` names, with its profile's rules; Refused for a name or a
     port that cannot be one."""
@@ -51,7 +56,7 @@ def resolve(target: str, port: int | None, read_only: bool, config: Config) -> T
         raise Refused(f"port is a number from 1 to 65535, got {port!r}")
     if port is not None and not 0 < port < 65536:
         raise Refused(f"port must be a number from 1 to 65535, got {port}")
-    where = str(config.path) if config.found else f"{config.path} (no such file)"
+    where = config_named(config)
     try:
         if target == SIMULATOR:
             host, given = None, port
