@@ -40,7 +40,7 @@ from sim_harness import SimulatorProcess  # noqa: E402
 
 from rac_console.commands.target import Target  # noqa: E402
 from rac_console.engine import Cycle, EngineOptions  # noqa: E402
-from rac_console.engine.cell import Cell  # noqa: E402
+from rac_console.engine.cell.cell import Cell  # noqa: E402
 
 ROWS = "I 0-99"
 TARGET = 0.8

@@ -22,9 +22,9 @@ import threading
 import time
 
 from rac_console.commands.target import Target
-from rac_console.engine.cell import Cell
-from rac_console.engine.events import Result
-from rac_console.engine.options import EngineOptions
+from rac_console.engine.cell.cell import Cell
+from rac_console.engine.published.events import Result
+from rac_console.engine.setup.options import EngineOptions
 from rac_console.sim.cell import SimulatedCellThread
 
 

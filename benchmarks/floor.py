@@ -71,7 +71,7 @@ class Worker:
 
     def __init__(self, port: int) -> None:
         from rac_console.commands.language import Get, VarRef
-        from rac_console.engine.execute import execute, measure_latency
+        from rac_console.engine.exchange.execute import execute, measure_latency
         from rac_console.protocol import kind_of
         from rac_console.session import Session
 

@@ -18,7 +18,7 @@ from bench_common import CPrograms, start_responder
 
 from rac_console.commands.exchange_parsers import parse_put
 from rac_console.commands.policy import WritePolicy
-from rac_console.engine.writes import WriteRules, write
+from rac_console.engine.exchange.writes import WriteRules, write
 from rac_console.session import Session
 
 PUT = parse_put("I 10 5")

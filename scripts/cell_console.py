@@ -16,9 +16,9 @@ from pathlib import Path
 
 from rac_console.commands.policy import TargetProfile, WritePolicy, Writes
 from rac_console.commands.target import Target
-from rac_console.engine.cell import Cell
-from rac_console.engine.options import EngineOptions
-from rac_console.engine.registry import Where
+from rac_console.engine.cell.cell import Cell
+from rac_console.engine.commands.registry import Where
+from rac_console.engine.setup.options import EngineOptions
 from rac_console.present.history import History
 from rac_console.sim.cell import SimulatedCellThread
 from rac_console.tui.app import run_console

@@ -19,8 +19,8 @@ from rac_console.commands.plant import parse_mqtt_address
 from rac_console.commands.policy import TargetProfile, WritePolicy, Writes, parse_allow
 from rac_console.commands.target import Target
 from rac_console.engine import Engine
-from rac_console.engine.cell import Cell
-from rac_console.engine.options import EngineOptions
+from rac_console.engine.cell.cell import Cell
+from rac_console.engine.setup.options import EngineOptions
 from rac_console.present.history import History
 from rac_console.sim.cell import SimulatedCellThread
 from rac_console.sim.thread import SimulatorThread

@@ -24,7 +24,7 @@ import pytest
 from textual.pilot import Pilot
 from textual.timer import Timer
 
-from rac_console.engine import jobs
+from rac_console.engine.commands import jobs
 from rac_console.tui.app import OutboxWoke, RacConsoleApp
 
 from .support.drivers import connected, log_text, make_app, results_text, type_line, until

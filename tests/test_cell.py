@@ -14,7 +14,7 @@ from rac_console.commands.cells import parse_cells, split_address, split_hosts
 from rac_console.commands.policy import WritePolicy, Writes
 from rac_console.commands.target import Target
 from rac_console.engine import Result
-from rac_console.engine.cell import Cell
+from rac_console.engine.cell.cell import Cell
 from rac_console.protocol import InputError, kind_of
 from rac_console.sim.thread import SimulatorThread
 from tests.support.cells import CellFront
@@ -134,7 +134,7 @@ def test_the_pure_parts() -> None:
     with pytest.raises(InputError, match="needs a command"):
         split_address("@cell4")
     from rac_console.commands.routing import OnTarget, Refused
-    from rac_console.engine.commands import BUILTIN
+    from rac_console.engine.commands.builtin import BUILTIN
 
     routed = BUILTIN.plan("get I 1", ["a", "b"], "b")
     assert isinstance(routed, OnTarget) and (routed.name, routed.text) == ("b", "get I 1")

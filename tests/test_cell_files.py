@@ -18,7 +18,7 @@ import pytest
 
 from rac_console.commands.target import Target
 from rac_console.engine import EngineOptions
-from rac_console.engine.cell import Cell
+from rac_console.engine.cell.cell import Cell
 from rac_console.sim.replay import load_recordings
 from rac_console.sim.thread import SimulatorThread
 from tests.support.cells import CellFront

@@ -7,7 +7,7 @@ import time
 from dataclasses import replace
 
 from rac_console.commands.language import parse_var
-from rac_console.engine.events import RowView, Status
+from rac_console.engine.published.events import RowView, Status
 from rac_console.present.cell_status import Badge, cell_status_text
 from rac_console.present.completion import complete
 from rac_console.present.filtering import FrameFilter

@@ -2,7 +2,7 @@
 run only with the context and the command object its handler takes.
 
 ``help`` lists the commands in the order of the language's ``COMMAND_WORDS``. Every
-entry of every module of ``rac_console.engine.commands`` is there exactly once; an
+entry of every module of ``rac_console.engine.commands.builtin`` is there exactly once; an
 entry added without its word (or a word without its entry) stops the registry from
 loading, rather than being listed wherever its module happened to put it.
 """
@@ -14,15 +14,14 @@ import pkgutil
 
 import pytest
 
-import rac_console.engine.commands as package
+import rac_console.engine.commands.builtin as package
 from rac_console.commands.exchange_parsers import parse_get
 from rac_console.commands.language import COMMAND_WORDS, Get, Simple, Step
 from rac_console.engine import Feedback, Message
-from rac_console.engine.commands import BUILTIN, help_lines, parse_command
-from rac_console.engine.context import JobContext
-from rac_console.engine.jobs import run_job
-from rac_console.engine.options import target_of
-from rac_console.engine.registry import (
+from rac_console.engine.commands.builtin import BUILTIN, help_lines, parse_command
+from rac_console.engine.commands.context import JobContext
+from rac_console.engine.commands.jobs import run_job
+from rac_console.engine.commands.registry import (
     EVERYWHERE,
     AnySpec,
     CommandSpec,
@@ -31,7 +30,8 @@ from rac_console.engine.registry import (
     Where,
     in_order,
 )
-from rac_console.engine.session_context import SessionContext
+from rac_console.engine.commands.session_context import SessionContext
+from rac_console.engine.setup.options import target_of
 
 
 def module_specs() -> dict[str, list[AnySpec]]:

@@ -27,7 +27,7 @@ from rac_console.commands.language import (
     parse_var,
     split_word,
 )
-from rac_console.engine.commands import parse_command
+from rac_console.engine.commands.builtin import parse_command
 from rac_console.protocol import InputError
 
 C = TypeVar("C")

@@ -20,18 +20,18 @@ from rac_console.cli.parser import build_cli
 from rac_console.commands.policy import TargetProfile, WritePolicy, Writes
 from rac_console.commands.target import Target
 from rac_console.engine import Engine, EngineOptions, Status
-from rac_console.engine.where import Where
+from rac_console.engine.setup.where import Where
 
 #: What the first screen does not need: the engine's parts and commands, the sessions,
 #: the command language, the simulator, the help and the confirm question, TOML.
 NOT_BEFORE_THE_FIRST_PAINT = (
     "rac_console.commands.language",
     "rac_console.commands.outcome",
-    "rac_console.engine.commands",
-    "rac_console.engine.events",
-    "rac_console.engine.link",
-    "rac_console.engine.poller",
-    "rac_console.engine.registry",
+    "rac_console.engine.commands.builtin",
+    "rac_console.engine.published.events",
+    "rac_console.engine.polling.link",
+    "rac_console.engine.polling.poller",
+    "rac_console.engine.commands.registry",
     "rac_console.session.blocking",
     "rac_console.sim",
     "rac_console.tui.confirm_screen",

@@ -319,7 +319,7 @@ async def test_argument_hint_and_history_suggestion_are_both_shown(tmp_path: Pat
 async def test_a_cut_candidate_list_says_how_many_more(tmp_path: Path) -> None:
     app = make_app(tmp_path)
     async with app.run_test(size=(120, 40)) as pilot:
-        from rac_console.engine.commands import BUILTIN
+        from rac_console.engine.commands.builtin import BUILTIN
         from rac_console.present.completion import WHOLE_LIST
 
         await type_line(pilot, "help ", enter=False, keys=True)  # 19 commands: cut

@@ -21,7 +21,7 @@ import pytest
 
 from rac_console.commands.language import VarRef
 from rac_console.engine import Engine
-from rac_console.engine.csvlog import CsvLog
+from rac_console.engine.watch.csvlog import CsvLog
 from rac_console.protocol import VT, Variant, kind_of
 from rac_console.session.blocking import Session
 from rac_console.sim.thread import SimulatorThread

@@ -17,7 +17,7 @@ from typing import TypeVar
 import pytest
 
 from rac_console.engine import Engine, Status
-from rac_console.engine.csvlog import columns_of
+from rac_console.engine.watch.csvlog import columns_of
 from rac_console.protocol import InputError
 from tests.support.drivers import Front
 from tests.support.servers import RecordingServer

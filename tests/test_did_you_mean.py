@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import pytest
 
-from rac_console.engine.commands import parse_command
+from rac_console.engine.commands.builtin import parse_command
 from rac_console.protocol import InputError
 from rac_console.protocol.text import close_match
 

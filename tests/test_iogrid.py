@@ -10,7 +10,7 @@ from rich.style import Style
 from rich.text import Text
 
 from rac_console.commands.language import VarRef
-from rac_console.engine.events import RowView
+from rac_console.engine.published.events import RowView
 from rac_console.present.iogrid import (
     NO_DECIMAL,
     STYLE_OFF,

@@ -13,8 +13,8 @@ import itertools
 
 import pytest
 
-from rac_console.engine.backoff import FIRST_DELAY, MAX_DELAY, Backoff
-from rac_console.engine.schedule import Schedule
+from rac_console.engine.polling.backoff import FIRST_DELAY, MAX_DELAY, Backoff
+from rac_console.engine.polling.schedule import Schedule
 
 T0 = 1000.0  # any reading of a monotonic clock
 

@@ -13,7 +13,7 @@ from pathlib import Path
 
 import pytest
 
-from rac_console.engine.watchlist import load
+from rac_console.engine.watch.watchlist import load
 from rac_console.present.history import History
 from rac_console.protocol import InputError
 from rac_console.tui.status_bar import StatusBar
@@ -252,7 +252,7 @@ def test_history_writers_in_two_processes_lose_nothing(tmp_path: Path) -> None:
 def test_a_watch_list_is_taken_as_written_or_refused(
     tmp_path: Path, content: str, message: str
 ) -> None:
-    from rac_console.engine.watchlist import load
+    from rac_console.engine.watch.watchlist import load
     from rac_console.protocol import InputError
 
     path = tmp_path / "cell.toml"

@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 
 from rac_console.engine import Cycle, Note, Outbox
-from rac_console.engine import outbox as outbox_module
+from rac_console.engine.published import outbox as outbox_module
 
 
 def test_cycles_are_shed_oldest_first_and_counted_like_frames(

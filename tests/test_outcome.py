@@ -9,7 +9,7 @@ import pytest
 
 from rac_console.commands.language import Get, VarRef
 from rac_console.commands.outcome import ExitStatus, Outcome
-from rac_console.engine.execute import execute
+from rac_console.engine.exchange.execute import execute
 from rac_console.protocol import kind_of
 from rac_console.session import Session
 from rac_console.sim.thread import SimulatorThread

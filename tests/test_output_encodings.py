@@ -87,7 +87,7 @@ CONFIG = '[target.cell3]\nhost = "127.0.0.1"\nlabel = "Zelle 3 — Schweißen"\n
 
 
 def test_a_config_saved_as_utf16_by_powershell_is_read(tmp_path: Path) -> None:
-    from rac_console.engine.config import load_config
+    from rac_console.engine.setup.config import load_config
 
     for encoding in ("utf-16", "utf-16-be"):
         data = (
@@ -100,7 +100,7 @@ def test_a_config_saved_as_utf16_by_powershell_is_read(tmp_path: Path) -> None:
 
 
 def test_a_config_in_ansi_says_what_it_looks_like_and_how_to_save_it(tmp_path: Path) -> None:
-    from rac_console.engine.config import load_config
+    from rac_console.engine.setup.config import load_config
     from rac_console.protocol import InputError
 
     with pytest.raises(InputError, match=r"looks like ANSI .* save it as UTF-8"):

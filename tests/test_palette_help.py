@@ -14,8 +14,8 @@ import pytest
 from textual.command import CommandList, CommandPalette
 from textual.widgets import Input
 
-from rac_console.engine.commands import BUILTIN
-from rac_console.engine.registry import RAW_HELP
+from rac_console.engine.commands.builtin import BUILTIN
+from rac_console.engine.commands.registry import RAW_HELP
 from rac_console.present.help_text import (
     HelpEntry,
     HelpSection,

@@ -16,7 +16,7 @@ from rac_console.commands.plant import (
     topic_level,
 )
 from rac_console.commands.profiles import parse_config
-from rac_console.engine.plant_tap import plant_name
+from rac_console.engine.polling.plant_tap import plant_name
 from rac_console.plant.payload import numeric_fields, payload, value_json
 from rac_console.protocol import KINDS, VT, InputError, Variant
 from rac_console.protocol.variables import R4_ARRAY

@@ -15,7 +15,7 @@ import pytest
 
 from rac_console.commands.policy import AllowRange, WritePolicy, Writes
 from rac_console.commands.profiles import colour_syntax_ok, parse_config
-from rac_console.engine.config import CONFIG_ENV, config_path, load_config
+from rac_console.engine.setup.config import CONFIG_ENV, config_path, load_config
 from rac_console.protocol import InputError, kind_of
 
 SOURCE = "/etc/rac/config.toml"

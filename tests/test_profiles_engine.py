@@ -14,7 +14,7 @@ import pytest
 from rac_console.commands.language import Connect
 from rac_console.commands.policy import TargetProfile, WritePolicy, Writes, parse_allow
 from rac_console.engine import Engine
-from rac_console.engine.commands import parse_command
+from rac_console.engine.commands.builtin import parse_command
 from rac_console.sim.thread import SimulatorThread
 from tests.support.drivers import Front
 

@@ -2,7 +2,7 @@
 the confirm question ``Write I10: 14 → 15 on Cell 3 — welding? [y/N]`` (default No),
 driven through prompt-toolkit's pipe input against the real simulator.
 
-The end-to-end test needs the write pipeline's confirm question (engine/writes.py).
+The end-to-end test needs the write pipeline's confirm question (engine/exchange/writes.py).
 """
 
 from __future__ import annotations
@@ -16,8 +16,8 @@ from prompt_toolkit.document import Document
 
 from rac_console.commands.policy import WritePolicy, Writes
 from rac_console.engine import CONFIRM_GUARD_SECONDS, ConfirmWrite
-from rac_console.engine.config import CONFIG_ENV, load_config
-from rac_console.engine.status import LABEL_WIDTH
+from rac_console.engine.published.status import LABEL_WIDTH
+from rac_console.engine.setup.config import CONFIG_ENV, load_config
 from rac_console.repl import asking as asking_module
 from rac_console.repl.prompt_parts import confirm_message, prompt_fragments, toolbar_fragments
 from rac_console.sim.thread import SimulatorThread

@@ -3,7 +3,7 @@ status line, ``connect NAME`` and ``connect sim``, and the confirm modal a typed
 Enter cannot answer.
 
 A second simulator on 127.0.0.1 port 0 plays the controller a profile names. The
-end-to-end confirm tests need the write pipeline's confirm question (engine/writes.py).
+end-to-end confirm tests need the write pipeline's confirm question (engine/exchange/writes.py).
 """
 
 from __future__ import annotations
@@ -18,8 +18,8 @@ from textual.widgets import Static
 
 from rac_console.commands.policy import TargetProfile, WritePolicy, Writes
 from rac_console.engine import ConfirmWrite
-from rac_console.engine.config import CONFIG_ENV, load_config
-from rac_console.engine.status import LABEL_WIDTH
+from rac_console.engine.published.status import LABEL_WIDTH
+from rac_console.engine.setup.config import CONFIG_ENV, load_config
 from rac_console.sim.thread import SimulatorThread
 from rac_console.tui import confirm_screen
 from rac_console.tui.app import RacConsoleApp

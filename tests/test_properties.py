@@ -11,7 +11,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from rac_console.engine.commands import parse_command
+from rac_console.engine.commands.builtin import parse_command
 from rac_console.protocol import (
     RacError,
     Variant,

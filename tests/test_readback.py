@@ -532,7 +532,7 @@ def test_a_config_saved_with_a_bom_is_read(
 
 
 def test_settings_saved_into_a_file_with_a_bom_keep_it(tmp_path: Path) -> None:
-    from rac_console.engine.settings import SettingsFile
+    from rac_console.engine.setup.settings import SettingsFile
 
     config = tmp_path / "config.toml"
     original = b'\xef\xbb\xbf# cells\r\n[target.cell3]\r\nhost = "h"\r\n'

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pytest
 
-from rac_console.engine.backoff import (
+from rac_console.engine.polling.backoff import (
     EARLY_EXCHANGES,
     FIRST_DELAY,
     GOOD_STRETCH,

@@ -15,10 +15,10 @@ import pytest
 from rac_console.cli.main import main
 from rac_console.commands.language import Get, VarRef, parse_var
 from rac_console.engine import Engine, Feedback, Message
-from rac_console.engine.commands import BUILTIN
-from rac_console.engine.context import JobContext
-from rac_console.engine.execute import execute
-from rac_console.engine.registry import EVERYWHERE, CommandSpec, Where, variable_completion
+from rac_console.engine.commands.builtin import BUILTIN
+from rac_console.engine.commands.context import JobContext
+from rac_console.engine.commands.registry import EVERYWHERE, CommandSpec, Where, variable_completion
+from rac_console.engine.exchange.execute import execute
 from rac_console.present.completion import complete, hint
 from rac_console.present.tokens import tokenize
 from rac_console.protocol import InputError

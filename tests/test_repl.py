@@ -305,7 +305,7 @@ async def test_on_a_live_controller_the_banner_says_live_with_the_profile(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     """Only the simulator had a first line; a live target started with a bare prompt."""
-    from rac_console.engine.config import CONFIG_ENV, load_config
+    from rac_console.engine.setup.config import CONFIG_ENV, load_config
     from rac_console.sim.thread import SimulatorThread
 
     with SimulatorThread() as cell:

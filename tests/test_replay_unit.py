@@ -17,7 +17,7 @@ from pathlib import Path
 
 import pytest
 
-from rac_console.engine.recorder import FrameRecorder
+from rac_console.engine.files.recorder import FrameRecorder
 from rac_console.protocol import escape_bytes, parse_response
 from rac_console.protocol.hresult import (
     E_ACCESSDENIED,

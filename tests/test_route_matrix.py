@@ -18,7 +18,7 @@ from pathlib import Path
 import pytest
 
 from rac_console.cli.main import make_cell, parse_args, settle_targets
-from rac_console.engine.cell import Cell
+from rac_console.engine.cell.cell import Cell
 from rac_console.present.history import History
 from rac_console.tui.app import RacConsoleApp
 from tests.support.drivers import Driver, cli, type_line, until

@@ -17,10 +17,10 @@ import pytest
 from rac_console.commands.cells import MOST_WATCHED
 from rac_console.commands.conditions import parse_wait
 from rac_console.commands.target import Target
-from rac_console.engine.cell import Cell
-from rac_console.engine.options import EngineOptions
-from rac_console.engine.watchlist import MAX_ROWS
-from rac_console.engine.where import Where
+from rac_console.engine.cell.cell import Cell
+from rac_console.engine.setup.options import EngineOptions
+from rac_console.engine.setup.where import Where
+from rac_console.engine.watch.watchlist import MAX_ROWS
 from rac_console.present.history import History
 from rac_console.sim.replay import read_targets
 from rac_console.tui.app import RacConsoleApp

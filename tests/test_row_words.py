@@ -4,8 +4,8 @@ read is not "stale" (nothing old is shown), and a grid of eight bits shows their
 from __future__ import annotations
 
 from rac_console.commands.language import VarRef
-from rac_console.engine.watch import WatchRow
-from rac_console.present.cells import status_cell
+from rac_console.engine.watch.rows import WatchRow
+from rac_console.present.table_cells import status_cell
 from rac_console.protocol import KINDS, VT, Variant
 
 

@@ -18,8 +18,8 @@ import pytest
 from rac_console.commands.config_keys import NAMED_TABLES, PLAIN_TABLES, withheld_notice, withhold
 from rac_console.commands.plant import CA_FILE_ENV, PASSWORD_ENV, USERNAME_ENV, Credentials
 from rac_console.commands.reach import Reach
-from rac_console.engine.config import load_config
-from rac_console.engine.where import Where
+from rac_console.engine.setup.config import load_config
+from rac_console.engine.setup.where import Where
 from tests.support.drivers import RAC, Running
 from tests.support.servers import RecordingServer, fixed_reply
 from tests.support.serving import consoles_of, open_console, start_serve, until

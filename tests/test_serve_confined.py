@@ -11,8 +11,8 @@ from pathlib import Path
 import pytest
 
 from rac_console.commands.routing import Reach
-from rac_console.engine.commands import BUILTIN
-from rac_console.engine.where import AT_A_TERMINAL, Where
+from rac_console.engine.commands.builtin import BUILTIN
+from rac_console.engine.setup.where import AT_A_TERMINAL, Where
 from tests.support.servers import RecordingServer
 from tests.support.serving import Console, Served, consoles_of, spend_link, start_serve, until
 

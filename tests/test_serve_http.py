@@ -541,7 +541,7 @@ def test_the_private_parts_relied_on_are_where_they_were() -> None:
 async def test_a_served_console_says_so_on_its_status_line(tmp_path: Path) -> None:
     """A session in a browser is not the console at the cell's own screen: its status line
     starts with SERVED (an unserved console's does not)."""
-    from rac_console.engine.where import Where
+    from rac_console.engine.setup.where import Where
     from rac_console.tui.status_bar import StatusBar
     from tests.support.drivers import make_app, until
 

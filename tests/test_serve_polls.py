@@ -11,7 +11,7 @@ import time
 import pytest
 
 from rac_console.engine import Engine
-from rac_console.engine.poll_bounds import (
+from rac_console.engine.setup.poll_bounds import (
     MAX_ROWS_ENV,
     MIN_INTERVAL_ENV,
     SERVED_MAX_ROWS,
@@ -20,7 +20,7 @@ from rac_console.engine.poll_bounds import (
     PollBounds,
     bounds_for,
 )
-from rac_console.engine.where import Where
+from rac_console.engine.setup.where import Where
 from tests.support.drivers import Front
 from tests.support.servers import RecordingServer
 from tests.support.serving import consoles_of, open_console, start_serve, until

@@ -13,7 +13,7 @@ import pytest
 
 from rac_console.commands.outcome import Outcome
 from rac_console.engine import Engine
-from rac_console.engine.where import Where
+from rac_console.engine.setup.where import Where
 from rac_console.sim.thread import SimulatorThread
 from tests.support.drivers import Front
 from tests.support.serving import consoles_of, open_console, start_serve, until

@@ -33,8 +33,8 @@ from rac_console.commands.settings import (
     update_settings_text,
 )
 from rac_console.engine import Feedback, Message
-from rac_console.engine.config import CONFIG_ENV, config_path
-from rac_console.engine.settings import SettingsFile
+from rac_console.engine.setup.config import CONFIG_ENV, config_path
+from rac_console.engine.setup.settings import SettingsFile
 from rac_console.protocol import InputError, Variant
 from rac_console.tui import app as app_module
 from rac_console.tui.app import RacConsoleApp

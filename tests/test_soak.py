@@ -20,7 +20,7 @@ from typing import cast
 import pytest
 
 from rac_console.engine import Alert, Engine, Note, Result, RowView
-from rac_console.engine.backoff import MAX_DELAY
+from rac_console.engine.polling.backoff import MAX_DELAY
 from rac_console.protocol import RacError, Response, Variant, escape_bytes, parse_response
 from rac_console.session import Frame
 from rac_console.sim.controller import SimulatedController

@@ -17,7 +17,7 @@ from pathlib import Path
 import pytest
 
 from rac_console.engine import Engine
-from rac_console.engine.transcript import FrameTranscript
+from rac_console.engine.files.transcript import FrameTranscript
 from rac_console.present.history import History
 from rac_console.protocol import InputError
 from rac_console.session import Frame

@@ -10,7 +10,7 @@ import pytest
 from rac_console.commands.exchange_parsers import parse_put
 from rac_console.commands.language import VarRef
 from rac_console.commands.outcome import ExitStatus, Outcome
-from rac_console.engine.events import Cycle, Message, Result, RowView
+from rac_console.engine.published.events import Cycle, Message, Result, RowView
 from rac_console.present.row_actions import put_line, toggle_line
 from rac_console.present.table_rows import SortMode, visible_keys
 from rac_console.present.toggles import PendingToggles

@@ -7,7 +7,7 @@ from pathlib import Path
 import pytest
 
 from rac_console.commands.language import Put, Unwatch, Watch
-from rac_console.engine.commands import parse_command
+from rac_console.engine.commands.builtin import parse_command
 from rac_console.protocol import InputError
 from tests.support.drivers import FrameTap, make_app, results_text, type_line, until
 

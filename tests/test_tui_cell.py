@@ -312,8 +312,8 @@ async def test_the_io_grid_takes_the_current_targets_io_rows_only(tmp_path: Path
 
 async def test_a_cell_of_one_is_the_console_as_before(tmp_path: Path) -> None:
     from rac_console.commands.target import Target
-    from rac_console.engine.cell import Cell
-    from rac_console.engine.options import EngineOptions
+    from rac_console.engine.cell.cell import Cell
+    from rac_console.engine.setup.options import EngineOptions
     from rac_console.present.history import History
     from rac_console.sim.thread import SimulatorThread
 

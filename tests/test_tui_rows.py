@@ -13,9 +13,9 @@ from textual.pilot import Pilot
 from rac_console.commands.language import VarRef
 from rac_console.commands.policy import TargetProfile, WritePolicy, Writes, parse_allow
 from rac_console.engine import Engine, RowView
-from rac_console.present.cells import CHANGED_DARK
 from rac_console.present.history import History
 from rac_console.present.row_detail import columns_for, detail_fields, detail_text, header_text
+from rac_console.present.table_cells import CHANGED_DARK
 from rac_console.protocol import Variant, kind_of
 from rac_console.tui.app import RacConsoleApp
 from rac_console.tui.help_screen import console_key_groups

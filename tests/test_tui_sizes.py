@@ -11,7 +11,7 @@ from typing import Any
 import pytest
 from textual.pilot import Pilot
 
-from rac_console.engine.commands import BUILTIN
+from rac_console.engine.commands.builtin import BUILTIN
 from rac_console.present.completion import complete
 from rac_console.tui.app import RacConsoleApp
 from tests.support.drivers import make_app, results_text, type_line, until

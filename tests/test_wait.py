@@ -16,7 +16,7 @@ from rac_console.commands.conditions import holds, parse_wait
 from rac_console.commands.language import Op, Put
 from rac_console.commands.outcome import ExitStatus, Outcome
 from rac_console.engine import Engine
-from rac_console.engine.commands import parse_command
+from rac_console.engine.commands.builtin import parse_command
 from rac_console.protocol import InputError, Variant
 from rac_console.session import Session
 from tests.support.drivers import Front
@@ -277,8 +277,8 @@ def test_no_poll_that_could_outlast_the_deadline_starts_during_a_wait(
     import threading
     import time
 
-    import rac_console.engine.poller as poller_module
-    from rac_console.engine.poller import Poller
+    import rac_console.engine.polling.poller as poller_module
+    from rac_console.engine.polling.poller import Poller
     from tests.support.servers import RecordingServer
 
     class Clock:

@@ -8,7 +8,7 @@ from pathlib import Path
 import pytest
 
 from rac_console.commands.language import VarRef
-from rac_console.engine import watchlist
+from rac_console.engine.watch import watchlist
 from rac_console.protocol import InputError, kind_of
 
 

@@ -119,7 +119,7 @@ def _members(args: argparse.Namespace) -> Members | None:
     if args.port is not None:
         raise InputError("-p applies to one target; in a cell each profile has its port")
     from ..commands.target import cell_targets
-    from ..engine.config import load_config
+    from ..engine.setup.config import load_config
     from ..session.endpoints import addresses
 
     config = load_config()

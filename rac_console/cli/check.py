@@ -15,8 +15,8 @@ from contextlib import ExitStack
 from ..commands.check import CheckReport, report_json
 from ..commands.outcome import ExitStatus
 from ..commands.target import Target
-from ..engine.recorder import FrameRecorder
-from ..engine.transcript import FrameTranscript
+from ..engine.files.recorder import FrameRecorder
+from ..engine.files.transcript import FrameTranscript
 from ..present.check import check_lines
 from ..present.render import make_console, print_error
 from ..protocol import InputError

@@ -40,10 +40,10 @@ from ..engine import (
     Result,
     Status,
 )
-from ..engine.cell import Cell, member_name
-from ..engine.csvlog import timestamp
-from ..engine.execute import outcome_of
-from ..engine.where import Where
+from ..engine.cell.cell import Cell, member_name
+from ..engine.exchange.execute import outcome_of
+from ..engine.setup.where import Where
+from ..engine.watch.csvlog import timestamp
 from ..present.batches import BatchReader
 from ..present.render import error_text, outcome_text, print_error
 from ..protocol import InputError, hresult_name

@@ -16,7 +16,7 @@ from typing import TYPE_CHECKING
 from .parser import ONE_SHOT, POLLING_COMMANDS, CliParser, build_cli, build_parser
 
 if TYPE_CHECKING:
-    from ..engine.cell import Cell
+    from ..engine.cell.cell import Cell
 
 __all__ = ["CliParser", "build_cli", "build_parser", "main", "parse_args"]
 
@@ -140,9 +140,9 @@ def make_cell(args: argparse.Namespace) -> Cell:
     """The console's or the REPL's cell of the settled targets (one target: a cell of
     one); InputError when a file named cannot be opened."""
     from ..engine import DEFAULT_INTERVAL, EngineOptions
-    from ..engine.cell import Cell, member_name
-    from ..engine.poll_bounds import bounds_for
-    from ..engine.where import Where
+    from ..engine.cell.cell import Cell, member_name
+    from ..engine.setup.poll_bounds import bounds_for
+    from ..engine.setup.where import Where
     from ..present.served import served
 
     # A console served to a browser runs only what reaches its targets and nothing
@@ -189,14 +189,14 @@ def _interactive(args: argparse.Namespace) -> int:
         for notice in getattr(args, "plant_notices", ()):
             cell.members[0].engine.alert(notice)
     if args.watch:
-        from ..engine.watchlist import load
+        from ..engine.watch.watchlist import load
 
         try:
             load(args.watch)  # a broken list is one line now, not a console that starts half-set
         except InputError as exc:
             print(f"rac-console: {terminal_safe(str(exc))}", file=sys.stderr)
             return 2
-    from ..engine.where import Where
+    from ..engine.setup.where import Where
 
     served = cell.where is Where.SERVED
     if not (sys.stdin.isatty() and sys.stdout.isatty()) and not served:

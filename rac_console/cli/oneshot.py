@@ -18,11 +18,11 @@ from ..commands.policy import Writes
 from ..commands.routing import Chained, OnEveryTarget, OnTarget, Refused, SwitchCurrent
 from ..commands.target import Target
 from ..engine import Alert, Measured, Message
-from ..engine.chained_wait import chained_feedback, met
-from ..engine.commands import BUILTIN
-from ..engine.jobs import run_job
-from ..engine.session_context import SessionContext
-from ..engine.where import Where
+from ..engine.cell.chained_wait import chained_feedback, met
+from ..engine.commands.builtin import BUILTIN
+from ..engine.commands.jobs import run_job
+from ..engine.commands.session_context import SessionContext
+from ..engine.setup.where import Where
 from ..present.cell_view import by_target
 from ..present.render import (
     error_text,
@@ -182,7 +182,7 @@ def run_script(args: argparse.Namespace) -> ExitStatus:
     except OSError as exc:
         print_error(output.err, f"cannot read {args.file}: {exc.strerror}")
         return ExitStatus.REFUSED
-    from ..engine.cell import member_name
+    from ..engine.cell.cell import member_name
 
     members = getattr(args, "cell_targets", None) or [(member_name(args.target), args.target)]
     numbered = enumerate(itertools.chain([first] if first else [], lines), 1)
@@ -214,7 +214,7 @@ def _run_lines(
     """The script's lines in order, each on the target the planner routes it to, each
     target's session opened when a line first needs it. In a cell, ``--record`` and
     ``--log`` are one file each, every line naming its target."""
-    from ..engine.frame_files import FrameFiles
+    from ..engine.files.frame_files import FrameFiles
 
     single = len(members) == 1
     targets = dict(members)

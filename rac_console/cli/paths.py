@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import os
 
-from ..engine.config import CONFIG_ENV, config_path
+from ..engine.setup.config import CONFIG_ENV, config_path
 from ..present.history import default_history_path
 from ..protocol import InputError
 from ..protocol.text import terminal_safe

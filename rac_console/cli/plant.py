@@ -46,7 +46,7 @@ def say_plant_notices(args: argparse.Namespace) -> None:
 
 
 def _plant_options(args: argparse.Namespace, notices: list[str]) -> dict[str, Any]:
-    from ..engine.config import load_config
+    from ..engine.setup.config import load_config
 
     config = load_config()
     if (withheld := withheld_notice(config.withheld)) is not None:  # a served console's
@@ -69,8 +69,8 @@ def _plant_options(args: argparse.Namespace, notices: list[str]) -> dict[str, An
         need("paho.mqtt.client", "publishing to MQTT")
         _check_ca_file(credentials.ca_file)
         from ..commands.plant import topic_level
-        from ..engine.options import EngineOptions
-        from ..engine.plant_tap import name_of
+        from ..engine.polling.plant_tap import name_of
+        from ..engine.setup.options import EngineOptions
 
         for name, target in members:
             named = EngineOptions(plant_name=None if len(members) == 1 else name)

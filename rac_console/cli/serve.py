@@ -11,7 +11,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from ..engine.poll_bounds import SERVED_MAX_ROWS, SERVED_MIN_INTERVAL
+from ..engine.setup.poll_bounds import SERVED_MAX_ROWS, SERVED_MIN_INTERVAL
 from ..present.served_bounds import DEFAULT_MEMORY_MIB, LEAST_MEMORY_MIB
 from .options import port_number, seconds_of, whole_of
 
@@ -173,8 +173,8 @@ def _withheld() -> str | None:
     """Which settings of the config file the sessions do not read (they reach the
     network or the files), as each session says it; None: none."""
     from ..commands.config_keys import withheld_notice
-    from ..engine.config import load_config
-    from ..engine.where import Where
+    from ..engine.setup.config import load_config
+    from ..engine.setup.where import Where
 
     return withheld_notice(load_config(where=Where.SERVED).withheld)
 

@@ -16,7 +16,7 @@ from typing import TYPE_CHECKING
 
 from ..commands.target import Target, host_and_port
 from ..commands.target import resolve_target as resolve_target_of
-from ..engine.config import load_config
+from ..engine.setup.config import load_config
 from ..protocol.errors import InputError
 from ..protocol.text import terminal_safe
 
@@ -77,8 +77,8 @@ def open_session(
     with ``--record`` (and ``--log``), a recorder that tells ``on_record_failure`` when it stops.
 
     Raises InputError when the config file is broken (only when not resolved before)."""
-    from ..engine.recorder import FrameRecorder
-    from ..engine.transcript import FrameTranscript
+    from ..engine.files.recorder import FrameRecorder
+    from ..engine.files.transcript import FrameTranscript
     from ..session import Session
 
     if target is None:

@@ -2,7 +2,7 @@
 
 Each parser turns the text after a command word into a command object or raises
 :class:`InputError` with what is wrong and how to write it; nothing here sends
-anything. Each command's registry entry (:mod:`rac_console.engine.commands`) names
+anything. Each command's registry entry (:mod:`rac_console.engine.commands.builtin`) names
 its parser. Every command object sits next to the parser that makes it, and the shared
 pieces (variables, ranges, seconds) are used by all; the parsers of the exchanges (get,
 put, send: one request each) are apart, in :mod:`.exchange_parsers`.
@@ -267,7 +267,7 @@ Command = (
 )
 
 #: The command words, in the order ``help`` lists them. Each is the name of one entry in
-#: a module of :mod:`rac_console.engine.commands`; an entry whose word is not here, or a
+#: a module of :mod:`rac_console.engine.commands.builtin`; an entry whose word is not here, or a
 #: word here with no entry, stops the registry from loading, so a command added is listed
 #: where it is declared here, never wherever its module happened to put it.
 COMMAND_WORDS = (

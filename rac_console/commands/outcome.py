@@ -65,7 +65,7 @@ class Outcome:
     written: Variant | None = None
     failure: Exception | None = None  # why no trustworthy reply came (not in the JSON)
     waited: Waited | None = None  # a wait: its condition, whether it was met, how long
-    # A PUT read back (see engine/writes.py): the value before (None: not known), the
+    # A PUT read back (see engine/exchange/writes.py): the value before (None: not known), the
     # value the GET after it answered, whether that is the value written (None: not
     # checked: --no-verify, or the read-back failed), and why the read-back failed.
     before: Variant | None = None

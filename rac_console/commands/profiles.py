@@ -1,6 +1,6 @@
 """Target profiles from the config file, parsed: pure (a dict in, profiles out).
 
-The file (read by :mod:`rac_console.engine.config`) names targets::
+The file (read by :mod:`rac_console.engine.setup.config`) names targets::
 
     [target.cell3]
     host = "192.168.0.1"

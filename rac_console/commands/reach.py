@@ -1,7 +1,7 @@
 """What a command or a setting of the config file reaches besides its target: declared
 on the command's spec (:class:`~.routing.Traits`) and on the config file's keys
 (:mod:`.config_keys`), read in one place by what decides where each may run
-(:func:`rac_console.engine.where.reaches`). Pure."""
+(:func:`rac_console.engine.setup.where.reaches`). Pure."""
 
 from __future__ import annotations
 

@@ -1,6 +1,6 @@
 """The config file's ``[settings]`` table: read, and rewritten in the file's text. Pure.
 
-The console keeps its look there (read by :mod:`rac_console.engine.settings`)::
+The console keeps its look there (read by :mod:`rac_console.engine.setup.settings`)::
 
     [settings]
     theme = "textual-light"   # Ctrl+P, Theme

@@ -7,17 +7,17 @@ Thread rules (the only ones; nothing else is shared):
   the poller, the recorder, the figures. Only that thread reads or writes them.
 - Any thread may call :meth:`Engine.submit` (lines go through a thread-safe queue and
   run one at a time, in order, between polls) and :meth:`Engine.stop`.
-- The engine publishes immutable events (:mod:`.events`: frames with their parsed
-  reply, notes, alerts, results, row views, the status) to one :class:`Outbox`. A front
-  end drains it on its own thread and schedule, and never reads an engine attribute.
-  Row views and the status replace the ones not yet drained.
+- The engine publishes immutable events (:mod:`.published.events`: frames with their
+  parsed reply, notes, alerts, results, row views, the status) to one :class:`Outbox`. A
+  front end drains it on its own thread and schedule, and never reads an engine
+  attribute. Row views and the status replace the ones not yet drained.
 - Nothing here imports Textual, prompt-toolkit or rich; the process-wide interpreter
   settings (switch interval, signal handlers) are left alone.
 
 Every name loads with its module on first use (PEP 562, :mod:`rac_console.lazy`): the
 one-shot commands use the events and the handlers without the engine's thread, so they
-skip its imports, and the console settles its target (``engine.config``) before its first
-paint without loading the events.
+skip its imports, and the console settles its target (``engine.setup.config``) before its
+first paint without loading the events.
 """
 
 from typing import TYPE_CHECKING
@@ -25,8 +25,7 @@ from typing import TYPE_CHECKING
 from ..lazy import exports
 
 if TYPE_CHECKING:
-    from .engine import SIMULATOR_NOTICE, Engine
-    from .events import (
+    from .published.events import (
         CONFIRM_GUARD_SECONDS,
         Alert,
         ConfirmWrite,
@@ -37,16 +36,17 @@ if TYPE_CHECKING:
         Result,
         RowView,
     )
-    from .feedback import Message, UiStep
-    from .options import DEFAULT_INTERVAL, EngineOptions
-    from .outbox import Batch, Outbox
-    from .status import Status
+    from .published.feedback import Message, UiStep
+    from .published.outbox import Batch, Outbox
+    from .published.status import Status
+    from .setup.options import DEFAULT_INTERVAL, EngineOptions
+    from .thread.engine import SIMULATOR_NOTICE, Engine
 
-#: Where each name lives: imported when first used, so ``engine.config`` (read to settle
-#: a target) or the outbox load neither the events nor the engine's parts.
+#: Where each name lives: imported when first used, so ``engine.setup.config`` (read to
+#: settle a target) or the outbox load neither the events nor the engine's parts.
 _WHERE = {
-    **dict.fromkeys(("SIMULATOR_NOTICE", "Engine"), ".engine"),
-    **dict.fromkeys(("DEFAULT_INTERVAL", "EngineOptions"), ".options"),
+    **dict.fromkeys(("SIMULATOR_NOTICE", "Engine"), ".thread.engine"),
+    **dict.fromkeys(("DEFAULT_INTERVAL", "EngineOptions"), ".setup.options"),
     **dict.fromkeys(
         (
             "CONFIRM_GUARD_SECONDS",
@@ -59,11 +59,11 @@ _WHERE = {
             "Result",
             "RowView",
         ),
-        ".events",
+        ".published.events",
     ),
-    **dict.fromkeys(("Message", "UiStep"), ".feedback"),
-    "Status": ".status",
-    **dict.fromkeys(("Batch", "Outbox"), ".outbox"),
+    **dict.fromkeys(("Message", "UiStep"), ".published.feedback"),
+    "Status": ".published.status",
+    **dict.fromkeys(("Batch", "Outbox"), ".published.outbox"),
 }
 __getattr__ = exports(__name__, _WHERE)
 

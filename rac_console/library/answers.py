@@ -2,7 +2,7 @@
 a :class:`Sent`, or the exception that says what failed and what the controller may hold.
 
 Reads the console's own :class:`~rac_console.commands.outcome.Outcome` (made by the one
-write path, :mod:`rac_console.engine.writes`): its status, its words and its read-back,
+write path, :mod:`rac_console.engine.exchange.writes`): its status, its words and its read-back,
 never a second judgement of the wire.
 """
 
@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from ..commands.language import Exchange, Get, VarRef
 from ..commands.outcome import ExitStatus, Outcome
-from ..engine.writes import plain_value as said_value
+from ..engine.exchange.writes import plain_value as said_value
 from ..protocol import Variant
 from ..session import ConnectFailed, NotSent, RequestTimeout
 from .errors import (

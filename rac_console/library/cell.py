@@ -141,7 +141,7 @@ class Cell(Mapping[str, Connection]):
         blank line or a comment. Lines that run elsewhere than one target (a chained
         wait, publish) and commands other than these are Refused: call the connection's
         methods (``cell["robotA"].watch(...)``) for the rest."""
-        from ..engine.commands import BUILTIN
+        from ..engine.commands.builtin import BUILTIN
 
         if not isinstance(line, str):
             raise Refused(f"a line is text such as '@robotA get I 10', not {line!r}")

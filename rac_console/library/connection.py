@@ -28,7 +28,7 @@ from ..commands.language import (
 from ..commands.outcome import Outcome
 from ..commands.policy import Writes
 from ..commands.target import Target
-from ..engine.writes import WriteRules, exchange
+from ..engine.exchange.writes import WriteRules, exchange
 from ..protocol import InputError, Variant
 from ..session import DEFAULT_TIMEOUT, ConnectFailed, Session
 from .answers import sent_of, value_of, written_of
@@ -221,7 +221,7 @@ class Connection:
 
     def _exchange(self, command: Exchange, *, verify: bool = True) -> Outcome:
         """The one place a command meets the controller: the console's write path
-        (:func:`rac_console.engine.writes.exchange`) under this connection's rules, one
+        (:func:`rac_console.engine.exchange.writes.exchange`) under this connection's rules, one
         request at a time. Refused once the connection is closed."""
         rules = self._rules if verify else replace(self._rules, verify=False)
         with self._lock:

@@ -14,7 +14,7 @@ from typing import TYPE_CHECKING, NamedTuple
 from ..commands.check import CheckReport, Problem, StepName, StepResult, hint
 from ..commands.target import Target, host_and_port
 from ..commands.target import resolve_target as resolve_target_of
-from ..engine.config import Config, load_config
+from ..engine.setup.config import Config, load_config
 from ..protocol import InputError
 from ..protocol.text import terminal_safe
 from ..session import ConnectFailed, Disconnected, Session

@@ -8,7 +8,7 @@ from collections.abc import Sequence
 
 from rich.text import Text
 
-from ..engine.events import Status
+from ..engine.published.events import Status
 from ..protocol.text import terminal_safe
 from .status import label_text
 

@@ -15,9 +15,9 @@ from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
     from ..commands.language import VarRef
-    from ..engine.events import Alert, ConfirmWrite, Cycle, Note, Result
-    from ..engine.outbox import Batch
-    from ..engine.status import Status
+    from ..engine.published.events import Alert, ConfirmWrite, Cycle, Note, Result
+    from ..engine.published.outbox import Batch
+    from ..engine.published.status import Status
     from ..session import Frame
 
 
@@ -37,7 +37,7 @@ class BatchReader:
             self.take_shed(target, batch.frames_dropped, batch.cycles_dropped)
 
     def _read_events(self, target: str | None, batch: Batch) -> None:
-        from ..engine.events import Alert, ConfirmWrite, Cycle, Note, Result
+        from ..engine.published.events import Alert, ConfirmWrite, Cycle, Note, Result
 
         for event in batch.events:
             if isinstance(event, Result):

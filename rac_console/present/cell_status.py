@@ -20,7 +20,7 @@ from ..protocol.text import terminal_safe
 from .status import CANNOT_CONNECT, RUNNING_SHOWN_AFTER, RUNNING_STYLE, label_style
 
 if TYPE_CHECKING:
-    from ..engine.status import Status
+    from ..engine.published.status import Status
 
 SEPARATOR = " │ "
 #: Names are cut to this many cells when the line is still too wide.

@@ -10,7 +10,7 @@ from rich.text import Text
 from ..protocol.text import terminal_safe
 
 if TYPE_CHECKING:
-    from ..engine.cell import Cell
+    from ..engine.cell.cell import Cell
 
 
 def by_target(name: str | None, text: Text) -> Text:

@@ -2,7 +2,7 @@
 
 Pure functions of the text before the cursor, so the console and the REPL show
 the same candidates and hints, and tests need no terminal. What a command takes is
-its registry entry's to say (:mod:`rac_console.engine.registry`); nothing here names
+its registry entry's to say (:mod:`rac_console.engine.commands.registry`); nothing here names
 a command.
 """
 
@@ -15,8 +15,8 @@ from dataclasses import dataclass
 from rich.text import Text
 
 from ..commands.language import is_raw_line
-from ..engine.commands import BUILTIN
-from ..engine.registry import Registry, Sources
+from ..engine.commands.builtin import BUILTIN
+from ..engine.commands.registry import Registry, Sources
 from ..protocol import KINDS
 
 

@@ -96,8 +96,8 @@ _ARROWS = frozenset("←→↑↓")
 
 def command_entries() -> tuple[HelpEntry, ...]:
     """Every command of the registry: usage, summary, example and notes."""
-    from ..engine.commands import BUILTIN
-    from ..engine.registry import RAW_HELP
+    from ..engine.commands.builtin import BUILTIN
+    from ..engine.commands.registry import RAW_HELP
 
     entries = [
         HelpEntry(

@@ -24,7 +24,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:  # the console opens its history before its first paint, without these
-    from ..engine.events import Result
+    from ..engine.published.events import Result
 
 DEFAULT_LIMIT = 1000
 
@@ -113,7 +113,7 @@ class History:
         return None
 
     def _write(self, line: str) -> None:
-        from ..engine.recorder import open_private
+        from ..engine.files.recorder import open_private
 
         if self.path is None:
             return
@@ -131,7 +131,7 @@ class History:
 
     def _trim(self) -> None:
         """Keep the newest ``limit`` lines of the file as it is now (the lock is held)."""
-        from ..engine.recorder import open_private
+        from ..engine.files.recorder import open_private
 
         assert self.path is not None  # only a file is trimmed
         lines = self._read()
@@ -154,7 +154,7 @@ def is_refused(result: Result) -> bool:
     user, at a confirm question) refused. A line that failed for the state it met
     (not connected, a timeout) is right, and kept."""
     from ..commands.outcome import ExitStatus, Outcome
-    from ..engine.events import Message
+    from ..engine.published.events import Message
 
     if any(isinstance(f, Outcome) and f.status == ExitStatus.REFUSED for f in result.feedback):
         return True

@@ -43,9 +43,9 @@ from rich.cells import cell_len, set_cell_size
 from rich.text import Text
 
 from ..commands.language import VarRef
-from ..engine.events import RowView
+from ..engine.published.events import RowView
 from ..protocol.text import terminal_safe
-from .cells import CHANGED_DARK, HIGHLIGHT_SECONDS, ChangeStyle
+from .table_cells import CHANGED_DARK, HIGHLIGHT_SECONDS, ChangeStyle
 
 GLYPH_ON = "●"
 GLYPH_OFF = "○"

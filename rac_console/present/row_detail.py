@@ -16,12 +16,12 @@ from typing import TYPE_CHECKING
 
 from rich.text import Text
 
-from ..engine.status import OK
+from ..engine.published.status import OK
 from ..protocol.text import scalar_text, terminal_safe
-from .cells import CHANGED_DARK, ChangeStyle, age_text, type_text
+from .table_cells import CHANGED_DARK, ChangeStyle, age_text, type_text
 
 if TYPE_CHECKING:
-    from ..engine.events import RowView
+    from ..engine.published.events import RowView
 
 #: Fields a column holds when they do not fit a line each: X Y Z | Rx Ry Rz | Fig.
 GROUP = 3

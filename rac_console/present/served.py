@@ -6,9 +6,9 @@ from __future__ import annotations
 from rich.text import Text
 
 # Whether this process is a served console: decided where the place is (the engine's).
-from ..engine.where import SERVED_ENV as SERVED_ENV
-from ..engine.where import WEB_DRIVER as WEB_DRIVER
-from ..engine.where import served as served
+from ..engine.setup.where import SERVED_ENV as SERVED_ENV
+from ..engine.setup.where import WEB_DRIVER as WEB_DRIVER
+from ..engine.setup.where import served as served
 
 #: The sizes a served screen may have, in cells each way: what a browser asks for, by
 #: message or typed in as keys, is brought within them (serve's parts, the console's

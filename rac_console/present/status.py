@@ -13,7 +13,7 @@ from rich.style import Style
 from rich.text import Text
 
 from ..commands.policy import TargetProfile
-from ..engine.status import LABEL_WIDTH, Status, shown_label
+from ..engine.published.status import LABEL_WIDTH, Status, shown_label
 from ..protocol.text import terminal_safe
 
 #: A reply is shown as awaited once it is this late (seconds): quicker ones would flicker.

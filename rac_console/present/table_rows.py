@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
     from ..commands.language import VarRef
-    from ..engine.events import RowView
+    from ..engine.published.events import RowView
 
 #: A row of a cell's table: its target's name and its variable (``I 10`` on two targets
 #: is two rows).

@@ -11,7 +11,7 @@ from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
     from ..commands.language import VarRef
-    from ..engine.events import Cycle, Result
+    from ..engine.published.events import Cycle, Result
 
 
 @dataclass

@@ -5,7 +5,7 @@ from __future__ import annotations
 import re
 
 from ..commands.language import is_raw_line
-from ..engine.commands import BUILTIN
+from ..engine.commands.builtin import BUILTIN
 from ..protocol import KINDS
 
 _WORD_RE = re.compile(r"\s+|\S+", re.ASCII)

@@ -33,7 +33,7 @@ from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:  # the store reads a cycle; it needs no engine to be tested
     from ..commands.language import VarRef
-    from ..engine.events import Cycle
+    from ..engine.published.events import Cycle
     from ..protocol.variables import VarKind
 
 #: Types with a trend: numbers, IO as 0/1, and each field of V P J T (S has none).

@@ -11,7 +11,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 from ..commands.routing import OnTarget
-from ..engine.commands import BUILTIN
+from ..engine.commands.builtin import BUILTIN
 
 
 def written_target(line: str, names: Sequence[str], current: str) -> str | None:

@@ -33,17 +33,17 @@ from ..engine import (
     Status,
     UiStep,
 )
-from ..engine.cell import Cell
+from ..engine.cell.cell import Cell
 from ..present.banner import repl_banner
 from ..present.batches import BatchReader
 from ..present.cell_view import by_target, cell_targets
-from ..present.cells import watch_table
 from ..present.completion import WHOLE_LIST, hint
 from ..present.frames import frame_line
 from ..present.heap import keep_full_collections_rare
 from ..present.history import History, is_refused
 from ..present.render import error_text, make_console, notice_text, outcome_text
 from ..present.status import connect_targets
+from ..present.table_cells import watch_table
 from ..session import Frame
 from .asking import ask_write
 from .prompt_parts import (

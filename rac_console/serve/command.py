@@ -12,7 +12,7 @@ from __future__ import annotations
 import sys
 from collections.abc import Sequence
 
-from ..engine.poll_bounds import SERVED_MAX_ROWS, SERVED_MIN_INTERVAL, served_environment
+from ..engine.setup.poll_bounds import SERVED_MAX_ROWS, SERVED_MIN_INTERVAL, served_environment
 from ..present.served import SERVED_ENV as SERVED_ENV
 from ..present.served import WEB_DRIVER as WEB_DRIVER
 from ..present.served import served as served

@@ -23,8 +23,8 @@ from textual.timer import Timer
 from textual.worker import Worker, WorkerState
 
 from .. import __version__
-from ..engine.feedback import Message
-from ..engine.where import Where
+from ..engine.published.feedback import Message
+from ..engine.setup.where import Where
 from ..present.glyphs import ascii_wanted
 from ..present.heap import keep_full_collections_rare
 from . import keys
@@ -41,8 +41,8 @@ from .watchdog import WATCH_EVERY, Watchdog
 
 if TYPE_CHECKING:
     from ..engine import Engine
-    from ..engine.cell import Cell
-    from ..engine.settings import SettingsFile
+    from ..engine.cell.cell import Cell
+    from ..engine.setup.settings import SettingsFile
     from ..present.history import History
 
 #: In a terminal the engine starts once the first screen is painted, or after this long.
@@ -77,7 +77,7 @@ class RacConsoleApp(App[int]):
         settings: SettingsFile | None = None,
     ) -> None:
         super().__init__()
-        from ..engine.cell import Cell
+        from ..engine.cell.cell import Cell
 
         #: The console's targets: one engine each (a plain console is a cell of one).
         self.cell = cell if isinstance(cell, Cell) else Cell.of(cell)
@@ -278,8 +278,8 @@ def run_console(
     palette's ``connect NAME`` entries); ``after_first_paint`` is called once its first
     screen is painted. Its settings are read here, before the app runs its loop (a
     console served to a browser neither reads nor writes them)."""
-    from ..engine.config import config_path
-    from ..engine.settings import SettingsFile
+    from ..engine.setup.config import config_path
+    from ..engine.setup.settings import SettingsFile
 
     served = cell.where is Where.SERVED
     settings = None if served else SettingsFile(config_path())

@@ -12,7 +12,7 @@ from textual.screen import Screen
 from ..present.status import profile_colour
 
 if TYPE_CHECKING:
-    from ..engine.status import Status
+    from ..engine.published.status import Status
 
 
 def border_colour(colour: str | None) -> Color | None:

@@ -21,8 +21,8 @@ from textual.screen import Screen
 from textual.widget import Widget
 from textual.widgets import DataTable, Input
 
-from ..engine.feedback import Message
-from ..engine.where import Where
+from ..engine.published.feedback import Message
+from ..engine.setup.where import Where
 from ..present.cell_view import cell_targets
 from ..present.status import connect_targets, writes_refused
 from ..present.trends import has_trend
@@ -41,9 +41,9 @@ from .watch_table import WatchTable
 
 if TYPE_CHECKING:
     from ..commands.language import Command
-    from ..engine.cell import Cell
-    from ..engine.events import ConfirmWrite, RowView
-    from ..engine.status import Status
+    from ..engine.cell.cell import Cell
+    from ..engine.published.events import ConfirmWrite, RowView
+    from ..engine.published.status import Status
     from ..present.history import History
     from .file_writes import FileWrites
 
@@ -163,7 +163,7 @@ class ConsoleScreen(Screen[None]):
     def caught_up(self, seconds: float) -> None:
         """The watchdog found the screen ``seconds`` behind what the engines published:
         everything is shown now, and the status line and the log say so."""
-        from ..engine.events import Alert
+        from ..engine.published.events import Alert
         from ..present.status import NOTICE_SECONDS, caught_up_alert, caught_up_notice
 
         self.panes.status_bar.say(caught_up_notice(seconds), NOTICE_SECONDS)

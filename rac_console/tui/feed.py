@@ -11,7 +11,7 @@ from collections.abc import Callable
 from functools import partial
 from typing import TYPE_CHECKING
 
-from ..engine.feedback import Message, UiStep
+from ..engine.published.feedback import Message, UiStep
 from ..present.batches import BatchReader, removed_rows
 from ..present.history import is_refused
 from ..present.status import placeholder_for
@@ -20,9 +20,9 @@ from . import row_keys
 from .command_line import dropped_text
 
 if TYPE_CHECKING:
-    from ..engine.events import Alert, ConfirmWrite, Cycle, Feedback, Note, Result
-    from ..engine.outbox import Batch
-    from ..engine.status import Status
+    from ..engine.published.events import Alert, ConfirmWrite, Cycle, Feedback, Note, Result
+    from ..engine.published.outbox import Batch
+    from ..engine.published.status import Status
     from ..present.history import History
     from ..session import Frame
     from .file_writes import FileWrites
@@ -137,7 +137,7 @@ class ConsoleFeed(BatchReader):
         self.panes.frame_log.add(frame, self._named(target))
 
     def take_shed(self, target: str | None, frames: int, cycles: int) -> None:
-        from ..engine.events import Alert
+        from ..engine.published.events import Alert
 
         lost = [counted(n, w) for n, w in ((frames, "frame"), (cycles, "poll cycle")) if n]
         self.panes.frame_log.add(Alert(f"{' and '.join(lost)} not shown: the screen fell behind"))

@@ -40,7 +40,7 @@ from .compat import InlineWidthLog, forget_drawn_lines
 from .frame_lines import HEX_SEPARATOR, FrameHighlighter, hex_fits, hex_plan, hex_under
 
 if TYPE_CHECKING:
-    from ..engine.events import Alert, Note
+    from ..engine.published.events import Alert, Note
 
 MAX_LINES = 5000
 MAX_PENDING = 50_000
@@ -245,7 +245,9 @@ class FrameLog(InlineWidthLog):
                 self._origin[id(event)] = terminal_safe(target)
             self._pending.append(event)
             return
-        from ..engine.events import Note  # notes and alerts are few: loaded with the first
+        from ..engine.published.events import (
+            Note,  # notes and alerts are few: loaded with the first
+        )
 
         text = event.text if target is None else f"{target}: {event.text}"
         when = event.time if isinstance(event, Note) else time.time()

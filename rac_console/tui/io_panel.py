@@ -22,13 +22,13 @@ from textual.message import Message
 from textual.widget import Widget
 from textual.widgets import DataTable, Static
 
-from ..present.cells import change_style
+from ..present.table_cells import change_style
 from ..protocol.text import terminal_safe
 from . import keys
 
 if TYPE_CHECKING:  # the grid is hidden until F5: its modules load when it first shows
     from ..commands.language import VarRef
-    from ..engine.events import RowView
+    from ..engine.published.events import RowView
     from ..present.iogrid import Grid
 
 #: From this many columns the panel sits beside the table; below, under it.

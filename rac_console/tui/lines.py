@@ -17,7 +17,7 @@ from .command_line import CommandLine
 
 if TYPE_CHECKING:
     from ..commands.language import Command
-    from ..engine.cell import Cell
+    from ..engine.cell.cell import Cell
     from .members import Members
 
 

@@ -17,7 +17,7 @@ from ..protocol.text import terminal_safe
 if TYPE_CHECKING:  # the first paint loads no engine module
     from ..commands.language import VarRef
     from ..engine import Engine, RowView, Status
-    from ..engine.cell import Cell, Member
+    from ..engine.cell.cell import Cell, Member
 
 
 @dataclass

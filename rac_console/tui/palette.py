@@ -32,7 +32,7 @@ from .console import ConsoleScreen
 if TYPE_CHECKING:
     from textual.app import App
 
-    from ..engine.events import Feedback
+    from ..engine.published.events import Feedback
     from .file_writes import FileWrites
     from .palette_commands import PaletteCommand
 
@@ -117,7 +117,7 @@ def _say_screenshot(
     written: Future[int],
 ) -> None:
     """Where the screenshot went, or why it did not (a notification and a line)."""
-    from ..engine.events import Message
+    from ..engine.published.events import Message
 
     shown = terminal_safe(str(target))
     error = None if written.cancelled() else written.exception()

@@ -17,7 +17,7 @@ from textual.containers import Horizontal, Vertical
 from textual.widget import AwaitMount, Widget
 from textual.widgets import Static
 
-from ..engine.where import Where
+from ..engine.setup.where import Where
 from ..present.status import placeholder_for
 from ..protocol.text import terminal_safe
 from .command_line import CommandLine
@@ -34,7 +34,7 @@ from .watch_table import TableFilter, WatchTable
 if TYPE_CHECKING:
     from textual.screen import Screen
 
-    from ..engine.events import RowView
+    from ..engine.published.events import RowView
     from ..present.history import History
     from ..present.trends import TrendStore
     from .members import Members

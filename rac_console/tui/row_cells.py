@@ -7,14 +7,14 @@ from typing import TYPE_CHECKING
 
 from rich.text import Text
 
-from ..present.cells import age_text, change_style, status_cell, type_text, value_cell
 from ..present.filtering import add_filter_title
 from ..present.status import label_style
+from ..present.table_cells import age_text, change_style, status_cell, type_text, value_cell
 from ..present.trends import field_labels, has_trend, sparkline_text
 from ..protocol.text import terminal_safe
 
 if TYPE_CHECKING:
-    from ..engine.events import RowView
+    from ..engine.published.events import RowView
     from ..present.trends import TrendStore
 
 #: Bars in a trend cell; a field's label (``Rz``, ``Fig``) takes the first 4 cells.

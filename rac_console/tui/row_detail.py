@@ -15,12 +15,12 @@ from rich.text import Span, Text
 from textual import events
 from textual.widgets import Static
 
-from ..present.cells import HIGHLIGHT_SECONDS, change_style
 from ..present.row_detail import detail_fields, detail_text, header_text
+from ..present.table_cells import HIGHLIGHT_SECONDS, change_style
 
 if TYPE_CHECKING:
     from ..commands.language import VarRef
-    from ..engine.events import RowView
+    from ..engine.published.events import RowView
 
 EMPTY_TEXT = Text("No rows: watch P 0 adds one; d on a row shows it here", style="dim")
 SUBTITLE = "d or Esc closes · ↑↓ in the table: another row"

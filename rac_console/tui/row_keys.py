@@ -21,7 +21,7 @@ if TYPE_CHECKING:
     from textual.widget import Widget
 
     from ..commands.language import VarRef
-    from ..engine.events import RowView
+    from ..engine.published.events import RowView
     from .members import MemberState
     from .panes import Panes
 

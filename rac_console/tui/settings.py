@@ -25,7 +25,7 @@ from typing import TYPE_CHECKING
 from textual.app import ScreenStackError
 from textual.command import CommandPalette
 
-from ..engine.feedback import Message
+from ..engine.published.feedback import Message
 from ..protocol.errors import InputError
 from .deadline import Deadline
 
@@ -33,7 +33,7 @@ if TYPE_CHECKING:
     from textual.app import App
 
     from ..commands.settings import Value
-    from ..engine.settings import LoadedSettings, SettingsFile
+    from ..engine.setup.settings import LoadedSettings, SettingsFile
     from .console import ConsoleScreen
 
 #: Seconds after the last change that the settings are saved.

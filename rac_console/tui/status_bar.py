@@ -15,7 +15,7 @@ from ..present.served import SERVED_BADGE
 from ..present.status import status_text
 
 if TYPE_CHECKING:
-    from ..engine.status import Status
+    from ..engine.published.status import Status
 
 
 class StatusBar(Static):

@@ -31,7 +31,7 @@ from .row_cells import differs, row_cells, table_title, target_cell, trend_cell
 
 if TYPE_CHECKING:
     from ..commands.language import VarRef
-    from ..engine.events import RowView
+    from ..engine.published.events import RowView
     from ..present.trends import TrendStore
 
 #: Status, age and trend before the value, so they stay in view when a long P or J

@@ -10,10 +10,10 @@ from pathlib import Path
 from rac_console.commands.policy import TargetProfile, WritePolicy, Writes
 from rac_console.commands.target import Target
 from rac_console.engine import Alert, Result, RowView
-from rac_console.engine.cell import Cell
-from rac_console.engine.options import EngineOptions
-from rac_console.engine.outbox import Batch
-from rac_console.engine.registry import Where
+from rac_console.engine.cell.cell import Cell
+from rac_console.engine.commands.registry import Where
+from rac_console.engine.published.outbox import Batch
+from rac_console.engine.setup.options import EngineOptions
 from rac_console.present.batches import BatchReader
 from rac_console.present.history import History
 from rac_console.sim.cell import SimulatedCellThread

@@ -47,8 +47,8 @@ from textual.widgets import RichLog, Static
 import rac_console.tui.panes as panes_module
 from rac_console.commands.policy import TargetProfile, WritePolicy, Writes, parse_allow
 from rac_console.engine import Alert, Cycle, Engine, Message, Note, Result, RowView, Status
-from rac_console.engine.outbox import Batch
-from rac_console.engine.where import Where
+from rac_console.engine.published.outbox import Batch
+from rac_console.engine.setup.where import Where
 from rac_console.present.batches import BatchReader
 from rac_console.present.history import History
 from rac_console.present.render import make_console

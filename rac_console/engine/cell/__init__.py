@@ -1,0 +1,2 @@
+"""A robot cell: one engine per controller behind one front end, the lines routed to
+them, and a wait on one target chained after another target's."""

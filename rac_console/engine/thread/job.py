@@ -1,0 +1,34 @@
+"""A submitted line or command, as the engine queues it.
+
+Its own module: :meth:`Engine.submit` makes one on any thread, and an engine is made
+(and may be handed lines) before its parts are, so this loads nothing of them.
+"""
+
+from __future__ import annotations
+
+import threading
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from ...commands.language import Command
+
+
+@dataclass
+class Job:
+    """One submitted line or command; a cancel belongs to it and to no other."""
+
+    seq: int
+    what: str | Command
+    shown: str | None = None  # how a command object is shown (a typed line shows itself)
+    _cancelled: threading.Event = field(default_factory=threading.Event, repr=False)
+
+    @property
+    def line(self) -> str | None:
+        return self.what if isinstance(self.what, str) else self.shown
+
+    def cancel(self) -> None:
+        self._cancelled.set()
+
+    def cancelled(self) -> bool:
+        return self._cancelled.is_set()
