@@ -7,18 +7,17 @@ import io
 import itertools
 import json
 import sys
-from collections.abc import Callable, Iterator
+from collections.abc import Iterable, Iterator
 from contextlib import ExitStack
 from dataclasses import replace
+from typing import TYPE_CHECKING
 
 from ..commands.argv import exchange_from_words, input_line
 from ..commands.language import Command, Latency
 from ..commands.outcome import ExitStatus, Outcome, refused, worst
 from ..commands.policy import Writes
-from ..commands.routing import Chained, OnEveryTarget, OnTarget, Refused, SwitchCurrent
 from ..commands.target import Target
-from ..engine import Alert, Measured, Message
-from ..engine.cell.chained_wait import chained_feedback, met
+from ..engine import Alert, Feedback, Measured, Message
 from ..engine.commands.builtin import BUILTIN
 from ..engine.commands.jobs import run_job
 from ..engine.commands.session_context import SessionContext
@@ -36,6 +35,9 @@ from ..protocol import InputError
 from ..session import ConnectFailed, Session
 from .cell import pick_member
 from .target import open_session
+
+if TYPE_CHECKING:
+    from ..engine.cell.routes import Done, Line
 
 
 class Output:
@@ -211,62 +213,24 @@ def _run_lines(
     members: list[tuple[str, Target]],
     numbered: Iterator[tuple[int, str]],
 ) -> ExitStatus:
-    """The script's lines in order, each on the target the planner routes it to, each
-    target's session opened when a line first needs it. In a cell, ``--record`` and
-    ``--log`` are one file each, every line naming its target."""
-    from ..engine.files.frame_files import FrameFiles
+    """The script's lines in order, each planned and carried out by the executor of
+    routes the console's cell uses (:mod:`..engine.cell.routes`), each target's session
+    opened when a line first needs it. In a cell, ``--record`` and ``--log`` are one file
+    each, every line naming its target."""
+    from ..engine.cell.routes import Line, Routes
 
     single = len(members) == 1
-    targets = dict(members)
-    names = list(targets)
-    current = names[0]
     status = ExitStatus.OK
     keep_going = bool(getattr(args, "keep_going", False))
-    plain = (
-        args if single else argparse.Namespace(**{**vars(args), "record": None, "transcript": None})
-    )
     with ExitStack() as stack:
-        files = None
-        if not single:
-            files = FrameFiles(args.record, getattr(args, "transcript", None), output.local_failure)
-            stack.callback(files.close)
-        sessions: dict[str, Session] = {}
-
-        def run_on(target: str, what: Command, line: str) -> list[Outcome | Message]:
-            if target not in sessions:
-                sessions[target] = stack.enter_context(
-                    open_session(plain, output.local_failure, targets[target])
-                )
-                if files is not None:
-                    place = names.index(target) + 1
-                    sessions[target].add_frame_observer(files.view(target, place).frame)
-            on = argparse.Namespace(**{**vars(args), "target": targets[target]})
-            return _results(sessions[target], what, on, line, Where.RUN)
-
+        sessions = _Sessions(args, output, members, stack)
+        routes = Routes(sessions, members, lambda: BUILTIN, Where.RUN)
         for number, raw_line in numbered:
             line = raw_line.rstrip("\r\n")
-            route = BUILTIN.plan(line, names, current)
+            for name, feedback in routes.answer(Line(number, line)).parts:
+                output.target = None if single else name
+                status = worst([status, _show_line(output, _shown(feedback, line), number)])
             output.target = None
-            results: list[Outcome | Message] = []
-            match route:
-                case Refused(text=text):
-                    results = [refused(line, text)]
-                case SwitchCurrent(name=name):
-                    current = output.target = name
-                    results = [Message(f"current target: {name}")]
-                case OnTarget(name=name, command=command):
-                    output.target = None if single else name
-                    results = run_on(name, command, line)
-                case Chained():
-                    results = _chained(route, run_on, line)
-                case OnEveryTarget(command=command):
-                    for name in names:
-                        output.target = name
-                        line_status = _show_line(output, run_on(name, command, line), number)
-                        status = worst([status, line_status])
-                    output.target = None
-            line_status = _show_line(output, results, number)
-            status = worst([status, line_status])
             if status is not ExitStatus.OK and not keep_going:
                 print_error(
                     output.err,
@@ -277,26 +241,50 @@ def _run_lines(
     return status
 
 
-def _chained(
-    route: Chained,
-    run_on: Callable[[str, Command, str], list[Outcome | Message]],
-    line: str,
-) -> list[Outcome | Message]:
-    """``wait ... after @FIRST ...`` in a script: FIRST's wait, then this target's."""
-    first = next(
-        (r for r in run_on(route.first, route.first_wait, line) if isinstance(r, Outcome)), None
-    )
-    if first is None:
-        return [refused(line, f"{route.first}: the wait did not run")]
-    second = None
-    if met(first):
-        found = run_on(route.second, route.second_wait, line)
-        second = next((r for r in found if isinstance(r, Outcome)), None)
-    return [
-        item
-        for item in chained_feedback(route.first, first, route.second, second)
-        if isinstance(item, Outcome | Message)
-    ]
+class _Sessions:
+    """``run``'s targets (:class:`~..engine.cell.routes.Targets`): a session each, opened
+    when a line first needs it and closed with ``stack``, running a command inline on
+    this thread, as the one-shot commands do."""
+
+    def __init__(
+        self,
+        args: argparse.Namespace,
+        output: Output,
+        members: list[tuple[str, Target]],
+        stack: ExitStack,
+    ) -> None:
+        from ..engine.files.frame_files import FrameFiles
+
+        self.args, self.output, self.stack = args, output, stack
+        self.targets = dict(members)
+        self.names = list(self.targets)
+        single = len(members) == 1
+        # One target keeps its own files, as without a cell; several share one of each.
+        self.plain = (
+            args
+            if single
+            else argparse.Namespace(**{**vars(args), "record": None, "transcript": None})
+        )
+        self.files: FrameFiles | None = None
+        if not single:
+            self.files = FrameFiles(
+                args.record, getattr(args, "transcript", None), output.local_failure
+            )
+            stack.callback(self.files.close)
+        self.sessions: dict[str, Session] = {}
+
+    def run(self, name: str, command: Command, line: Line, done: Done, whole: bool) -> None:
+        """Run ``command`` on ``name``'s session now; ``done`` before this returns."""
+        if name not in self.sessions:
+            session = self.stack.enter_context(
+                open_session(self.plain, self.output.local_failure, self.targets[name])
+            )
+            if self.files is not None:
+                place = self.names.index(name) + 1
+                session.add_frame_observer(self.files.view(name, place).frame)
+            self.sessions[name] = session
+        on = argparse.Namespace(**{**vars(self.args), "target": self.targets[name]})
+        done(tuple(_feedback(self.sessions[name], command, on, line.text, Where.RUN)))
 
 
 def _context(session: Session, args: argparse.Namespace) -> SessionContext:
@@ -311,10 +299,27 @@ def _context(session: Session, args: argparse.Namespace) -> SessionContext:
 def _results(
     session: Session, what: str | Command, args: argparse.Namespace, line: str, where: Where
 ) -> list[Outcome | Message]:
-    """One line or command through the registry's job runner, as the console runs it:
-    its outcomes, a refusal for each error (what only runs at a terminal, a line that
-    does not parse), and what else it said; nothing for a blank line or a comment."""
+    """One line or command through the registry's job runner, as the console runs it,
+    and what it said as the command line shows it (:func:`_shown`)."""
+    return _shown(_feedback(session, what, args, line, where), line)
+
+
+def _feedback(
+    session: Session,
+    what: str | Command,
+    args: argparse.Namespace,
+    line: str | None,
+    where: Where,
+) -> list[Feedback]:
+    """One line or command run inline by the registry's job runner: its feedback."""
     _, feedback = run_job(BUILTIN, _context(session, args), what, where, line)
+    return feedback
+
+
+def _shown(feedback: Iterable[Feedback], line: str) -> list[Outcome | Message]:
+    """Feedback as the command line shows it: the outcomes, a refusal for each error
+    (what only runs at a terminal, a line that does not parse), and what else was said;
+    nothing for a blank line or a comment."""
     results: list[Outcome | Message] = []
     for item in feedback:
         if isinstance(item, Outcome):

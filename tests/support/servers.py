@@ -253,6 +253,7 @@ class RecordingServer:
                 with self._cond:
                     self.lines.append(line)
                     self.numbered.append((number, line))
+                    self._cond.notify_all()
                 answer = self.reply(line)
                 if answer is CLOSE:
                     return
@@ -292,6 +293,12 @@ class RecordingServer:
                 assert self._cond.wait_for(lambda: port in self.peers, timeout=5)
                 index = self.peers.index(port)
                 return [p for p in self.peers[:index] if p not in self._sentinels]
+
+    def wait_line(self, line: bytes, timeout: float = 10) -> bool:
+        """Whether ``line`` (without its CR) came within ``timeout`` seconds: woken by
+        each line that comes, never a sleep."""
+        with self._cond:
+            return self._cond.wait_for(lambda: line in self.lines, timeout=timeout)
 
     def wait_received(self, size: int, timeout: float = 5) -> bytes:
         with self._cond:

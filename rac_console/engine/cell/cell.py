@@ -8,6 +8,13 @@ always goes to one controller, named by the line or by the prompt, under that
 controller's own rules. Jobs are numbered by one counter for the whole cell, so a
 number names one job whichever engine runs it.
 
+A line's way through a cell: :meth:`Cell.enter` queues it (lines run one at a time, in
+the order submitted); at its turn it is planned once and carried out by the executor of
+routes (:mod:`.routes`, the one ``run`` uses too), each target's part a job in that
+target's engine (:mod:`..thread.inbox`); the engine publishes the job's frames, then its
+Result, to its outbox, and hands the Result to the cell on its own thread, where the
+next line starts. Front ends drain the outboxes when woken; nothing waits for them.
+
 The files are the cell's: one ``--record``, one ``--log`` transcript and one CSV log for
 every target, each line naming its target (:class:`~..thread.engine.CellFiles`). The members'
 options name no file; the cell opens them before any thread starts, says a failure once
@@ -25,7 +32,7 @@ from typing import TYPE_CHECKING
 
 from ...commands.names import find_name
 from ...protocol import InputError
-from ...protocol.text import endpoint, terminal_safe
+from ...protocol.text import endpoint
 from ..published.feedback import Message
 from ..published.outbox import Batch, Outbox
 from ..setup.options import EngineOptions
@@ -33,49 +40,37 @@ from ..setup.where import Where
 from ..thread.engine import CellFiles, Engine
 
 if TYPE_CHECKING:  # the console's first paint loads none of these
-    from ...commands.language import Command, Wait
-    from ...commands.outcome import Outcome
-    from ...commands.routing import Chained, Route, SwitchCurrent
+    from ...commands.language import Command
+    from ...commands.routing import Route
     from ...commands.target import Target
     from ..commands.registry import Registry
     from ..files.frame_files import FrameFiles
-    from ..published.events import Event, Feedback, Result
+    from ..published.events import Result
     from ..watch.cellcsv import CellCsv
+    from .routes import Answer, Done, Line
 
 
 @dataclass
-class _Chain:
-    """A ``wait ... after @NAME ...`` under way: the first target's wait, then this
-    one's; the front end awaits ``seq``."""
-
-    seq: int
-    line: str | None
-    command: Wait
-    first: str  # the target waited for first
-    second: str  # the target the line ran on
-    first_outcome: Outcome | None = None
-
-
-@dataclass
-class _Gather:
-    """A line run by every target of the cell; the front end awaits ``seq``, answered
-    once every target's result is in (in the cell's order)."""
-
-    seq: int
-    line: str | None
-    command: Command
-    waiting: dict[str, tuple[Feedback, ...] | None]  # by target: its feedback, once in
-
-
-@dataclass(frozen=True)
 class _Line:
     """A line submitted, waiting for its turn: typed (``command`` None), or a command a
-    front end made for the target ``name`` (None: the current one)."""
+    front end made for the target ``name`` (None: the current one); once started, the
+    route it was planned to (None while it waits)."""
 
     seq: int
     line: str | None
     command: Command | None = None
     name: str | None = None
+    route: Route | None = None
+
+
+@dataclass(frozen=True)
+class Entered:
+    """A line handed to the cell: its number, and its route when it started at once
+    (None: it waits behind a line running, and is planned at its turn). A front end reads
+    the route (where the line writes) instead of planning the line a second time."""
+
+    seq: int
+    route: Route | None
 
 
 @dataclass(frozen=True)
@@ -115,8 +110,10 @@ class Cell:
         self._registry, self.where = registry, where
         self._numbers: Iterator[int] = itertools.count(1)
         #: The cell's own results (``use``, a line for a target it does not have) and
-        #: alerts (a file of the cell's that failed).
+        #: alerts (a file of the cell's that failed). One lock for every outbox of the
+        #: cell: a drain takes them all at one instant (see :meth:`drain`).
         self.outbox = Outbox(notify)
+        lock = self.outbox.lock
         options = options if options is not None else EngineOptions()
         names = [name for name, _ in targets]
         # One target keeps its own files, exactly as without a cell; several share the
@@ -152,7 +149,7 @@ class Cell:
                 Engine(
                     target=target,
                     options=named[name],
-                    outbox=Outbox(notify),
+                    outbox=Outbox(notify, lock),
                     where=where,
                     registry=registry,
                     numbers=self._numbers,
@@ -165,16 +162,27 @@ class Cell:
             )
             for place, (name, target) in enumerate(targets, 1)
         )
-        self.current = self.members[0].name
         self._queue_parts()
 
     def _queue_parts(self) -> None:
+        from .routes import Routes
+
+        #: Plans each line once and carries its route out, the engines running the
+        #: commands (the same executor as ``run``'s, whose sessions run them inline).
+        self.routes = Routes(
+            _Engines(self),
+            [(member.name, member.target) for member in self.members],
+            lambda: self.registry,
+            self.where,
+        )
         self._lock = threading.RLock()
-        self._lines: deque[_Line] = deque()  # submitted, waiting for their turn
+        #: Lines submitted, waiting for their turn: the route of a line depends on the
+        #: ``use`` before it, and a cell runs one line at a time, whatever target each
+        #: names. The next starts when the last has answered, on the thread it ended on.
+        self._lines: deque[_Line] = deque()
         self._running: int | None = None  # the number of the line running now
+        self._pumping = False  # a thread is taking lines from the queue (under the lock)
         self._dropped: list[_Line] = []  # cancelled behind the line running: said after it
-        self._chains: dict[int, _Chain] = {}  # by the number of the job awaited now
-        self._gathers: dict[int, _Gather] = {}  # by the number of each member's job
 
     @classmethod
     def of(cls, engine: Engine, name: str | None = None) -> Cell:
@@ -182,11 +190,10 @@ class Cell:
         cell = cls.__new__(cls)
         cell._registry, cell.where = None, engine.where
         cell._numbers = engine.numbers
-        cell.outbox = Outbox(engine.outbox.notify)
+        cell.outbox = Outbox(engine.outbox.notify, engine.outbox.lock)
         cell.files = cell.csv = None
         member = Member(name or member_name(engine.target), engine.target, engine)
         cell.members = (member,)
-        cell.current = member.name
         cell._queue_parts()
         return cell
 
@@ -194,6 +201,11 @@ class Cell:
     def outboxes(self) -> tuple[Outbox, ...]:
         """The cell's own outbox, then each member's: a front end sets their notify."""
         return (self.outbox, *(member.engine.outbox for member in self.members))
+
+    @property
+    def current(self) -> str:
+        """The target the lines without ``@NAME`` go to (``use NAME`` changes it)."""
+        return self.routes.current
 
     @property
     def single(self) -> bool:
@@ -249,137 +261,70 @@ class Cell:
     # ------------------------------------------------------------------ jobs
 
     def submit(self, line: str) -> int:
-        """Queue a typed line; it is routed (:mod:`rac_console.commands.routing`) when
+        """Queue a typed line; it is planned (:mod:`rac_console.commands.routing`) when
         every line before it has ended, so lines run one at a time, in the order typed,
         whatever target each names. Its Result carries the number returned (from its
         target's outbox, or the cell's for a line the cell answers itself)."""
-        return self._enqueue(_Line(next(self._numbers), line))
+        return self.enter(line).seq
 
     def submit_command(
         self, command: Command, line: str | None = None, name: str | None = None
     ) -> int:
         """Queue a command a front end made (Space on a row of ``name``'s table), in
         turn with the typed lines; run as it is, never parsed."""
-        return self._enqueue(_Line(next(self._numbers), line, command, name))
+        return self.enter(line, command, name).seq
 
-    def _enqueue(self, item: _Line) -> int:
+    def enter(
+        self, line: str | None, command: Command | None = None, name: str | None = None
+    ) -> Entered:
+        """:meth:`submit` (``command`` None) or :meth:`submit_command`, saying the
+        route the line was planned to when it started at once (the console's guard of
+        the keys typed ahead of a write's question reads it)."""
+        item = _Line(next(self._numbers), line, command, name)
         with self._lock:
             self._lines.append(item)
         self._pump()
-        return item.seq
+        return Entered(item.seq, item.route)
 
     def _pump(self) -> None:
         """Start the next lines while none runs: those the cell answers itself at once,
-        then the first a target runs (the next waits for its Result)."""
+        then the first a target runs (the next waits for its answer). On the thread that
+        submitted a line, or the one a line ended on; a line answered at once while the
+        queue is being taken is followed by the next in the same loop, not a deeper one."""
         with self._lock:
-            while self._running is None and self._lines:
-                self._start(self._lines.popleft())
-
-    def _route(self, item: _Line) -> Route:
-        from ...commands.routing import Refused, route_command
-
-        if item.command is None:
-            return self.registry.plan(item.line or "", self.names, self.current)
-        name = self.current if item.name is None else find_name(self.names, item.name)
-        if name is None:
-            from ...commands.cells import not_open
-
-            return Refused(str(not_open(str(item.name), self.names)))
-        text = item.line or ""
-        return route_command(item.command, text, self.names, name, self.registry.traits)
+            if self._pumping:
+                return
+            self._pumping = True
+            try:
+                while self._running is None and self._lines:
+                    item = self._lines.popleft()
+                    self._running = item.seq
+                    self._start(item)
+            finally:
+                self._pumping = False
 
     def _start(self, item: _Line) -> None:
-        """Route one line and start it (under the lock)."""
-        from ...commands.routing import Chained, OnEveryTarget, OnTarget, Refused, SwitchCurrent
+        """Plan one line, once, and carry it out (under the lock)."""
+        from .routes import Line
 
-        route = self._route(item)
-        if isinstance(route, OnTarget | OnEveryTarget | SwitchCurrent):
-            spec = self.registry.find(route.command)
-            if spec is not None and not spec.runs_in(self.where):  # said once, not per target
-                from ..commands.jobs import not_here
+        line = Line(item.seq, item.line, item.command, item.name)
+        item.route = self.routes.plan(line)
+        self.routes.execute(item.route, line, self._answered)
 
-                text = not_here(self.registry, spec.name, self.where)
-                self._answer(item, (Message(text, "error"),), route.command)
+    def _answered(self, answer: Answer) -> None:
+        """A line's answer (on the thread it ended on): said by the cell unless its one
+        target's engine said it already; then the next line starts."""
+        from ..published.events import Result
+
+        line = answer.line
+        if answer.by is None:
+            self.outbox.put(Result(line.seq, answer.feedback, line.text, answer.command))
+        with self._lock:
+            if self._running != line.seq:
                 return
-        match route:
-            case OnTarget(name=name, command=command):
-                self.member(name).engine.submit_command(command, item.line, item.seq)
-                self._running = item.seq
-            case OnEveryTarget(command=command):
-                self._to_every_target(item, command)
-                self._running = item.seq
-            case Chained():
-                self._chain(item, route)
-                self._running = item.seq
-            case SwitchCurrent():
-                self._use(item, route)
-            case Refused(text=text):
-                self._answer(item, (Message(text, "error"),))
-            case _:  # a blank line, a comment
-                self._answer(item, ())
-
-    def _use(self, item: _Line, route: SwitchCurrent) -> None:
-        member = self.member(route.name)
-        self.current = member.name
-        label = member.target.label
-        shown = f"{member.name} ({terminal_safe(label)})" if label else member.name
-        said = Message(f"current target: {shown}; @NAME runs a line elsewhere")
-        self._answer(item, (said,), route.command)
-
-    def _chain(self, item: _Line, route: Chained) -> None:
-        """``wait ... after @FIRST ...``: FIRST's wait now, this target's once it held."""
-        chain = _Chain(item.seq, item.line, route.command, route.first, route.second)
-        first = self.member(route.first).engine
-        self._chains[first.submit_command(route.first_wait)] = chain
-
-    def _advance(self, chain: _Chain, result: Result) -> list[Result]:
-        """A chained wait's job ended: the second wait starts, or the whole answer."""
-        from ...commands.outcome import Outcome
-        from ..published.events import Result
-        from .chained_wait import chained_feedback, met
-
-        outcome = next((f for f in result.feedback if isinstance(f, Outcome)), None)
-        if chain.first_outcome is None:  # the first target's wait
-            if outcome is None or not met(outcome):
-                feedback = (
-                    chained_feedback(chain.first, outcome, chain.second, None)
-                    if outcome is not None
-                    else result.feedback
-                )
-                return [Result(chain.seq, feedback, chain.line, chain.command)]
-            chain.first_outcome = outcome
-            second = replace(chain.command, after=None)
-            self._chains[self.member(chain.second).engine.submit_command(second)] = chain
-            return []
-        feedback = (
-            chained_feedback(chain.first, chain.first_outcome, chain.second, outcome)
-            if outcome is not None
-            else result.feedback
-        )
-        return [Result(chain.seq, feedback, chain.line, chain.command)]
-
-    def _to_every_target(self, item: _Line, command: Command) -> None:
-        """A line for the whole cell (``publish``): run by every target, answered once."""
-        gather = _Gather(item.seq, item.line, command, {})
-        for member in self.members:
-            self._gathers[member.engine.submit_command(command)] = gather
-            gather.waiting[member.name] = None
-
-    def _gathered(self, name: str, gather: _Gather, result: Result) -> list[Result]:
-        from ..published.events import Result
-
-        gather.waiting[name] = result.feedback
-        if any(feedback is None for feedback in gather.waiting.values()):
-            return []
-        feedback = tuple(f for each in gather.waiting.values() for f in each or ())
-        return [Result(gather.seq, feedback, gather.line, gather.command)]
-
-    def _answer(
-        self, item: _Line, feedback: tuple[Feedback, ...], command: Command | None = None
-    ) -> None:
-        from ..published.events import Result
-
-        self.outbox.put(Result(item.seq, feedback, item.line, command or item.command))
+            self._running = None
+            self._say_dropped()
+        self._pump()
 
     def cancel(self, queued: bool = False) -> None:
         """Esc, Ctrl-C: the running line stops on every target, and the lines queued
@@ -396,11 +341,13 @@ class Cell:
     def _say_dropped(self) -> None:
         """The lines a cancel dropped, answered once the line running has ended (so
         their answers come after its, in the order typed)."""
+        from ..published.events import Result
         from ..thread.engine import NOT_RUN
 
         dropped, self._dropped = self._dropped, []
         for item in dropped:
-            self._answer(item, (Message(NOT_RUN, "error"),))
+            said = (Message(NOT_RUN, "error"),)
+            self.outbox.put(Result(item.seq, said, item.line, item.command))
 
     def answer_confirm(self, seq: int, yes: bool) -> None:
         """The answer to a ConfirmWrite: its number names one job in the cell."""
@@ -412,37 +359,37 @@ class Cell:
             member.engine.set_poll_frames(shown)
 
     def drain(self) -> list[tuple[str | None, Batch]]:
-        """Everything published since the last drain: the cell's own results (None),
-        then each target's batch, by name. The line running ends when its Result is
-        here, and the next starts: so each drain holds the lines in the order typed."""
-        drained: list[tuple[str | None, Batch]] = [(None, self.outbox.drain())]
-        drained.extend((member.name, member.engine.outbox.drain()) for member in self.members)
-        if not any(batch.events for _, batch in drained[1:]):
+        """Everything published since the last drain, taken at one instant: the cell's
+        own results (None), then each target's batch, by name; when several hold
+        answers, cut so that the answers come in the order the lines were submitted
+        (:mod:`.answer_order`). The queue of lines moves without it."""
+        batches = Outbox.drain_together(self.outboxes)
+        drained: list[tuple[str | None, Batch]] = [(None, batches[0])]
+        drained.extend((m.name, b) for m, b in zip(self.members, batches[1:], strict=True))
+        if not any(batch.events for _, batch in drained):
             return drained  # the first paint loads no event class
-        from ..published.events import Result
+        from .answer_order import in_answer_order
 
-        ended = False
-        answers: list[Result] = []
-        for name, batch in drained[1:]:
-            if not batch.events:
-                continue
-            kept: list[Event] = []
-            for event in batch.events:
-                if not isinstance(event, Result):
-                    kept.append(event)
-                elif (chain := self._chains.pop(event.seq, None)) is not None:
-                    answers.extend(self._advance(chain, event))
-                elif (gather := self._gathers.pop(event.seq, None)) is not None:
-                    answers.extend(self._gathered(str(name), gather, event))
-                else:
-                    kept.append(event)
-                    ended = ended or event.seq == self._running
-            batch.events[:] = kept
-        drained[0][1].events.extend(answers)
-        ended = ended or any(answer.seq == self._running for answer in answers)
-        if ended:
-            with self._lock:
-                self._running = None
-                self._say_dropped()
-            self._pump()
-        return drained
+        return in_answer_order(drained)
+
+
+class _Engines:
+    """A cell's :class:`~.routes.Targets`: each target's engine runs a command as a
+    job, on its own thread; the feedback comes back on that thread."""
+
+    def __init__(self, cell: Cell) -> None:
+        self._cell = cell
+
+    def run(self, name: str, command: Command, line: Line, done: Done, whole: bool) -> None:
+        """A job on ``name``'s engine; ``whole``: numbered as the line and published by
+        the engine (its Result is the line's answer, with the frames before it); else a
+        step of the cell's answer, numbered on its own and handed to ``done`` alone."""
+        engine = self._cell.member(name).engine
+
+        def then(result: Result) -> None:
+            done(result.feedback)
+
+        if whole:
+            engine.submit_command(command, line.text, line.seq, then=then)
+        else:
+            engine.submit_command(command, then=then, publish=False)

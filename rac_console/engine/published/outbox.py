@@ -11,7 +11,7 @@ from __future__ import annotations
 import contextlib
 import threading
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
@@ -46,12 +46,16 @@ class Outbox:
     """Thread-safe: ``put*`` from the engine's thread, :meth:`drain` from a front end's.
 
     ``notify`` (if given) is called on the engine's thread when the outbox stops being
-    empty: a front end with an event loop wakes its drain from there.
+    empty: a front end with an event loop wakes its drain from there. ``lock``: one
+    shared by the outboxes of a cell, so that :func:`drain_together` takes them all at
+    one instant.
     """
 
-    def __init__(self, notify: Callable[[], None] | None = None) -> None:
+    def __init__(
+        self, notify: Callable[[], None] | None = None, lock: threading.Lock | None = None
+    ) -> None:
         self.notify = notify
-        self._lock = threading.Lock()
+        self.lock = lock if lock is not None else threading.Lock()
         self._batch = Batch()
         self._empty = True
         #: ``time.monotonic()`` when the outbox stopped being empty, None while it is: a
@@ -62,7 +66,7 @@ class Outbox:
         self.waiting_since: float | None = None
 
     def put(self, event: Event) -> None:
-        with self._lock:
+        with self.lock:
             events = self._batch.events
             events.append(event)
             if len(events) > MAX_EVENTS:
@@ -74,7 +78,7 @@ class Outbox:
     def put_many(self, events: list[Event], rows: dict[VarRef, RowView] | None = None) -> None:
         """Several events at once, in order, and the row views that follow them: one
         lock for a batch of frames."""
-        with self._lock:
+        with self.lock:
             batch = self._batch.events
             batch.extend(events)
             if len(batch) > MAX_EVENTS:
@@ -87,7 +91,7 @@ class Outbox:
             self._notify()
 
     def put_removed(self, variables: list[VarRef]) -> None:
-        with self._lock:
+        with self.lock:
             for var in variables:
                 self._batch.rows.pop(var, None)
                 self._batch.removed.add(var)
@@ -96,18 +100,32 @@ class Outbox:
             self._notify()
 
     def put_status(self, status: Status) -> None:
-        with self._lock:
+        with self.lock:
             self._batch.status = status
             woke = self._wake()
         if woke:
             self._notify()
 
     def drain(self) -> Batch:
-        with self._lock:
-            batch, self._batch = self._batch, Batch()
-            self._empty = True
-            self.pending_since = None
+        with self.lock:
+            return self._take()
+
+    def _take(self) -> Batch:
+        batch, self._batch = self._batch, Batch()
+        self._empty = True
+        self.pending_since = None
         return batch
+
+    @staticmethod
+    def drain_together(outboxes: Sequence[Outbox]) -> list[Batch]:
+        """Drain outboxes that share one lock at one instant: whatever one of them got
+        before another got something is in the same drain (a cell's line ended on one
+        target, and the next one's answer on another, come out together)."""
+        lock = outboxes[0].lock
+        if any(outbox.lock is not lock for outbox in outboxes):
+            raise ValueError("drain_together needs outboxes made with one lock")
+        with lock:
+            return [outbox._take() for outbox in outboxes]
 
     def _wake(self) -> bool:
         woke, self._empty = self._empty, False

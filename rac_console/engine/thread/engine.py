@@ -43,7 +43,7 @@ if TYPE_CHECKING:
     from ..polling.plant_tap import PlantTap
     from ..polling.poller import Poller
     from ..polling.publisher import Publisher
-    from ..published.events import Feedback
+    from ..published.events import Feedback, Result
     from ..watch.cellcsv import CellCsv
     from ..watch.csvsink import CsvSink
     from .engine_context import EngineParts
@@ -201,18 +201,25 @@ class Engine:
 
     def submit(self, line: str) -> int:
         """Queue a typed line; its :class:`Result` comes out with the number returned."""
-        seq = self._inbox.put(line)
+        seq = self._inbox.put(line).seq
         self._answer_if_dead()
         return seq
 
     def submit_command(
-        self, command: Command, line: str | None = None, seq: int | None = None
+        self,
+        command: Command,
+        line: str | None = None,
+        seq: int | None = None,
+        then: Callable[[Result], None] | None = None,
+        publish: bool = True,
     ) -> int:
         """Queue a command a front end made itself (F2's pause, Space on an IO row):
         run like a typed line, never parsed; ``line`` is how it is shown (the echo,
         the result), or None for nothing to echo. ``seq``: the number its cell gave
-        the line (else the next of :attr:`numbers`)."""
-        seq = self._inbox.put(command, line, seq)
+        the line (else the next of :attr:`numbers`). ``then`` is handed its Result on
+        this engine's thread once it is out (``publish``: in the outbox; else to
+        ``then`` alone), even when the job is not run."""
+        seq = self._inbox.put(command, line, seq, then, publish).seq
         self._answer_if_dead()
         return seq
 
@@ -232,7 +239,11 @@ class Engine:
         from ..published.events import Message, Result
 
         for job in self._inbox.abandon():
-            self.outbox.put(Result(job.seq, (Message(ENGINE_STOPPED, "error"),), job.line, None))
+            result = Result(job.seq, (Message(ENGINE_STOPPED, "error"),), job.line, None)
+            if job.publish:
+                self.outbox.put(result)
+            if job.then is not None:
+                job.then(result)
 
     def stop(self, timeout: float = 5.0) -> None:
         """End the thread: a request in flight is cut short, the target closed."""
@@ -332,7 +343,6 @@ class Engine:
         from ..published.events import Message, Result
         from .engine_context import EngineContext
 
-        self._inbox.begin(job)
         try:
             feedback: list[Feedback]
             if job.cancelled():
@@ -349,13 +359,21 @@ class Engine:
                 command, feedback = run_job(self.registry, context, job.what, self.where, job.line)
         except BaseException:  # the thread ends (see _run): this line is answered first
             said = Message(DIED_RUNNING, "error")
-            self._publisher.emit(Result(job.seq, (said,), job.line, self._parsed(job.what)))
+            self._answer(job, Result(job.seq, (said,), job.line, self._parsed(job.what)))
             raise
         finally:
             self._inbox.end()
         self.publish_status(force=True)
-        self._publisher.emit(Result(job.seq, tuple(feedback), job.line, command))
+        self._answer(job, Result(job.seq, tuple(feedback), job.line, command))
+
+    def _answer(self, job: Job, result: Result) -> None:
+        """A job's Result out: to the outbox after the frames and the status before it,
+        then to whoever waits on it (a cell's next line starts there)."""
+        if job.publish:
+            self._publisher.emit(result)
         self._publisher.flush()
+        if job.then is not None:
+            job.then(result)
 
     def _parsed(self, what: str | Command) -> Command | None:
         """The command a job names (None when its line does not parse)."""

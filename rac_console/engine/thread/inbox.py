@@ -3,20 +3,22 @@ number, run one at a time on the engine's thread, cancelled from any thread; and
 answers front ends give to the confirm questions of a write.
 
 Everything else of the engine belongs to its thread alone (see the package docstring);
-this is what the other threads may reach, each piece under the one lock. Loads nothing
-of the engine's parts: an engine takes lines before they are made.
+this is what the other threads may reach, under one lock. The jobs waiting are held in
+one queue, which a cancel of the queued jobs reads too (no second copy of them). Loads
+nothing of the engine's parts: an engine takes lines before they are made.
 """
 
 from __future__ import annotations
 
 import itertools
-import queue
 import threading
-from collections.abc import Iterator
+from collections import deque
+from collections.abc import Callable, Iterator
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
     from ...commands.language import Command
+    from ..published.events import Result
     from .job import Job
 
 
@@ -26,34 +28,44 @@ class Inbox:
     def __init__(self, numbers: Iterator[int] | None = None) -> None:
         """``numbers``: where jobs get their numbers (the engines of a cell share one)."""
         self.numbers = numbers if numbers is not None else itertools.count(1)
-        self._jobs: queue.SimpleQueue[Job | None] = queue.SimpleQueue()  # None: stop
-        self._lock = threading.Lock()
-        self._queued: dict[int, Job] = {}  # submitted, not started
+        self._lock = threading.Condition()
+        self._jobs: deque[Job] = deque()  # submitted, not started, in order
+        self._stopped = False
         self._running: Job | None = None
         self._answers: dict[int, bool] = {}  # confirm answers, by the job's number
 
     # ------------------------------------------------------------ any thread
 
-    def put(self, what: str | Command, line: str | None = None, seq: int | None = None) -> int:
-        """Queue a line or a command (``seq``: the number its cell gave it); its number."""
+    def put(
+        self,
+        what: str | Command,
+        line: str | None = None,
+        seq: int | None = None,
+        then: Callable[[Result], None] | None = None,
+        publish: bool = True,
+    ) -> Job:
+        """Queue a line or a command (``seq``: the number its cell gave it; ``then``
+        and ``publish``: see :class:`~.job.Job`)."""
         from .job import Job
 
         with self._lock:
-            job = Job(next(self.numbers) if seq is None else seq, what, line)
-            self._queued[job.seq] = job
-        self._jobs.put(job)
-        return job.seq
+            job = Job(next(self.numbers) if seq is None else seq, what, line, then, publish)
+            self._jobs.append(job)
+            self._lock.notify()
+        return job
 
     def put_stop(self) -> None:
-        """The engine's loop ends when it takes this (the jobs behind it are not run)."""
-        self._jobs.put(None)
+        """The engine's loop ends when it next asks (the jobs still queued are not run)."""
+        with self._lock:
+            self._stopped = True
+            self._lock.notify()
 
     def cancel(self, queued: bool = False) -> bool:
         """Cancel the job running (with ``queued``, the ones waiting too); whether one
         was running."""
         with self._lock:
             running = self._running
-            cancelled = list(self._queued.values()) if queued else []
+            cancelled = list(self._jobs) if queued else []
             if running is not None:
                 cancelled.append(running)
         for job in cancelled:
@@ -67,37 +79,28 @@ class Inbox:
     def abandon(self) -> list[Job]:
         """Every job queued, taken out unrun: the engine's thread has ended, and a job
         left in the queue would be waited for forever."""
-        taken: list[Job] = []
         with self._lock:
-            while True:
-                try:
-                    job = self._jobs.get_nowait()
-                except queue.Empty:
-                    break
-                if job is not None:
-                    self._queued.pop(job.seq, None)
-                    taken.append(job)
+            taken = list(self._jobs)
+            self._jobs.clear()
         return taken
 
     # ------------------------------------------------------------ the engine's thread
 
     def empty(self) -> bool:
-        return self._jobs.empty()
+        return not self._jobs
 
     def next(self, wait: float | None) -> Job | tuple[()] | None:
-        """The next job; ``()`` when none came within ``wait`` seconds; None: stop."""
-        try:
-            if wait == 0:  # between polls: ask without raising when nothing came
-                return self._jobs.get_nowait() if not self._jobs.empty() else ()
-            return self._jobs.get(timeout=wait)
-        except queue.Empty:
-            return ()
-
-    def begin(self, job: Job) -> None:
-        """``job`` runs now."""
+        """The next job, running from now; ``()`` when none came within ``wait`` seconds
+        (0: between polls, asked without waiting); None: stop."""
         with self._lock:
-            self._queued.pop(job.seq, None)
-            self._running = job
+            if wait != 0 and not self._jobs and not self._stopped:
+                self._lock.wait_for(lambda: self._jobs or self._stopped, timeout=wait)
+            if self._stopped:
+                return None
+            if not self._jobs:
+                return ()
+            self._running = self._jobs.popleft()
+            return self._running
 
     def end(self) -> None:
         """The job running has ended."""

@@ -7,20 +7,29 @@ Its own module: :meth:`Engine.submit` makes one on any thread, and an engine is 
 from __future__ import annotations
 
 import threading
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
     from ...commands.language import Command
+    from ..published.events import Result
 
 
 @dataclass
 class Job:
-    """One submitted line or command; a cancel belongs to it and to no other."""
+    """One submitted line or command; a cancel belongs to it and to no other.
+
+    Its :class:`Result` goes to the outbox (``publish``), and then to ``then`` on the
+    engine's thread: a cell learns there that its line ended (and starts the next, with
+    no front end draining), or takes the feedback of one step of a line it answers as a
+    whole (unpublished: the front ends see the cell's one answer)."""
 
     seq: int
     what: str | Command
     shown: str | None = None  # how a command object is shown (a typed line shows itself)
+    then: Callable[[Result], None] | None = None
+    publish: bool = True
     _cancelled: threading.Event = field(default_factory=threading.Event, repr=False)
 
     @property
