@@ -1,6 +1,6 @@
-"""A line's way through a cell (issue 43): carried out by the one executor of routes
-(the console's cell and ``run`` give it only how a target runs a command), and the
-cell's queue moving with no front end draining it.
+"""A line's way through a cell (issue 43): planned once, carried out by the one executor
+of routes (the console's cell and ``run`` give it only how a target runs a command), and
+the cell's queue moving with no front end draining it.
 
 The executor's own tests give it targets written here (inline, or answering when the
 test says, as an engine answers on its thread); the cell's run against fake controllers
@@ -10,6 +10,7 @@ that record what they receive, judged from their side.
 from __future__ import annotations
 
 from collections.abc import Callable
+from pathlib import Path
 
 import pytest
 
@@ -17,10 +18,13 @@ from rac_console.commands.language import Command
 from rac_console.commands.target import Target
 from rac_console.engine import Message, Result
 from rac_console.engine.cell.cell import Cell
-from rac_console.engine.cell.routes import Done, Line, Routes
+from rac_console.engine.cell.routes import Answer, Done, Line, Routes
 from rac_console.engine.commands.builtin import BUILTIN
+from rac_console.engine.commands.registry import Registry
 from rac_console.engine.setup.options import EngineOptions
 from rac_console.engine.setup.where import Where
+from rac_console.sim.thread import SimulatorThread
+from tests.support.drivers import answerable, burst, confirm_console, connected, modal, until
 from tests.support.servers import RecordingServer
 
 Servers = Callable[..., RecordingServer]
@@ -70,7 +74,7 @@ def test_the_executor_runs_a_line_on_its_target_and_use_moves_the_current_one() 
 def test_a_line_every_target_runs_is_answered_once_in_the_cells_order() -> None:
     targets = Later()
     routes = routes_of(targets)
-    answers = []
+    answers: list[Answer] = []
     line = Line(1, "publish off")
     routes.execute(routes.plan(line), line, answers.append)
     assert set(targets.waiting) == {"A", "B"} and answers == []
@@ -84,7 +88,7 @@ def test_a_line_every_target_runs_is_answered_once_in_the_cells_order() -> None:
 def test_a_chained_wait_whose_first_wait_did_not_run_never_waits_on_the_second() -> None:
     targets = Later()
     routes = routes_of(targets)
-    answers = []
+    answers: list[Answer] = []
     line = Line(1, "@B wait IO 64 on within 1 after @A IO 128 on")
     routes.execute(routes.plan(line), line, answers.append)
     assert list(targets.waiting) == ["A"]
@@ -134,3 +138,36 @@ def test_a_cell_that_no_front_end_drains_still_runs_its_next_lines(recording: Se
         assert read == [("A", seqs[0]), ("B", seqs[1]), ("A", seqs[2])]
     finally:
         cell.stop()
+
+
+# ---------------------------------------------------------- planned once
+
+
+@pytest.mark.slow
+async def test_a_typed_write_is_planned_once_and_its_keys_typed_ahead_still_held(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The console's guard of the keys typed ahead of a write's question reads the
+    route its cell planned the line to: the line is planned once, by the registry that
+    runs it."""
+    planned: list[str] = []
+    plan = Registry.plan
+
+    def counted(self: Registry, line: str, *args: object, **kwargs: object) -> object:
+        planned.append(line)
+        return plan(self, line, *args, **kwargs)  # type: ignore[arg-type]
+
+    monkeypatch.setattr(Registry, "plan", counted)
+    with SimulatorThread() as simulator:
+        app = confirm_console(tmp_path, simulator)
+        async with app.run_test(size=(100, 30)) as pilot:
+            await connected(pilot, app)
+            burst(app, "put IO 67 on\ry\r")
+            await until(pilot, lambda: modal(app) is not None, "the question")
+            screen = modal(app)
+            assert screen is not None
+            await answerable(pilot, screen)
+            await pilot.press("n")
+            await until(pilot, lambda: not app.main_screen.lines.pending, "the answer")
+            assert app.main_screen.panes.command_line.value == ""  # the y never got there
+    assert planned.count("put IO 67 on") == 1

@@ -70,15 +70,6 @@ class CommandLine(Input):
     cell: tuple[tuple[str, str], ...] = ()
     BINDINGS: ClassVar[list[BindingType]] = keys.COMMAND_LINE
 
-    class Entered(Message):
-        """A line the user entered, taken out of the line the moment Enter was read;
-        ``held``: the keys typed after it are held until the console releases them."""
-
-        def __init__(self, line: str, held: bool = False) -> None:
-            super().__init__()
-            self.line = line
-            self.held = held
-
     class Hint(Message):
         """What the command still needs, when a history suggestion holds the grey text."""
 
@@ -133,9 +124,12 @@ class CommandLine(Input):
         self._seen = seen
         self._position: int | None = None
         self._draft = ""
-        #: Whether a line may stop to ask before it writes (set by the console): the keys
-        #: typed after its Enter are then held.
-        self.may_ask: Callable[[str], bool] = lambda line: False
+        #: Hands a line to the console the moment Enter is read (set by the console),
+        #: in the order typed; ``may_hold``: a line typed (not pasted) whose keys after
+        #: it may be held. True: it may stop to ask before it writes, so the keys typed
+        #: after its Enter are held (the console read that from the route its cell
+        #: planned the line to, not from a plan of its own).
+        self.enter: Callable[[str, bool], bool] = lambda line, may_hold: False
         self._held: list[events.Key | events.Paste] | None = None  # None: not holding
         self._dropping = False  # a question is up: keys typed ahead of it are dropped
         self._dropped = 0
@@ -270,20 +264,19 @@ class CommandLine(Input):
             first = self.value[: self.cursor_position] + complete[0]
             self.value = ""
             for line in (first, *complete[1:]):
-                self.post_message(self.Entered(line))
+                self.enter(line, False)
         if tail:
             self.insert_text_at_cursor(tail)
 
     async def action_submit(self) -> None:
-        """Take the line out now, so keys already on their way start a fresh one."""
+        """Take the line out and hand it over now, so keys already on their way start a
+        fresh one (and, after a write that may ask, are held)."""
         line = self.value
         self.value = ""
         self._position = None
         self._draft = ""
-        holds = self.may_ask(line)
-        if holds:
+        if self.enter(line, True):
             self.hold()  # the keys after this Enter, until the line asked or ended
-        self.post_message(self.Entered(line, held=holds))
 
     def action_cursor_right(self, select: bool = False) -> None:
         from ..present.completion import hint

@@ -85,7 +85,7 @@ class ConsoleScreen(Screen[None]):
         self.profiles = {} if served else dict(self.members.engine.profiles)
         panes.command_line.targets = tuple(connect_targets(self.profiles))
         panes.command_line.cell = tuple(cell_targets(cell))  # none for one target
-        panes.command_line.may_ask = self.lines.may_ask
+        panes.command_line.enter = self.enter_line
         self.pacing = Pacing(self, self.update_all, self._clock_shown, self.refresh_table)
         self.feed = ConsoleFeed(
             self.members,
@@ -230,11 +230,8 @@ class ConsoleScreen(Screen[None]):
             return
         command, line = toggled
         line = row_keys.addressed(self.cell_mode, target, line)
-        may_ask = self.lines.may_ask(line)
-        seq = self.lines.submit(line, command, target or None)
-        if may_ask:  # the keys typed after this Space must not answer its question
-            self.panes.command_line.hold()
-            self.lines.hold_keys(seq, queued=False)
+        # The keys typed after this Space must not answer its question, if it asks.
+        seq = self.lines.toggle(line, command, target or None)
         state.toggles.start(row.var, seq, not bool(row.variant and row.variant.value))
 
     def _close_question(self, seq: int) -> None:
@@ -258,11 +255,12 @@ class ConsoleScreen(Screen[None]):
 
     # ---------------------------------------------------------- the command line
 
-    @on(CommandLine.Entered)
-    def entered(self, event: CommandLine.Entered) -> None:
-        """Hand the line to the cell: lines run one at a time, each once, in order."""
+    def enter_line(self, line: str, may_hold: bool) -> bool:
+        """The command line's Enter (or a pasted line): handed to the cell at once, in
+        the order typed (lines run one at a time, each once, in order); True when the
+        keys typed after it are held (see :meth:`Lines.enter`)."""
         self.panes.completions.hide()
-        self.lines.entered(event.line, event.held)
+        return self.lines.enter(line, may_hold)
 
     @on(CommandLine.Dropped)
     def keys_dropped(self, event: CommandLine.Dropped) -> None:

@@ -3,7 +3,11 @@ answers: which one runs, how long it has, which keys typed meanwhile are held.
 
 Lines run one at a time, each once, in order (the cell's queue); Esc cancels the
 running one and those behind it. A write that may stop to ask holds the keys typed after
-its Enter, so that nothing typed ahead answers its question (see :class:`CommandLine`).
+its Enter, so that nothing typed ahead answers its question (see :class:`CommandLine`):
+which lines those are is read from the route the cell planned the line to when it
+started it at once (:meth:`Cell.enter`), never from a second plan here. :attr:`Lines.pending`
+is this thread's own record of the lines not answered yet (the running line's clock, Esc,
+the footer): a front end never reads the cell's queue, which other threads move.
 """
 
 from __future__ import annotations
@@ -17,6 +21,7 @@ from .command_line import CommandLine
 
 if TYPE_CHECKING:
     from ..commands.language import Command
+    from ..commands.routing import Route
     from ..engine.cell.cell import Cell
     from .members import Members
 
@@ -46,24 +51,34 @@ class Lines:
         """Every line the console hands the cell (typed, or made by a key on a row:
         then ``command`` is run as it is on ``target`` (None: the current one), never
         parsed, and ``line`` shows it): counted as running or queued until its result,
-        and cancelled by Esc."""
-        cell = self.cell
-        seq = cell.submit(line) if command is None else cell.submit_command(command, line, target)
-        self.pending[seq] = (line, time.monotonic())
-        self.changed()
-        return seq
+        and cancelled by Esc. Its number."""
+        return self._hand_over(line, command, target)[0]
 
-    def entered(self, line: str, held: bool) -> None:
-        """A line typed and entered (``held``: the keys after it wait for its question)."""
-        if not line.strip():
-            if held:
-                self.command_line.post_message(CommandLine.Release())
-            return
-        self.command_line.remember(line)
+    def _hand_over(
+        self, line: str, command: Command | None = None, target: str | None = None
+    ) -> tuple[int, bool]:
+        """:meth:`submit`; and whether the line may stop to ask before it writes: a
+        write on a ``confirm`` target, started at once with nothing of the console's
+        before it (a write queued behind a long wait must not hold the keys typed
+        meanwhile)."""
         queued = bool(self.pending)
-        seq = self.submit(line)
-        if held:
-            self.hold_keys(seq, queued)
+        entered = self.cell.enter(line, command, target)
+        self.pending[entered.seq] = (line, time.monotonic())
+        self.changed()
+        return entered.seq, not queued and self._asks(entered.route)
+
+    def enter(self, line: str, may_hold: bool) -> bool:
+        """A line typed (or pasted) and entered, handed to the cell at once; True when
+        the keys typed after it are held until it asked or ended (``may_hold``: the
+        command line holds them)."""
+        if not line.strip():
+            return False
+        self.command_line.remember(line)
+        seq, asks = self._hand_over(line)
+        if not (may_hold and asks) or self.held_seq is not None:
+            return False
+        self.held_seq = seq
+        return True
 
     def answered(self, seq: int) -> int:
         """Line ``seq`` has its result: the keys it held go on. Returns how many keys its
@@ -84,25 +99,23 @@ class Lines:
         self._dropped += count
         return True
 
-    def may_ask(self, line: str) -> bool:
-        """Whether this line, run now, may stop to ask before it writes: a write on a
-        ``confirm`` target with nothing running before it (a write queued behind a
-        long wait must not hold the keys typed meanwhile)."""
+    def toggle(self, line: str, command: Command, target: str | None) -> int:
+        """Space on a row: ``command`` handed to the cell as ``line``; when it may ask,
+        the keys typed after the Space are held as after a typed write's Enter."""
+        seq, asks = self._hand_over(line, command, target)
+        if asks and self.held_seq is None:
+            self.command_line.hold()
+            self.held_seq = seq
+        return seq
+
+    def _asks(self, route: Route | None) -> bool:
+        """Whether a line planned to ``route`` may stop to ask before it writes: a write
+        to a ``confirm`` target whose rules let it write (None: not started yet)."""
         from ..present.type_ahead import written_target
 
-        if self.pending:
-            return False
-        name = written_target(line, self.cell.names, self.cell.current)
+        name = written_target(route) if route is not None else None
         status = self.members.state_of(name).status if name is not None else None
         return status is not None and status.writes == "confirm" and not writes_refused(status)
-
-    def hold_keys(self, seq: int, queued: bool) -> None:
-        """The keys typed after line ``seq`` are held until it asked or ended; a line that
-        turned out to be queued behind another holds none."""
-        if queued or self.held_seq is not None:
-            self.command_line.post_message(CommandLine.Release())
-        else:
-            self.held_seq = seq
 
     def running(self) -> tuple[str, float, int] | None:
         """The oldest line not answered yet (the one running: lines run in order), how
