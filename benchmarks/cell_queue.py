@@ -6,8 +6,9 @@ A cell of two simulated targets (in this process) runs ``--lines`` lines that al
 between the targets (``@robotA get I 1``, ``@robotB get I 1``), woken by the cell's notify
 as a front end is. Side by side, each round:
 
-- ``one queue``: through :meth:`Cell.submit`, the next line started when the Result of
-  the one before is drained (lines in the order typed, whatever target they name);
+- ``one queue``: through :meth:`Cell.submit`, the next line started when the one before
+  has answered, on its engine's thread (lines in the order typed, whatever target they
+  name);
 - ``per engine``: the same lines handed straight to each target's engine, as before
   the queue (each engine runs its own in order, the targets side by side).
 
