@@ -18,7 +18,8 @@ from bench_common import CPrograms, start_responder
 
 from rac_console.commands.exchange_parsers import parse_put
 from rac_console.commands.policy import WritePolicy
-from rac_console.engine.exchange.writes import WriteRules, write
+from rac_console.commands.routing import WriteTrait
+from rac_console.engine.exchange.gate import WriteGate
 from rac_console.session import Session
 
 PUT = parse_put("I 10 5")
@@ -38,12 +39,13 @@ def bare(port: int, count: int) -> float:
 
 
 def client(port: int, count: int, verify: bool) -> float:
-    """Writes a second through the engine's write path (what put, run and the console use)."""
+    """Writes a second through the write gate (what put, run, the console and the library use)."""
     session = Session("127.0.0.1", port, timeout=2)
+    gate = WriteGate(WritePolicy(), WriteTrait.ALWAYS, "put", verify=verify)
     try:
         started = time.perf_counter()
         for _ in range(count):
-            write(session, PUT, WriteRules(WritePolicy(), verify=verify), None)
+            gate.exchange(session, PUT)
         return count / (time.perf_counter() - started)
     finally:
         session.close()

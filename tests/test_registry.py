@@ -13,12 +13,11 @@ from pathlib import Path
 import pytest
 
 from rac_console.cli.main import main
-from rac_console.commands.language import Get, VarRef, parse_var
+from rac_console.commands.language import VarRef, parse_var
 from rac_console.engine import Engine, Feedback, Message
 from rac_console.engine.commands.builtin import BUILTIN
 from rac_console.engine.commands.context import JobContext
 from rac_console.engine.commands.registry import EVERYWHERE, CommandSpec, Where, variable_completion
-from rac_console.engine.exchange.execute import execute
 from rac_console.present.completion import complete, hint
 from rac_console.present.tokens import tokenize
 from rac_console.protocol import InputError
@@ -43,10 +42,10 @@ def parse_twice(rest: str) -> Twice:
 
 
 def run_twice(context: JobContext, command: Twice, line: str | None) -> list[Feedback]:
-    session = context.session
-    if session is None:
+    controller = context.controller
+    if controller is None:
         return [Message("not connected", "error")]
-    first, second = (execute(session, Get(command.var)) for _ in range(2))
+    first, second = (controller.get(command.var) for _ in range(2))
     if not (first.ok and second.ok):
         return [Message(f"{command.var} could not be read twice", "error")]
     moved = "moved" if first.variant != second.variant else "held still"

@@ -2,7 +2,7 @@
 
 Every request goes through :meth:`Connection._exchange`, the one place the library meets
 the controller: a read is sent as the console sends it, a write crosses the console's
-write path (read-only, the profile's ``allow``, the confirm answer, the read-back, an
+write gate (read-only, the profile's ``allow``, the confirm answer, the read-back, an
 unknown outcome said as unknown). Requests are taken one at a time under a lock, so
 threads may share a connection; the session below is owned by whichever thread holds it.
 """
@@ -12,7 +12,6 @@ from __future__ import annotations
 import threading
 import time
 from collections.abc import Callable, Iterator
-from dataclasses import replace
 from typing import TYPE_CHECKING, Literal, overload
 
 from ..commands.language import (
@@ -26,9 +25,8 @@ from ..commands.language import (
     parse_var_list,
 )
 from ..commands.outcome import Outcome
-from ..commands.policy import Writes
 from ..commands.target import Target
-from ..engine.exchange.writes import WriteRules, exchange
+from ..engine.exchange.gate import WriteGate
 from ..protocol import InputError, Variant
 from ..session import DEFAULT_TIMEOUT, ConnectFailed, Session
 from .answers import sent_of, value_of, written_of
@@ -91,14 +89,8 @@ class Connection:
         self._at = Endpoint(session.host, session.port, session.timeout)
         self._lock = threading.RLock()  # RLock: a confirm callback may read again
         self._closed = False
-        policy = target.policy
-        if yes and policy.confirms:  # said yes ahead, as --yes: nothing to ask
-            policy = replace(policy, writes=Writes.OPEN)
-        self._rules = WriteRules(
-            policy,
-            read_only=target.read_only,
-            confirm=_asking(confirm) if confirm is not None else None,
-        )
+        asking = _asking(confirm) if confirm is not None else None
+        self._gate = WriteGate.for_library(target, confirm=asking, yes=yes)
 
     # ------------------------------------------------------------ what it is
 
@@ -220,14 +212,14 @@ class Connection:
         return readings
 
     def _exchange(self, command: Exchange, *, verify: bool = True) -> Outcome:
-        """The one place a command meets the controller: the console's write path
-        (:func:`rac_console.engine.exchange.writes.exchange`) under this connection's rules, one
-        request at a time. Refused once the connection is closed."""
-        rules = self._rules if verify else replace(self._rules, verify=False)
+        """The one place a command meets the controller: through the console's write gate
+        (:class:`rac_console.engine.exchange.gate.WriteGate`) under this connection's
+        rules, one request at a time. Refused once the connection is closed."""
+        gate = self._gate if verify else self._gate.without_read_back()
         with self._lock:
             if self._closed:
                 raise Refused("the connection is closed: nothing was sent (connect again)")
-            return exchange(self._session, command, rules)
+            return gate.exchange(self._session, command)
 
     # ------------------------------------------------------------ the end
 

@@ -1,6 +1,8 @@
 """What a command's handler may use: its job, the target's rules, and (in an engine)
 what it may do to the engine, one method per thing. Handlers never see the engine
-itself, nor its parts (the link, the poller, the publisher, the files, the CSV sink).
+itself, nor its parts (the link, the poller, the publisher, the files, the CSV sink),
+nor the session: they read and write through :attr:`JobContext.controller`, whose
+writes cross the job's write gate (:mod:`..exchange.gate`).
 
 :class:`JobContext` is enough for the commands that also run in ``rac-console run``
 and at the command line (an exchange, a wait): the CLI provides one over its own
@@ -16,17 +18,17 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Literal, Protocol
+from typing import TYPE_CHECKING, Literal, Protocol, Self
 
 if TYPE_CHECKING:
     from ...commands.language import VarRef
     from ...commands.outcome import Outcome
     from ...commands.plant import MqttAddress
     from ...commands.policy import WritePolicy
+    from ...commands.routing import WriteTrait
     from ...commands.target import Target
-    from ...protocol import Variant
-    from ...session import ConnectFailed, Session, TransportError
-    from ..exchange.writes import Confirm
+    from ...session import ConnectFailed, TransportError
+    from ..exchange.controller import Controller
     from ..published.events import RowView
 
 #: The files frames go to besides the screen (``record``, ``transcript``).
@@ -58,17 +60,23 @@ class JobContext(Protocol):
     """What an exchange or a wait needs, wherever it runs."""
 
     @property
-    def session(self) -> Session | None: ...
+    def controller(self) -> Controller | None:
+        """The target, to read and (through this job's write gate) to write; None: not
+        connected. Made from the job's command spec: a command declared never to write
+        (its traits) has every write refused at the gate, nothing sent."""
+        ...
+
     @property
     def rules(self) -> Target: ...
-    @property
-    def verify(self) -> bool: ...
-    @property
-    def confirm(self) -> Confirm | None: ...
+
+    def declaring(self, name: str, writes: WriteTrait) -> Self:
+        """This context for a job of the command ``name``, which declares ``writes``
+        (its spec's traits; :meth:`~.registry.Spec.run` asks it). A context never
+        declared lets no write out."""
+        ...
 
     def cancelled(self) -> bool: ...
     def between(self, until: float, deadline: float) -> None: ...
-    def known_before(self, var: VarRef) -> Variant | None: ...
     def read_back(self, outcome: Outcome) -> None: ...
     def see(self, variables: tuple[VarRef, ...] | list[VarRef]) -> None: ...
     def connect_failed(self, error: ConnectFailed | None) -> None: ...

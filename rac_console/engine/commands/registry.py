@@ -145,7 +145,9 @@ class Spec(Generic[C, T]):
     #: entry of a command a front end made by them, and the handler is given only them.
     types: tuple[type[T], ...] = field(default=())
     #: What the planner and the guards know of it: whether it writes, where it runs in
-    #: a cell (:mod:`rac_console.commands.routing`).
+    #: a cell (:mod:`rac_console.commands.routing`). Its handler's context is declared
+    #: with it (:meth:`run`): the write gate refuses every write of a command declared
+    #: never to write (the default).
     traits: Traits = field(default_factory=Traits)
 
     @property
@@ -173,7 +175,8 @@ class CommandSpec(Spec[JobContext, T]):
     says, ``rac-console run`` and the command line included."""
 
     def run(self, context: JobContext, command: object, line: str | None) -> list[Feedback]:
-        return self.handle(context, self.command_of(command), line)
+        declared = context.declaring(self.name, self.traits.writes)
+        return self.handle(declared, self.command_of(command), line)
 
 
 @dataclass(frozen=True)
@@ -185,7 +188,8 @@ class EngineSpec(Spec[CommandContext, T]):
         engine = context.engine_context()
         if engine is None:  # its ``where`` says a place with no engine: a mistake
             return [Message(f"{self.name!r} needs the console or the REPL", "error")]
-        return self.handle(engine, self.command_of(command), line)
+        declared = engine.declaring(self.name, self.traits.writes)
+        return self.handle(declared, self.command_of(command), line)
 
 
 #: An entry of any command: each entry's own command type is checked where it is made,

@@ -4,15 +4,17 @@ list, no one to ask (a ``confirm`` target's write needs ``--yes``) and no poller
 
 from __future__ import annotations
 
-import time
-from typing import TYPE_CHECKING
+import copy
+from typing import TYPE_CHECKING, Self
 
 from ...commands.language import VarRef
 from ...commands.outcome import Outcome
+from ...commands.routing import WriteTrait
 from ...commands.target import Target
-from ...protocol import Variant
 from ...session import ConnectFailed, Session, TransportError
-from ..exchange.writes import Confirm
+from ..exchange.conditions import sleep_until
+from ..exchange.controller import Controller
+from ..exchange.gate import WriteGate
 
 if TYPE_CHECKING:
     from .context import CommandContext
@@ -22,19 +24,31 @@ class SessionContext:
     """A :class:`~.context.JobContext` that nobody cancels but Ctrl-C."""
 
     def __init__(self, session: Session, rules: Target, verify: bool = True) -> None:
-        self.session: Session | None = session
+        self._session: Session | None = session
         self.rules = rules
-        self.verify = verify
-        self.confirm: Confirm | None = None
+        self._verify = verify
+        #: The command whose job this is, and what it declares (see :meth:`declaring`).
+        self._declared: tuple[str, WriteTrait] = ("", WriteTrait.NEVER)
+
+    @property
+    def controller(self) -> Controller | None:
+        if self._session is None:
+            return None
+        name, writes = self._declared
+        rules = self.rules
+        gate = WriteGate(rules.policy, writes, name, rules.read_only, self._verify)
+        return Controller(self._session, gate)
+
+    def declaring(self, name: str, writes: WriteTrait) -> Self:
+        declared = copy.copy(self)
+        declared._declared = (name, writes)
+        return declared
 
     def cancelled(self) -> bool:
         return False
 
     def between(self, until: float, deadline: float) -> None:
-        time.sleep(max(0.0, until - time.perf_counter()))
-
-    def known_before(self, var: VarRef) -> Variant | None:
-        return None
+        sleep_until(until, deadline)
 
     def read_back(self, outcome: Outcome) -> None:
         """Nothing watched to update."""

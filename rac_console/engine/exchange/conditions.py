@@ -23,7 +23,8 @@ from .execute import execute
 READ_EVERY = 0.01
 
 
-def _sleep_until(until: float, deadline: float) -> None:
+def sleep_until(until: float, deadline: float) -> None:
+    """The time between two reads with nothing else to do (a plain session's)."""
     time.sleep(max(0.0, until - time.perf_counter()))
 
 
@@ -32,9 +33,8 @@ def wait_for(
     wait: Wait,
     *,
     line: str | None = None,
-    read_only: bool = False,
     cancelled: Callable[[], bool] = lambda: False,
-    between: Callable[[float, float], None] = _sleep_until,
+    between: Callable[[float, float], None] = sleep_until,
 ) -> Outcome:
     """Read ``wait.var`` until the condition holds, ``wait.within`` seconds pass, the
     controller cannot be reached, or ``cancelled()``; the last read's outcome, with how
@@ -47,7 +47,7 @@ def wait_for(
     reads = 0
     while True:
         sent_at = time.perf_counter()
-        outcome = execute(session, get, read_only=read_only, line=line)
+        outcome = execute(session, get, line=line)  # the read path: a GET alone goes out
         reads += 1
         now = time.perf_counter()
         variant = outcome.variant if outcome.ok else None

@@ -1,7 +1,10 @@
-"""Run one exchange command over a session and turn every result into an Outcome.
+"""The read path: one read sent over a session, and every result turned into an Outcome.
 
-The one place where a command meets the session, shared by the CLI, ``run`` and the
-engine behind the console and the REPL.
+Shared by the CLI, ``run``, the library and the engine behind the console and the REPL.
+Only a GET goes out here (a ``get``, a raw line that is a well-formed GET, ``latency``'s
+and a wait's reads, a write's reads before and after); anything that may write is
+refused, nothing sent: a write crosses the write gate
+(:class:`~.gate.WriteGate`), the one place a write meets the session.
 """
 
 from __future__ import annotations
@@ -38,19 +41,30 @@ def read_only_refusal(command: Exchange, why: str = "read-only mode is on") -> s
     """Why read-only keeps this off the wire, naming what was refused (a PUT, or the
     raw line itself); None for a well-formed GET, the only thing read-only lets out (in
     every front end, and for raw lines alike). ``why``: whose rule it is."""
+    return None if command.request.read_only_safe else refusal_of(command, why)
+
+
+def refusal_of(command: Exchange, why: str) -> str:
+    """``command`` refused for ``why``, naming what was refused (:func:`named`)."""
+    if command.request.write:
+        return f"{named(command)} refused: {why} (nothing was sent)"
+    return (
+        f"{named(command)} refused: {why}, and only well-formed GET requests go out "
+        "(GET:RC8:<index>:<type>:, e.g. GET:RC8:10:I:); nothing was sent"
+    )
+
+
+def named(command: Exchange) -> str:
+    """What a refusal names: ``PUT I 10`` (a typed put), ``PUT`` (a raw line that
+    starts with PUT), else the raw line itself, quoted, escaped and cut to
+    :data:`QUOTED_LINE` characters."""
     request = command.request
-    if request.read_only_safe:
-        return None
     if request.write:
-        what = f"PUT {command.var}" if isinstance(command, Put) else "PUT"
-        return f"{what} refused: {why} (nothing was sent)"
+        return f"PUT {command.var}" if isinstance(command, Put) else "PUT"
     text = terminal_safe(request.text)
     if len(text) > QUOTED_LINE:
         text = text[: QUOTED_LINE - 1] + "…"
-    return (
-        f"'{text}' refused: {why}, and only well-formed GET requests go out "
-        "(GET:RC8:<index>:<type>:, e.g. GET:RC8:10:I:); nothing was sent"
-    )
+    return f"'{text}'"
 
 
 def never() -> bool:
@@ -58,20 +72,26 @@ def never() -> bool:
     return False
 
 
+#: Why the read path keeps a write off the wire (a mistake in the code that sent it
+#: there: every write is a :class:`~.gate.WriteGate`'s).
+NOT_A_READ = "a write goes out only through the write gate"
+
+
 def execute(
     session: Session,
     command: Exchange,
     *,
-    read_only: bool = False,
     line: str | None = None,
     cancelled: Callable[[], bool] = never,
 ) -> Outcome:
-    """Send one command and describe what came of it; never raises for I/O.
+    """Send one read and describe what came of it; never raises for I/O. A read is a
+    typed GET (``GET:RC8:<index>:<type>:`` by construction) or a raw line that is a
+    well-formed GET; anything else is refused, nothing sent: reads cannot write.
 
     ``cancelled`` is the job's cancel, asked right before the request goes out."""
     request = command.request
-    if read_only and (refusal := read_only_refusal(command)) is not None:
-        return refused(line, refusal, request.text)
+    if type(command) is not Get and not request.read_only_safe:
+        return refused(line, refusal_of(command, NOT_A_READ), request.text)
     try:
         if cancelled is never:
             reply: Reply | TransportError = session.exchange(request)

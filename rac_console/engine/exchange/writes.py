@@ -1,27 +1,26 @@
-"""A write, as a careful integrator makes it: refused by the target's rules before the
-wire, the value before read (or taken from the watch table), confirmed where the target
-asks for it, sent, and read back.
+"""What happens around a write but the write itself: the confirm question and the read
+that checks its answer, the read-back, and the words a write is said in.
 
-Shared by the CLI, ``run`` and the engine behind the console and the REPL. A controller
-that answers S_OK and keeps its old value, or answers an error and writes anyway, is
-caught by the read-back: the outcome says what the controller holds now.
+The write itself crosses the write gate (:class:`~.gate.WriteGate`), which calls these;
+nothing here sends anything but GETs. A controller that answers S_OK and keeps its old
+value, or answers an error and writes anyway, is caught by the read-back: the outcome
+says what the controller holds now.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass, replace
+from dataclasses import replace
 
-from ...commands.check import check_pointer
-from ...commands.language import Exchange, Get, Put, Raw, VarRef
+from ...commands.language import Get, Put, Raw, VarRef
 from ...commands.outcome import ExitStatus, Outcome, refused
-from ...commands.policy import WritePolicy, Writes, written_var
+from ...commands.policy import WritePolicy
 from ...commands.readback import comparable, same_value
 from ...protocol import ProtocolError, Variant
 from ...protocol.text import quoted_text
 from ...protocol.variant import parse_variant
-from ...session import ConnectFailed, NotSent, RequestTimeout, Session
-from .execute import execute, never, read_only_refusal
+from ...session import NotSent, RequestTimeout, Session
+from .execute import execute
 
 #: Asks whether to write: (the variable, its value now or None, the value to write,
 #: the write) -> yes.
@@ -37,7 +36,7 @@ NO_ONE_TO_ASK = (
 MAX_QUESTIONS = 3
 
 
-def _confirmed(
+def confirmed(
     session: Session,
     var: VarRef,
     before: Variant | None,
@@ -75,98 +74,11 @@ def _confirmed(
     )
 
 
-def _nothing_known(var: VarRef) -> Variant | None:
+def nothing_known(var: VarRef) -> Variant | None:
     return None
 
 
-@dataclass(frozen=True)
-class WriteRules:
-    """What a write is held to: the target's rules, and its job's (ask, cancel)."""
-
-    policy: WritePolicy
-    read_only: bool = False
-    verify: bool = True  # read every PUT back
-    #: A watched variable's value now (no extra GET then).
-    known_before: Callable[[VarRef], Variant | None] = _nothing_known
-    confirm: Confirm | None = None  # None: nobody to ask (the CLI without --yes)
-    cancelled: Callable[[], bool] = never  # the job's cancel, asked before each send
-
-
-def exchange(
-    session: Session, command: Exchange, rules: WriteRules, line: str | None = None
-) -> Outcome:
-    """One GET, PUT or raw line, from any front end: a put, and any raw line but a
-    well-formed GET (a line that does not start with PUT may still write on a lenient
-    controller), goes by the target's rules (:func:`write`); a read is just sent."""
-    if isinstance(command, Put) or (
-        isinstance(command, Raw) and not command.request.read_only_safe
-    ):
-        return write(session, command, rules, line)
-    return execute(
-        session, command, read_only=rules.read_only, line=line, cancelled=rules.cancelled
-    )
-
-
-def write(session: Session, command: Put | Raw, rules: WriteRules, line: str | None) -> Outcome:
-    """Send one write the way the target allows; never raises for I/O."""
-    policy, read_only, verify = rules.policy, rules.read_only, rules.verify
-    confirm, cancelled = rules.confirm, rules.cancelled
-    wire = command.request.text
-    if read_only:
-        profile_rule = policy.writes is Writes.READ_ONLY and policy.source
-        why = f"{policy.source} is read-only" if profile_rule else "read-only mode is on"
-        if (refusal := read_only_refusal(command, why)) is not None:
-            return refused(line, refusal, wire)
-    if (refusal := policy.refusal(command)) is not None:
-        return refused(line, refusal, wire)
-    var = written_var(command)
-    if var is None:  # a raw line we cannot read: sent as typed, nothing to read back
-        if policy.confirms:
-            return refused(line, _no_one_to_ask("this line", policy), wire)
-        return execute(session, command, line=line, cancelled=cancelled)
-    if policy.confirms and confirm is None:
-        return refused(line, _no_one_to_ask(str(var), policy), wire)
-    written = _value_of(command)
-    if written is None and (policy.confirms or policy.allow is not None):
-        return refused(
-            line,
-            f"refused: the value of this raw PUT cannot be read, so {policy.source or 'the target'}"
-            f"'s rules cannot be checked; write it as put {var.kind.code} {var.index} VALUE "
-            "(nothing was sent)",
-            wire,
-        )
-    before = rules.known_before(var)
-    if before is None and (verify or policy.confirms):
-        first = execute(session, Get(var), cancelled=cancelled)
-        if isinstance(first.failure, NotSent):
-            return replace(first, request=wire, error=f"PUT {var} {first.error}", input_line=line)
-        if first.status == ExitStatus.TRANSPORT:  # the controller does not answer: no PUT
-            return replace(
-                first,
-                request=wire,
-                error=f"PUT {var} not sent: reading its value first failed: {first.error}"
-                f" {check_pointer(session.host, session.port)}",
-                input_line=line,
-                var=var,
-            )
-        before = first.variant if first.ok else None
-    if policy.confirms and confirm is not None and written is not None:
-        asked = _confirmed(session, var, before, written, command, confirm, line, cancelled)
-        if isinstance(asked, Outcome):
-            return asked
-        before = asked
-    outcome = execute(session, command, line=line, cancelled=cancelled)
-    if isinstance(outcome.failure, NotSent):
-        return replace(outcome, var=var, before=before, error=f"PUT {var} {outcome.error}")
-    outcome = replace(outcome, var=var, written=written, before=before)
-    if not verify or isinstance(outcome.failure, ConnectFailed):  # nothing went out
-        return outcome
-    if cancelled():  # the user said stop: nothing more goes out, not even the GET
-        return replace(outcome, read_back_error="not read back: cancelled")
-    return _read_back(session, outcome, var, written)
-
-
-def _read_back(session: Session, outcome: Outcome, var: VarRef, written: Variant | None) -> Outcome:
+def read_back(session: Session, outcome: Outcome, var: VarRef, written: Variant | None) -> Outcome:
     """The GET after the PUT: what the controller holds now, and whether it is the value
     written. A mismatch after S_OK is a failure (exit 1); after a timeout or an error
     answer the outcome keeps its own status and the read-back says what happened.
@@ -199,7 +111,7 @@ def _read_back(session: Session, outcome: Outcome, var: VarRef, written: Variant
     return outcome
 
 
-def _value_of(command: Put | Raw) -> Variant | None:
+def value_of(command: Put | Raw) -> Variant | None:
     """The value a write sends: a typed put's, or the one a raw PUT line carries."""
     if isinstance(command, Put):
         return command.value
@@ -219,6 +131,6 @@ def plain_value(var: VarRef, variant: Variant) -> str:
     return "  ".join(f"{label} {text}" if label else text for label, text in fields)
 
 
-def _no_one_to_ask(what: str, policy: WritePolicy) -> str:
+def no_one_to_ask(what: str, policy: WritePolicy) -> str:
     source = f"{policy.source} " if policy.source else "this target "
     return NO_ONE_TO_ASK.format(var=what, source=source)

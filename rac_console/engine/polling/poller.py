@@ -3,6 +3,12 @@ after a failure, and what a cycle hands to the CSV log and the trends.
 
 Run on the engine's thread between jobs, one row at a time, so a typed command waits
 at most for the one poll in flight.
+
+It reads only, and hands the session its request directly (no write gate: it is the hot
+path): the one request it sends is a row's :attr:`~..watch.rows.WatchRow.request`, the
+row's GET, made and checked a well-formed GET once when the row is first polled. That it
+sends nothing else is held by tests/test_write_gate.py (no other request reaches the
+session from here) at no cost per poll.
 """
 
 from __future__ import annotations

@@ -7,13 +7,17 @@ engine for each job, and used on the engine's thread alone, as the parts are.
 
 from __future__ import annotations
 
+import copy
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Self
 
+from ...commands.routing import WriteTrait
 from ..commands.context import CommandContext, CsvLogState, FrameFileKind, LogFile
-from ..exchange.writes import Confirm, plain_value
+from ..exchange.controller import Controller
+from ..exchange.gate import WriteGate
+from ..exchange.writes import plain_value
 from ..published.events import OK, ConfirmWrite
 
 if TYPE_CHECKING:
@@ -23,7 +27,7 @@ if TYPE_CHECKING:
     from ...commands.policy import WritePolicy
     from ...commands.target import Target
     from ...protocol import Variant
-    from ...session import ConnectFailed, Session, TransportError
+    from ...session import ConnectFailed, TransportError
     from ..commands.registry import Registry
     from ..files.frame_files import FrameFiles
     from ..polling.link import Link
@@ -77,24 +81,24 @@ class EngineContext:
         self._rules = rules
         self._verify = verify
         self._stopping = stopping
+        #: The command whose job this is, and what it declares (see :meth:`declaring`).
+        self._declared: tuple[str, WriteTrait] = ("", WriteTrait.NEVER)
 
     # ------------------------------------------------------------ JobContext
 
     @property
-    def session(self) -> Session | None:
-        return self._parts.link.session
+    def controller(self) -> Controller | None:
+        session = self._parts.link.session
+        return Controller(session, self._gate()) if session is not None else None
 
     @property
     def rules(self) -> Target:
         return self._rules
 
-    @property
-    def verify(self) -> bool:
-        return self._verify
-
-    @property
-    def confirm(self) -> Confirm:
-        return self._confirm
+    def declaring(self, name: str, writes: WriteTrait) -> Self:
+        declared = copy.copy(self)
+        declared._declared = (name, writes)
+        return declared
 
     def cancelled(self) -> bool:
         return self._job.cancelled() or self._stopping()
@@ -102,7 +106,23 @@ class EngineContext:
     def between(self, until: float, deadline: float) -> None:
         self._parts.poller.poll_until(until, deadline, self.cancelled)
 
-    def known_before(self, var: VarRef) -> Variant | None:
+    def _gate(self) -> WriteGate:
+        """This job's write gate: the target's rules as the job began, what its command
+        declares, the confirm question put to the front end, the watched value before."""
+        name, writes = self._declared
+        rules = self._rules
+        return WriteGate(
+            rules.policy,
+            writes,
+            name,
+            rules.read_only,
+            self._verify,
+            self._known_before,
+            self._confirm,
+            self.cancelled,
+        )
+
+    def _known_before(self, var: VarRef) -> Variant | None:
         row = self._parts.poller.watch.rows.get(var)
         return row.variant if row is not None and row.status == OK and not row.stale else None
 

@@ -30,8 +30,12 @@ class WatchRow:
 
     @cached_property
     def request(self) -> Request:
-        """The GET this row is polled with, made once."""
-        return get_for(self.var.kind, self.var.index)
+        """The GET this row is polled with, made once: the one request the poller sends,
+        and so checked here to be a well-formed GET (once per row, never per poll)."""
+        request = get_for(self.var.kind, self.var.index)
+        if not request.read_only_safe:  # a row reads: it never hands the session a write
+            raise AssertionError(f"a watched row's request must be a GET: {request.text!r}")
+        return request
 
     def due(self, now: float, interval: float) -> bool:
         """True when this row should be polled in the cycle starting ``now``."""

@@ -41,10 +41,10 @@ def run_connect(context: CommandContext, command: Connect, line: str | None) -> 
     for notice in target.notices:
         context.alert(notice)
     context.switch_target(target)
-    session = context.session
-    assert session is not None
+    controller = context.controller
+    assert controller is not None
     try:
-        session.connect()
+        controller.connect()
     except (ConnectFailed, Disconnected) as exc:
         if isinstance(exc, ConnectFailed):
             context.connect_failed(exc)

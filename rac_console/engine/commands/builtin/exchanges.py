@@ -12,9 +12,6 @@ from ....commands.outcome import Outcome
 from ....commands.routing import Traits, WriteTrait
 from ....protocol import KINDS
 from ....session import ConnectFailed, Disconnected, TransportError
-from ...exchange.conditions import wait_for
-from ...exchange.execute import measure_latency
-from ...exchange.writes import WriteRules, exchange
 from ...published.events import Feedback, Measured, Message
 from ..context import JobContext
 from ..registry import (
@@ -33,23 +30,15 @@ TYPE_NOTE = "TYPE: I F D S V P J T IO; I 10, I10 and I[10] name the same variabl
 
 
 def run_exchange(context: JobContext, command: Exchange, line: str | None) -> list[Feedback]:
-    """One exchange; a write by the target's rules: allow, confirm (asked through the
-    front end, or refused with no one to ask), the value before and the read-back."""
-    session = context.session
-    if session is None:
+    """One exchange; a write crosses the job's gate (the target's rules: allow, confirm
+    asked through the front end or refused with no one to ask, the value before and the
+    read-back)."""
+    controller = context.controller
+    if controller is None:
         return [Message(NOT_CONNECTED, "error")]
     if isinstance(command, Get | Put):
         context.see((command.var,))
-    target = context.rules
-    rules = WriteRules(
-        target.policy,
-        target.read_only,
-        context.verify,
-        context.known_before,
-        context.confirm,
-        context.cancelled,
-    )
-    outcome = exchange(session, command, rules, line)
+    outcome = controller.exchange(command, line)
     context.read_back(outcome)
     return [noted(context, outcome)]
 
@@ -73,28 +62,20 @@ def run_wait(context: JobContext, command: Wait, line: str | None) -> list[Feedb
                 "error",
             )
         ]
-    session = context.session
-    if session is None:
+    controller = context.controller
+    if controller is None:
         return [Message(NOT_CONNECTED, "error")]
     context.see((command.var,))
-    outcome = wait_for(
-        session,
-        command,
-        line=line,
-        read_only=context.rules.read_only,
-        cancelled=context.cancelled,
-        between=context.between,
-    )
+    outcome = controller.wait(command, line, between=context.between)
     return [noted(context, outcome)]
 
 
 def run_latency(context: JobContext, command: Latency, line: str | None) -> list[Feedback]:
-    if context.session is None:
+    controller = context.controller
+    if controller is None:
         return [Message(NOT_CONNECTED, "error")]
     try:
-        summary = measure_latency(
-            context.session, command.var, command.count, command.interval, context.cancelled
-        )
+        summary = controller.latency(command.var, command.count, command.interval)
     except (ConnectFailed, Disconnected) as exc:
         context.connect_failed(exc if isinstance(exc, ConnectFailed) else None)
         return [Message(str(exc), "error")]
