@@ -2,8 +2,8 @@
 a :class:`Sent`, or the exception that says what failed and what the controller may hold.
 
 Reads the console's own :class:`~rac_console.commands.outcome.Outcome` (made by the one
-write path, :mod:`rac_console.engine.exchange.writes`): its status, its words and its read-back,
-never a second judgement of the wire.
+write gate, :mod:`rac_console.engine.exchange.gate`): its status, its words and its
+read-back, never a second judgement of the wire.
 """
 
 from __future__ import annotations
