@@ -58,8 +58,14 @@ def test_each_target_keeps_its_own_rules_and_a_refusal_sends_nothing(
             cell.run("@robot2 put I 10 5")
         with pytest.raises(rac.Refused, match="no target named robot3 is open here"):
             cell.run("@robot3 get I 1")
-        with pytest.raises(rac.Refused, match="runs get, put, send"):
-            cell.run("watch I 1")
+        for line in (
+            "watch I 1",
+            "wait I 1 == 1",
+            "@robot1 wait I 1 == 1 after @robot2 I 2 == 2",
+            "latency 3",
+        ):
+            with pytest.raises(rac.Refused, match="runs get, put, send"):
+                cell.run(line)
         with pytest.raises(KeyError, match="robot3"):
             cell["robot3"]
     assert first.lines == [] and second.lines == []

@@ -3,21 +3,25 @@ routed by ``@NAME`` as the console routes them (``rac.cell("line2")``).
 
 The targets are those ``--cell NAME`` or ``-H a,b`` would open, each under its own
 profile's rules; ``"demo"`` with no ``[cell.demo]`` in the config file starts the
-console's demo simulators in this process. A line goes where the console's planner
-says: ``@robotA put I 10 5`` to robotA, a line without ``@NAME`` to the current target
-(``use NAME`` changes it).
+console's demo simulators in this process. A line is planned and carried out by the
+console's executor of routes (:class:`~rac_console.engine.cell.routes.Routes`), whose
+targets here are the connections: ``@robotA put I 10 5`` runs on robotA's, through its
+write gate, a line without ``@NAME`` on the current target's (``use NAME`` changes it).
 """
 
 from __future__ import annotations
 
+import itertools
 from collections.abc import Iterator, Mapping, Sequence
 from typing import TYPE_CHECKING
 
-from ..commands.language import Get, Put, Raw
+from ..commands.language import Command, Get, Put, Raw, Use
 from ..commands.names import find_name
-from ..commands.routing import Nothing, OnTarget, SwitchCurrent
-from ..commands.routing import Refused as RefusedRoute
+from ..commands.outcome import Outcome
 from ..commands.target import Target, cell_targets
+from ..engine.cell.routes import Done, Line, Routes
+from ..engine.published.feedback import Message
+from ..engine.setup.where import Where
 from ..protocol import InputError
 from ..session import DEFAULT_TIMEOUT
 from .connection import Confirm, Connection
@@ -26,6 +30,7 @@ from .results import Sent, Value, Written
 from .target import ConfigPath, check_timeout, config_named, loaded, open_session
 
 if TYPE_CHECKING:
+    from ..engine.commands.registry import Registry
     from ..sim.cell import SimulatedCellThread
 
 #: What a line of a cell may run from a script: one exchange on one target, or ``use``.
@@ -97,6 +102,32 @@ def _demo(read_only: bool) -> tuple[SimulatedCellThread, list[tuple[str, Target]
     return simulated, members
 
 
+class _OnConnections:
+    """The executor's targets (:class:`~rac_console.engine.cell.routes.Targets`) for a
+    script's cell: an exchange runs inline on the target's connection; any other command
+    is answered with a refusal, nothing sent."""
+
+    def __init__(self, connections: Mapping[str, Connection]) -> None:
+        self._connections = connections
+
+    def run(self, name: str, command: Command, line: Line, done: Done, whole: bool) -> None:
+        if isinstance(command, Get | Put | Raw):
+            done((self._connections[name]._exchange(command),))
+        else:
+            done((Message(_not_run(line.text or ""), "error"),))
+
+
+def _not_run(line: str) -> str:
+    return f"a cell's line in a script runs {RUNS}, not {line.strip()!r}"
+
+
+def _builtin() -> Registry:
+    """The console's commands, loaded with the first line planned."""
+    from ..engine.commands.builtin import BUILTIN
+
+    return BUILTIN
+
+
 class Cell(Mapping[str, Connection]):
     """The cell's connections by name (``cell["robotA"]``, any case), and :meth:`run` for
     lines routed by ``@NAME``. A context manager; :meth:`close` closes every connection."""
@@ -107,12 +138,19 @@ class Cell(Mapping[str, Connection]):
         self._connections = connections
         self._simulated = simulated
         self._names = tuple(connections)
-        self.current = self._names[0]  # where a line without @NAME runs
+        members = [(name, connection._target) for name, connection in connections.items()]
+        self._routes = Routes(_OnConnections(connections), members, _builtin, Where.RUN)
+        self._numbers = itertools.count(1)
 
     @property
     def names(self) -> tuple[str, ...]:
         """The targets' names, in the cell's order."""
         return self._names
+
+    @property
+    def current(self) -> str:
+        """The target a line without ``@NAME`` runs on."""
+        return self._routes.current
 
     def __getitem__(self, name: str) -> Connection:
         found = find_name(self._names, name) if isinstance(name, str) else None
@@ -138,25 +176,23 @@ class Cell(Mapping[str, Connection]):
     def run(self, line: str) -> Value | Written | Sent | None:
         """One line of the console's language, routed as the console routes it: a get's
         value, a put's :class:`Written`, a raw line's :class:`Sent`; None for ``use``, a
-        blank line or a comment. Lines that run elsewhere than one target (a chained
-        wait, publish) and commands other than these are Refused: call the connection's
-        methods (``cell["robotA"].watch(...)``) for the rest."""
-        from ..engine.commands.builtin import BUILTIN
-
+        blank line or a comment. Other commands, and lines that run elsewhere than one
+        target (a chained wait, publish), are Refused with nothing sent: call the
+        connection's methods (``cell["robotA"].watch(...)``) for the rest."""
         if not isinstance(line, str):
             raise Refused(f"a line is text such as '@robotA get I 10', not {line!r}")
-        route = BUILTIN.plan(line, self._names, self.current)
-        match route:
-            case Nothing():
-                return None
-            case RefusedRoute(text=text):
-                raise Refused(text)
-            case SwitchCurrent(name=name):
-                self.current = name
-                return None
-            case OnTarget(name=name, command=Get() | Put() | Raw() as command):
-                return self._connections[name]._command(command)
-        raise Refused(f"a cell's line in a script runs {RUNS}, not {line.strip()!r}")
+        answer = self._routes.answer(Line(next(self._numbers), line))
+        command = answer.command
+        if command is not None and not isinstance(command, Get | Put | Raw | Use):
+            raise Refused(_not_run(line))
+        for name, feedback in answer.parts:
+            for said in feedback:
+                if isinstance(said, Outcome) and name is not None:
+                    assert isinstance(command, Get | Put | Raw)
+                    return self._connections[name]._answer(command, said)
+                if isinstance(said, Message) and said.level == "error":
+                    raise Refused(said.text)
+        return None
 
     def close(self) -> None:
         """Close every connection (and the demo's simulators)."""

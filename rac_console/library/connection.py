@@ -160,10 +160,10 @@ class Connection:
             raise Refused(f"{exc} (nothing was sent)") from None
         return sent_of(self._exchange(command), command, self._at)
 
-    def _command(self, command: Exchange) -> Value | Written | Sent:
-        """A command of the console's language (a cell's line): a get's value, a put's
-        :class:`Written`, a raw line's :class:`Sent`."""
-        outcome = self._exchange(command)
+    def _answer(self, command: Exchange, outcome: Outcome) -> Value | Written | Sent:
+        """What came of a command of the console's language (a cell's line), as the
+        method that sends it says it: a get's value, a put's :class:`Written`, a raw
+        line's :class:`Sent`; the exception for a failure."""
         if isinstance(command, Get):
             return value_of(outcome, command.var, self._at)
         if isinstance(command, Put):
