@@ -24,7 +24,12 @@ from rac_console.engine.commands.registry import Registry
 from rac_console.engine.setup.options import EngineOptions
 from rac_console.engine.setup.where import Where
 from rac_console.sim.thread import SimulatorThread
-from tests.support.drivers import answerable, burst, confirm_console, connected, modal, until
+from tests.support.drivers import (
+    confirm_console,
+    connected,
+    declined_with_keys_typed_ahead,
+    until,
+)
 from tests.support.servers import RecordingServer
 
 Servers = Callable[..., RecordingServer]
@@ -162,12 +167,7 @@ async def test_a_typed_write_is_planned_once_and_its_keys_typed_ahead_still_held
         app = confirm_console(tmp_path, simulator)
         async with app.run_test(size=(100, 30)) as pilot:
             await connected(pilot, app)
-            burst(app, "put IO 67 on\ry\r")
-            await until(pilot, lambda: modal(app) is not None, "the question")
-            screen = modal(app)
-            assert screen is not None
-            await answerable(pilot, screen)
-            await pilot.press("n")
+            await declined_with_keys_typed_ahead(pilot, app)
             await until(pilot, lambda: not app.main_screen.lines.pending, "the answer")
             assert app.main_screen.panes.command_line.value == ""  # the y never got there
     assert planned.count("put IO 67 on") == 1

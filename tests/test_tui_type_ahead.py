@@ -13,19 +13,18 @@ from __future__ import annotations
 
 from collections.abc import Iterator
 from pathlib import Path
-from typing import Any
 
 import pytest
 
 from rac_console.present.type_ahead import may_ask
 from rac_console.sim.thread import SimulatorThread
-from rac_console.tui.app import RacConsoleApp
 from tests.support.drivers import (
     FrameTap,
     answerable,
     burst,
     confirm_console,
     connected,
+    declined_with_keys_typed_ahead,
     modal,
     results_text,
     until,
@@ -38,17 +37,6 @@ pytestmark = pytest.mark.slow
 def cell() -> Iterator[SimulatorThread]:
     with SimulatorThread() as simulator:
         yield simulator
-
-
-async def declined_with_keys_typed_ahead(pilot: Any, app: RacConsoleApp) -> None:
-    """``put IO 67 on``, Enter, ``y``, Enter in one burst; the question answered No once
-    its guard time is over (the ``y`` and Enter were typed ahead of it)."""
-    burst(app, "put IO 67 on\ry\r")
-    await until(pilot, lambda: modal(app) is not None, "the question")
-    screen = modal(app)
-    assert screen is not None
-    await answerable(pilot, screen)
-    await pilot.press("n")
 
 
 async def test_keys_typed_before_the_question_never_reach_the_command_line(

@@ -226,6 +226,17 @@ async def answerable(pilot: Pilot[Any], screen: ConfirmWriteScreen) -> None:
     await until(pilot, lambda: ANSWERABLE in question_keys(screen), f"{ANSWERABLE} on the question")
 
 
+async def declined_with_keys_typed_ahead(pilot: Pilot[Any], app: RacConsoleApp) -> None:
+    """``put IO 67 on``, Enter, ``y``, Enter in one burst; the question answered No once
+    its guard time is over (the ``y`` and Enter were typed ahead of it)."""
+    burst(app, "put IO 67 on\ry\r")
+    await until(pilot, lambda: modal(app) is not None, "the question")
+    screen = modal(app)
+    assert screen is not None
+    await answerable(pilot, screen)
+    await pilot.press("n")
+
+
 async def connected(pilot: Pilot[Any], app: RacConsoleApp) -> None:
     await until(
         pilot,

@@ -14,8 +14,8 @@ in one thing only, how a target runs a command, and that is its one parameter, a
   inline, and the answer is in before :meth:`Routes.execute` returns
   (:meth:`Routes.answer` says so);
 - the library's cell (``rac.cell(...)``, :mod:`rac_console.library.cell`): a line of
-  ``cell.run("@robotA put I 10 5")`` is meant to go through :meth:`Routes.answer` too,
-  with a :class:`Targets` that runs a command on the target's connection.
+  ``cell.run("@robotA put I 10 5")`` goes through :meth:`Routes.answer` too, its
+  :class:`Targets` running a command on the target's connection.
 
 Its modules load when the first line is planned: a cell is made before the console's
 first paint, which must not wait for the command language.
