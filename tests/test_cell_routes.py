@@ -9,12 +9,13 @@ that record what they receive, judged from their side.
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from pathlib import Path
 
 import pytest
 
 from rac_console.commands.language import Command
+from rac_console.commands.routing import Route
 from rac_console.commands.target import Target
 from rac_console.engine import Message, Result
 from rac_console.engine.cell.cell import Cell
@@ -112,6 +113,27 @@ def test_what_only_runs_at_a_terminal_is_refused_once_in_run_and_runs_nowhere() 
 
 
 # ------------------------------------------------------------- the cell's queue
+
+
+class Broken(Registry):
+    """The built-in commands, with a bug in the planner for one line."""
+
+    def plan(self, line: str, names: Sequence[str], current: str) -> Route:
+        if line == "boom":
+            raise RuntimeError("a bug")
+        return super().plan(line, names, current)
+
+
+def test_a_bug_in_planning_a_line_answers_it_and_the_next_line_still_runs() -> None:
+    cell = Cell(MEMBERS, registry=Broken(BUILTIN))  # never started: nothing is sent
+    boom, use = cell.submit("boom"), cell.submit("use b")
+    answers = {
+        event.seq: str(event.feedback)
+        for _, batch in cell.drain()
+        for event in batch.events
+        if isinstance(event, Result)
+    }
+    assert "internal error" in answers[boom] and "current target: B" in answers[use]
 
 
 def reply(line: bytes) -> bytes:

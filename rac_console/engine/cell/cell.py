@@ -280,8 +280,8 @@ class Cell:
         """:meth:`submit` (``command`` None) or :meth:`submit_command`, saying the
         route the line was planned to when it started at once (the console's guard of
         the keys typed ahead of a write's question reads it)."""
-        item = _Line(next(self._numbers), line, command, name)
-        with self._lock:
+        with self._lock:  # numbered in the order queued: answers are read in that order
+            item = _Line(next(self._numbers), line, command, name)
             self._lines.append(item)
         self._pump()
         return Entered(item.seq, item.route)
@@ -305,11 +305,15 @@ class Cell:
 
     def _start(self, item: _Line) -> None:
         """Plan one line, once, and carry it out (under the lock)."""
-        from .routes import Line
+        from .routes import Answer, Line
 
         line = Line(item.seq, item.line, item.command, item.name)
-        item.route = self.routes.plan(line)
-        self.routes.execute(item.route, line, self._answered)
+        try:
+            item.route = self.routes.plan(line)
+            self.routes.execute(item.route, line, self._answered)
+        except Exception as exc:  # a bug must not stop the queue, nor the thread it is on
+            said = Message(f"internal error: {exc!r}", "error")
+            self._answered(Answer(line, item.command, ((None, (said,)),)))
 
     def _answered(self, answer: Answer) -> None:
         """A line's answer (on the thread it ended on): said by the cell unless its one
