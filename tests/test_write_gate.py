@@ -31,7 +31,7 @@ from rac_console.protocol.request import put_for
 from rac_console.protocol.variables import MAX_INDEX
 from rac_console.session import Session
 from tests.support.drivers import Front
-from tests.support.servers import Memory, RecordingServer
+from tests.support.servers import Memory, Recording, RecordingServer
 
 PACKAGE = Path(__file__).parent.parent / "rac_console"
 REFUSED_AT_THE_GATE = "refused at the write gate: the command 'poke' is declared never to write"
@@ -82,22 +82,9 @@ def poke() -> Iterator[CommandSpec]:
 
 
 @pytest.fixture
-def controller() -> Iterator[RecordingServer]:
+def controller(recording: Recording) -> RecordingServer:
     """A fake controller that keeps what is PUT and records every line it receives."""
-    server = RecordingServer(Memory())
-    try:
-        yield server
-    finally:
-        server.close()
-
-
-def answer(front: Front, line: str) -> Outcome:
-    """The one outcome the engine answered ``line`` with."""
-    seq = front.engine.submit(line)
-    front.until(lambda: seq in front.results, f"the answer to {line!r}")
-    (outcome,) = front.results[seq].feedback
-    assert isinstance(outcome, Outcome)
-    return outcome
+    return recording(Memory())
 
 
 def puts(server: RecordingServer) -> list[bytes]:
@@ -114,7 +101,7 @@ def test_the_console_engine_refuses_an_undeclared_write_at_the_gate(
     front = Front(engine)
     try:
         for line, what in (("poke I 10 5", "PUT I10"), ("poke PUT:RC8:10:I:3,5", "PUT")):
-            outcome = answer(front, line)
+            outcome = front.outcome(line)
             assert outcome.status is ExitStatus.REFUSED
             assert outcome.error == f"{what} {REFUSED_AT_THE_GATE} {SPEC_SAYS}"
         front.run("get I 10")  # answered: every line sent before it has arrived

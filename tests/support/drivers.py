@@ -45,6 +45,7 @@ from textual.pilot import Pilot
 from textual.widgets import RichLog, Static
 
 import rac_console.tui.panes as panes_module
+from rac_console.commands.outcome import Outcome
 from rac_console.commands.policy import TargetProfile, WritePolicy, Writes, parse_allow
 from rac_console.engine import Alert, Cycle, Engine, Message, Note, Result, RowView, Status
 from rac_console.engine.published.outbox import Batch
@@ -586,6 +587,14 @@ class Front(BatchReader):
         seq = self.engine.submit(line)
         self.until(lambda: seq in self.results, f"the answer to {line!r}")
         return [getattr(f, "text", None) or str(f) for f in self.results[seq].feedback]
+
+    def outcome(self, line: str) -> Outcome:
+        """Submit an exchange's line and wait for its one outcome."""
+        seq = self.engine.submit(line)
+        self.until(lambda: seq in self.results, f"the answer to {line!r}")
+        (outcome,) = self.results[seq].feedback
+        assert isinstance(outcome, Outcome), outcome
+        return outcome
 
     def errors(self, line: str) -> list[str]:
         seq = self.engine.submit(line)
