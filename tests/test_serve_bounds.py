@@ -99,7 +99,10 @@ def test_32_kib_typed_as_keys_leave_the_console_small_and_a_get_answered(env, ru
 
 def test_a_paste_of_more_characters_than_keys_are_taken_goes_whole(env, running) -> None:
     served = start_serve(env, running)
-    console = open_console(served)
+    # Tall enough for every answer of the paste: its 31 lines run as fast as the
+    # controller answers (not one a screen refresh), so on 40 rows the first line's
+    # answer may have scrolled out of the results before the screen is first drawn.
+    console = open_console(served, height=100)
     console.type_line("get I 1")
     console.until("I1 = ")  # the command line has the focus: a paste goes to it
     pasted = "get I 7" + " " * (KEYS_AT_ONCE - 16) + "\r" + "get I 8\r" * 30

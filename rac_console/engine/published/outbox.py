@@ -47,15 +47,16 @@ class Outbox:
 
     ``notify`` (if given) is called on the engine's thread when the outbox stops being
     empty: a front end with an event loop wakes its drain from there. ``lock``: one
-    shared by the outboxes of a cell, so that :func:`drain_together` takes them all at
+    shared by the outboxes of a cell, so that :meth:`drain_together` takes them all at
     one instant.
     """
 
     def __init__(
-        self, notify: Callable[[], None] | None = None, lock: threading.Lock | None = None
+        self, notify: Callable[[], None] | None = None, lock: threading.RLock | None = None
     ) -> None:
         self.notify = notify
-        self.lock = lock if lock is not None else threading.Lock()
+        #: Reentrant: :meth:`drain_together` holds it while each outbox drains itself.
+        self.lock = lock if lock is not None else threading.RLock()
         self._batch = Batch()
         self._empty = True
         #: ``time.monotonic()`` when the outbox stopped being empty, None while it is: a
@@ -108,12 +109,9 @@ class Outbox:
 
     def drain(self) -> Batch:
         with self.lock:
-            return self._take()
-
-    def _take(self) -> Batch:
-        batch, self._batch = self._batch, Batch()
-        self._empty = True
-        self.pending_since = None
+            batch, self._batch = self._batch, Batch()
+            self._empty = True
+            self.pending_since = None
         return batch
 
     @staticmethod
@@ -125,7 +123,7 @@ class Outbox:
         if any(outbox.lock is not lock for outbox in outboxes):
             raise ValueError("drain_together needs outboxes made with one lock")
         with lock:
-            return [outbox._take() for outbox in outboxes]
+            return [outbox.drain() for outbox in outboxes]
 
     def _wake(self) -> bool:
         woke, self._empty = self._empty, False
