@@ -17,8 +17,9 @@ dotted ``settings.theme`` keys, an inline table, a value over several lines, quo
 keys). Our own rewriter before it (regular expressions over the lines, 285 lines)
 refused some of these and dropped the comment after others. Two of tomlkit's habits
 are undone here: a new key goes right after the table's last key (tomlkit puts it
-after the comments that follow, which lead into the next table), and new lines take
-the file's Windows line ends. The result is parsed again (tomllib) and must hold what
+after the comments that follow, which lead into the next table; done through
+:mod:`.tomlkit_compat`, which holds what this needs beneath tomlkit's public API), and
+new lines take the file's Windows line ends. The result is parsed again (tomllib) and must hold what
 the file held with only those values changed, whatever tomlkit's version did; a file
 that is not valid TOML, or whose ``settings`` is no table, is an InputError of one line,
 and the file is left as it is. tomlkit is imported for a save only: reading the
@@ -151,7 +152,9 @@ def _edited(text: str, values: Mapping[str, Value]) -> str | None:
     """The text with ``values`` set in its ``settings`` table; None when that is no
     table, or tomlkit cannot edit it."""
     import tomlkit
-    from tomlkit.items import AoT, InlineTable, Table
+    from tomlkit.items import InlineTable, Table
+
+    from .tomlkit_compat import append_after_last_key
 
     try:
         document = tomlkit.parse(text)
@@ -163,19 +166,7 @@ def _edited(text: str, values: Mapping[str, Value]) -> str | None:
             if key not in added:
                 table[key] = value  # in place: its key, comment and indent kept
         if isinstance(table, Table | InlineTable):
-            # tomlkit appends after the comments that follow the last key (they lead into
-            # what comes next) and puts a blank line before a sub-table: what follows the
-            # last key is taken off the table's body, the new keys appended, and it is put
-            # back. (Its index by key is not told: the document is only rendered now.)
-            body = table.value.body
-            cut = len(body)
-            while cut and (body[cut - 1][0] is None or isinstance(body[cut - 1][1], Table | AoT)):
-                cut -= 1  # a comment, a blank, a sub-table
-            tail = body[cut:]
-            del body[cut:]
-            for key, value in added.items():
-                table.append(key, value)
-            body.extend(tail)
+            append_after_last_key(table, added)  # before the comments that follow
         else:  # split across the file: tomlkit finds the place
             table.update(added)
         return document.as_string()
