@@ -13,6 +13,7 @@ from pathlib import Path
 import pytest
 
 import rac_console as rac
+from tests.support.doc_samples import run_python
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -178,15 +179,6 @@ def test_a_script_that_uses_every_public_name_type_checks_strictly(tmp_path: Pat
 
 @pytest.mark.slow
 def test_the_script_runs_against_the_simulator(tmp_path: Path, env: dict[str, str]) -> None:
-    script = tmp_path / "script.py"
-    script.write_text(SCRIPT, encoding="utf-8")
-    done = subprocess.run(
-        [sys.executable, str(script)],
-        capture_output=True,
-        text=True,
-        cwd=tmp_path,
-        env=env,
-        timeout=120,
-    )
+    done = run_python(SCRIPT, tmp_path, env)
     assert done.returncode == 0, done.stderr
     assert "nothing accepts connections" in done.stdout

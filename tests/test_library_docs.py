@@ -5,13 +5,11 @@ example shows of a value, it asserts."""
 
 from __future__ import annotations
 
-import subprocess
-import sys
 from pathlib import Path
 
 import pytest
 
-from tests.support.doc_samples import PYTHON_PAGES, Sample, read_page
+from tests.support.doc_samples import PYTHON_PAGES, Sample, read_page, run_python
 
 SAMPLES = [
     sample for page in PYTHON_PAGES for sample in read_page(page).samples if sample.kind == "python"
@@ -33,14 +31,5 @@ def test_an_unmarked_python_block_is_found() -> None:
 @pytest.mark.slow
 @pytest.mark.parametrize("sample", SAMPLES, ids=[s.name for s in SAMPLES])
 def test_the_example_runs(sample: Sample, tmp_path: Path, env: dict[str, str]) -> None:
-    script = tmp_path / "example.py"
-    script.write_text("\n".join(sample.lines) + "\n", encoding="utf-8")
-    done = subprocess.run(
-        [sys.executable, str(script)],
-        capture_output=True,
-        text=True,
-        cwd=tmp_path,
-        env=env,
-        timeout=120,
-    )
+    done = run_python("\n".join(sample.lines) + "\n", tmp_path, env)
     assert (done.returncode, done.stderr) == (0, ""), f"{sample.name}:\n{done.stderr}"

@@ -33,6 +33,8 @@ from __future__ import annotations
 
 import difflib
 import re
+import subprocess
+import sys
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Literal
@@ -172,3 +174,18 @@ def difference(what: str, expected: list[str], actual: list[str], numbers_vary: 
     printed = [normalised(line, numbers_vary) for line in actual]
     diff = difflib.unified_diff(shown, printed, "the sample", "the program", lineterm="")
     return f"{what}: the sample is not what the program prints\n" + "\n".join(diff)
+
+
+def run_python(text: str, folder: Path, env: dict[str, str]) -> subprocess.CompletedProcess[str]:
+    """``text`` run as a script (a python sample, or a test's own) in a fresh interpreter,
+    in ``folder`` with ``env`` (the test's private HOME): what it printed, and its status."""
+    script = folder / "script.py"
+    script.write_text(text, encoding="utf-8")
+    return subprocess.run(
+        [sys.executable, str(script)],
+        capture_output=True,
+        text=True,
+        cwd=folder,
+        env=env,
+        timeout=120,
+    )
