@@ -235,3 +235,24 @@ async def test_the_footers_old_keys_go_with_each_line_run(tmp_path: Path) -> Non
         assert live_keys() <= 2 * before, (before, live_keys())
 
     await run_console(tmp_path, steps)
+
+
+async def test_the_style_caches_of_the_footers_old_keys_go_with_them(tmp_path: Path) -> None:
+    """Textual keeps the style cache of up to 1,024 widgets gone, each with the lines it
+    drew (an ``lru_cache`` on a method holds it): the footer's old keys, nine a line
+    run, kept theirs, about 4 KB each, 4 MB once full."""
+    from textual._styles_cache import StylesCache
+
+    def live_caches() -> int:
+        gc.collect()
+        return sum(isinstance(thing, StylesCache) for thing in gc.get_objects())
+
+    async def steps(pilot: Pilot[Any], app: RacConsoleApp) -> None:
+        await connected(pilot, app)
+        await answered(pilot, app, 50)
+        before = live_caches()
+        for n in range(30):
+            await answered(pilot, app, 51 + n % 40)
+        assert live_caches() < before + 30, (before, live_caches())  # not one a line
+
+    await run_console(tmp_path, steps)

@@ -6,11 +6,13 @@ tested alone; the keys with Pilot against the built-in simulator.
 
 from __future__ import annotations
 
+import gc
 import re
 from pathlib import Path
 from typing import cast
 
 import pytest
+from rich.segment import Segment
 from textual.pilot import Pilot
 
 from rac_console.present.filtering import FrameFilter
@@ -19,7 +21,7 @@ from rac_console.protocol import parse_request, parse_response
 from rac_console.session import Frame
 from rac_console.tui.app import RacConsoleApp
 from rac_console.tui.frame_lines import FrameHighlighter
-from rac_console.tui.frame_log import KEPT, FrameLog
+from rac_console.tui.frame_log import KEPT_BYTES, KEPT_OTHERS, FrameLog
 from tests.support.drivers import log_text, make_app, results_text, type_line, until
 
 SIZE = (150, 40)
@@ -271,14 +273,71 @@ async def test_filter_by_text_and_poll_frames_stay_f3(tmp_path: Path) -> None:
 def test_the_log_is_bounded_and_counts_what_it_keeps() -> None:
     log = FrameLog()
     reply = parse_response("0,3,1")
-    for n in range(KEPT // 2 + 500):  # more frames than the log keeps
+    for n in range(KEPT_OTHERS // 2 + 500):  # more frames than the log keeps
         t = 1_700_000_000 + n / 1000
         request = parse_request(f"GET:RC8:{n % 7}:I:\r".encode())
         log.add(Frame(t, "tx", f"GET:RC8:{n % 7}:I:\r".encode(), request=request))
         log.add(Frame(t + 0.0001, "rx", b"0,3,1\r", 0.0001, response=reply, request=request))
     log.flush()
-    assert log.frames_kept == KEPT
+    assert log.frames_kept == KEPT_OTHERS
     log.set_filter("I 3")
     shown = re.search(r"(\d+) of (\d+) frames", log.title_text)
-    assert shown is not None and int(shown.group(2)) == KEPT
-    assert abs(int(shown.group(1)) - KEPT / 7) < 4  # a seventh: the GETs of I3, their replies
+    assert shown is not None and int(shown.group(2)) == KEPT_OTHERS
+    assert abs(int(shown.group(1)) - KEPT_OTHERS / 7) < 4  # a seventh: I3's GETs and replies
+
+
+def test_frames_as_long_as_a_reply_may_be_are_kept_within_a_budget_of_bytes() -> None:
+    """A reply may be 64 KiB: kept by the count alone, 20,000 of them held 1.3 GB. The
+    oldest go once the kept frames' bytes pass KEPT_BYTES; the newest stay."""
+    log = FrameLog()
+    request = parse_request(b"GET:RC8:1:S:\r")
+    long_reply = b"0,8," + b"x" * 60_000 + b"\r"
+    count = 2 * KEPT_BYTES // len(long_reply)  # twice the budget
+    for n in range(count):
+        t = 1_700_000_000 + n
+        log.add(Frame(t, "tx", b"GET:RC8:1:S:\r", poll=True, request=request))
+        log.add(Frame(t + 0.001, "rx", long_reply, 0.001, poll=True, request=request))
+    log.flush()
+    assert log.frames_kept < count, log.title_text  # of the 2 * count frames given
+    assert log.frames_kept * len(long_reply) // 2 <= KEPT_BYTES
+    log.add(Frame(1_700_100_000, "tx", b"GET:RC8:7:I:\r", request=parse_request(b"GET:RC8:7:I:\r")))
+    log.set_filter("I 7")
+    log.flush()
+    assert "1 of" in log.title_text  # the newest is kept, beside them
+
+
+async def test_the_frame_lines_cut_at_the_views_edge_are_not_kept_once_drawn(
+    tmp_path: Path,
+) -> None:
+    """Rich keeps each cut of a text that holds a character outside its single-cell fast
+    path (a frame line's ``←``, ``↵``) in a cache of 16,384, never looked up again: every
+    frame line too long for the view, once drawn, stayed (9 MB once full, under a flood)."""
+    from textual.app import App, ComposeResult
+
+    class Pane(App[None]):
+        def compose(self) -> ComposeResult:
+            yield FrameLog()
+
+    def cut_lines_alive() -> int:
+        gc.collect()
+        return sum(isinstance(o, Segment) and "←" in o.text for o in gc.get_objects())
+
+    request = parse_request(b"GET:RC8:0:P:\r")
+    app = Pane()
+    async with app.run_test(size=(60, 12)) as pilot:
+        log = app.query_one(FrameLog)
+        await until(pilot, lambda: log.size.height > 0, "the log laid out")
+
+        async def rounds(start: int, count: int) -> None:
+            for n in range(start, start + count):  # three new long lines each, drawn
+                for m in range(3):
+                    t = 1_700_000_000 + n + m / 10
+                    reply = f"0,8196,{n}.{m}" + ",300.0000001" * 6 + "\r"
+                    log.add(Frame(t, "rx", reply.encode(), 0.001, request=request))
+                log.flush()
+                await pilot.pause(0.05)
+
+        await rounds(0, 10)
+        before = cut_lines_alive()
+        await rounds(10, 40)  # 120 lines more, each cut at the view's edge
+        assert cut_lines_alive() < before + 40, (before, cut_lines_alive())

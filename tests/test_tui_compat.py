@@ -3,6 +3,8 @@ Textual renames the private thing or it stops doing what the console relies on."
 
 from __future__ import annotations
 
+import gc
+import weakref
 from typing import ClassVar
 
 from rich.segment import Segment
@@ -138,3 +140,39 @@ async def test_a_rich_log_writes_again_what_came_before_its_size() -> None:
                 break
             await pilot.pause()
         assert Early.written == [False, True]  # the deferred write, through write()
+
+
+def test_forgetting_gone_styles_lets_go_a_style_cache_textual_kept() -> None:
+    from textual._styles_cache import StylesCache
+    from textual.color import Color
+
+    cache = StylesCache()
+    cache.get_inner_outer(Color(0, 0, 0), Color(10, 20, 30))  # as a widget's paint does
+    drawn = weakref.ref(cache)
+    del cache
+    gc.collect()
+    assert drawn() is not None  # kept by the lru_cache on the method, its widget gone
+    compat.forget_gone_styles()
+    gc.collect()
+    assert drawn() is None
+
+
+def test_forgetting_split_segments_empties_what_rich_kept_of_a_cut() -> None:
+    compat.forget_split_segments()
+    Strip([Segment("12:00:00.000 ← 0,3,1↵")], 21).crop(0, 15)  # cut inside the arrow's text
+    assert Segment._split_cells.cache_info().currsize > 0  # Rich kept the cut
+    compat.forget_split_segments()
+    assert Segment._split_cells.cache_info().currsize == 0
+
+
+async def test_limited_a_rich_log_keeps_that_many_lines_as_drawn() -> None:
+    app = Logged()
+    async with app.run_test(size=(40, 30)) as pilot:
+        log = app.query_one(RichLog)
+        compat.limit_drawn_lines(log, 5)
+        for n in range(20):
+            log.write(f"line {n}")
+        await pilot.pause()
+        for y in range(20):
+            log._render_line(y, 0, 30)  # each drawn
+        assert len(log._line_cache) == 5

@@ -4,6 +4,7 @@ width, and the frame log's border counting the frames it shows."""
 
 from __future__ import annotations
 
+import gc
 import re
 from pathlib import Path
 
@@ -14,7 +15,7 @@ from rac_console.protocol import parse_request, parse_response
 from rac_console.session import Frame
 from rac_console.tui.app import RacConsoleApp
 from rac_console.tui.frame_lines import HEX_SEPARATOR
-from rac_console.tui.frame_log import KEPT, MAX_LINES, FrameLog
+from rac_console.tui.frame_log import KEPT, KEPT_OTHERS, MAX_LINES, FrameLog
 from tests.support.drivers import make_app, results_text, rows_read, type_line, until
 
 REPLY = parse_response("0,3,1")
@@ -68,9 +69,9 @@ def test_a_filter_counts_what_it_shows_and_forgets_the_oldest() -> None:
     log.add(Frame(1_700_000_001.1, "rx", b"0,11,-1\r", 0.0001, response=reply, request=io128))
     log.flush()
     assert shown_of_kept(log) == (2, 22)
-    add_exchanges(log, KEPT, poll=False, start=1_700_000_100)  # pushes the IO128 pair out
+    add_exchanges(log, KEPT_OTHERS, poll=False, start=1_700_000_100)  # pushes IO128 out
     log.flush()
-    assert shown_of_kept(log) == (0, KEPT)
+    assert shown_of_kept(log) == (0, KEPT_OTHERS)
 
 
 # ------------------------------------------------------------- the hex view
@@ -236,6 +237,44 @@ async def test_results_written_before_the_pane_has_a_size_are_kept_once() -> Non
         text = "\n".join(strip.text for strip in log.lines)
         assert [text.count(f"entry {n} ") for n in range(3)] == [1, 1, 1], text
         assert all(strip.cell_length <= log.scrollable_content_region.width for strip in log.lines)
+
+
+@pytest.mark.slow  # 1,400 lines drawn
+async def test_the_results_pane_keeps_few_of_its_lines_as_drawn() -> None:
+    """RichLog keeps each line it drew, cut to the view, in a cache of 1,024 keyed by
+    the line's number since it began: a pane that shows a dozen lines kept the last
+    1,024 drawn (about 5 KB each, with the styled copy each holds) beside its own."""
+    from rich.text import Text
+    from textual.app import App, ComposeResult
+    from textual.strip import Strip
+
+    from rac_console.tui.results import MAX_LINES as KEPT_LINES
+    from rac_console.tui.results import ResultsLog
+
+    class Pane(App[None]):
+        def compose(self) -> ComposeResult:
+            yield ResultsLog(id="results")
+
+    def strips_alive() -> int:
+        gc.collect()
+        return sum(isinstance(thing, Strip) for thing in gc.get_objects())
+
+    app = Pane()
+    async with app.run_test(size=(60, 20)) as pilot:
+        log = app.query_one(ResultsLog)
+        await until(pilot, lambda: log.size.height > 0, "the pane laid out")
+
+        async def rounds(start: int, count: int) -> None:
+            for n in range(start, start + count):  # ten entries at a time, each drawn
+                for m in range(10):
+                    log.write(Text(f"› put I 50 {n}{m}\nI50: {n} → {m}  S_OK"))
+                await pilot.pause(0.05)
+
+        await rounds(0, 30)  # 600 lines: the pane keeps its 500
+        assert len(log.lines) == KEPT_LINES
+        before = strips_alive()
+        await rounds(30, 40)  # 800 lines more
+        assert strips_alive() < before + 100, (before, strips_alive())
 
 
 # ------------------------------------------------------------- frozen (F4)

@@ -1,4 +1,4 @@
-"""Every private Textual hook the console uses, each in one small function here.
+"""Every private Textual (and Rich) hook the console uses, each in one small function here.
 
 Textual gives no promise about names with a leading underscore. Keeping them in one
 place means an upgrade is checked here, and ``tests/test_tui_compat.py`` fails (one test
@@ -16,6 +16,7 @@ from rich.cells import cell_len
 from rich.segment import Segment
 from rich.style import Style
 from textual import _time
+from textual._styles_cache import StylesCache
 from textual.binding import Binding
 from textual.dom import DOMNode
 from textual.strip import Strip
@@ -134,3 +135,33 @@ def forget_closed_watchers(node: DOMNode) -> None:
     watchers: dict[str, list[tuple[DOMNode, object]]] = getattr(node, "__watchers", {})
     for watching in watchers.values():
         watching[:] = [(n, call) for n, call in watching if not (n._closing or n._closed)]
+
+
+def forget_gone_styles() -> None:
+    """Let go of the style caches of widgets gone.
+
+    Textual's ``StylesCache.get_inner_outer`` is an ``lru_cache(1024)`` on a method, so
+    it keeps up to 1,024 ``StylesCache`` objects alive, each with the lines its widget
+    drew (about 4 KB), long after the widget was removed: the footer's keys go at every
+    line run, so it filled with theirs (4 MB). It is a cache of two colours: emptied,
+    the widgets on screen fill it again at the next paint. Checked with Textual 8.2.8."""
+    StylesCache.get_inner_outer.cache_clear()
+
+
+def forget_split_segments() -> None:
+    """Empty Rich's cache of segments cut at a cell (``Segment._split_cells``).
+
+    Rich keeps every cut of a segment that holds a character outside its single-cell
+    fast path (the frame log's ``←`` and ``↵``) in an ``lru_cache`` of 16,384; a log's
+    lines cut at the view's edge are new each time and never looked up again (no hit
+    in a shift's worth), about 540 B each: 9 MB once full. Checked with Rich 15.0.0
+    (and 13.3.3, the lowest pyproject allows)."""
+    Segment._split_cells.cache_clear()
+
+
+def limit_drawn_lines(log: RichLog, lines: int) -> None:
+    """Keep at most ``lines`` of a :class:`RichLog`'s lines as drawn (its
+    ``_line_cache``, 1,024): keyed by each line's number since the log began, it held
+    a copy of each of the last 1,024 lines shown (about 5 KB each with its caches),
+    however few the pane shows. Checked with Textual 8.2.8."""
+    log._line_cache.maxsize = lines

@@ -14,7 +14,13 @@ from textual.app import ComposeResult
 from textual.widget import Widget
 from textual.widgets import Footer
 
-from .compat import footer_key_text, footer_ready, forget_closed_watchers, is_palette_key
+from .compat import (
+    footer_key_text,
+    footer_ready,
+    forget_closed_watchers,
+    forget_gone_styles,
+    is_palette_key,
+)
 
 #: The palette key's width besides its text: the bar at its left.
 PALETTE_BAR = 1
@@ -35,6 +41,7 @@ class FittingFooter(Footer):
 
     def compose(self) -> ComposeResult:
         forget_closed_watchers(self)  # the keys of the last compose, gone (see there)
+        forget_gone_styles()  # and their style caches, kept by Textual (see there)
         widgets = list(super().compose())
         width = self.size.width or self.app.size.width
         self._width = width

@@ -1,7 +1,8 @@
 """The raw frame log: one line per frame, written in batches, bounded in memory.
 
 Besides the lines drawn, the log keeps the last :data:`KEPT` poll frames it was given and,
-apart, the last :data:`KEPT` others (typed exchanges and notes), each with its gap (a frame
+apart, the last :data:`KEPT_OTHERS` others (typed exchanges and notes), each with its gap
+and each kind within :data:`KEPT_BYTES` of frames (a frame
 carries its request), so the hex view (F7), the frame times, the filter (``/``) and the poll
 frames (F3) redraw what is on screen, not only what comes; a fast poll cannot push the
 typed exchanges out (with polls hidden they would vanish at the next redraw).
@@ -36,7 +37,7 @@ from ..present.frames import (
 from ..protocol.text import terminal_safe
 from ..session.types import Frame
 from . import frame_lines, keys
-from .compat import InlineWidthLog, forget_drawn_lines
+from .compat import InlineWidthLog, forget_drawn_lines, forget_split_segments
 from .frame_lines import HEX_SEPARATOR, FrameHighlighter, hex_fits, hex_plan, hex_under
 
 if TYPE_CHECKING:
@@ -48,8 +49,17 @@ MAX_PENDING = 50_000
 #: line says how many were not (drawing them cost the poller its CPU, unread).
 MAX_LINES_PER_FLUSH = 500
 #: Poll frames kept to be drawn again (by the hex view, the frame times, the filter and
-#: F3), and as many others (typed exchanges, notes). The filter looks through these.
+#: F3). The filter looks through these. A poll frame costs 350 to 500 B kept (its bytes,
+#: its parsed reply, its gap): 7 to 10 MB when full, seconds into a flood.
 KEPT = 20_000
+#: Other events kept (typed exchanges, notes): as many as the log draws, so with polls
+#: hidden (F3) every one it can show is there. About 450 B a typed frame (a ``put``
+#: makes four with its readbacks): 2.2 MB when full, after a thousand lines typed.
+KEPT_OTHERS = MAX_LINES
+#: Bytes of frames kept, at most, of each kind: the oldest go past it as past the
+#: count. Frames of a few dozen bytes never reach it; a reply may be 64 KiB, and
+#: 20,000 of them held 1.3 GB (about three times this in memory with their parse).
+KEPT_BYTES = 4 * 1024 * 1024
 
 #: What the log holds: a frame, or a note (its time and text).
 Event = Frame | tuple[float, str]
@@ -86,6 +96,7 @@ class FrameLog(InlineWidthLog):
         self._origin: dict[int, str] = {}
         self.target_width = 0
         self._frames_kept = 0
+        self._kept_bytes = [0, 0]  # of the kept polls' frames, of the others'
         self._frames_shown = 0  # counted while narrowed (a filter, or polls hidden)
         self._show_polls = True
         self._hex_view = False
@@ -260,6 +271,7 @@ class FrameLog(InlineWidthLog):
         self._bodies.clear()
         self._origin.clear()
         self._frames_kept = self._frames_shown = 0
+        self._kept_bytes = [0, 0]
         super().clear()
         self.update_title()
         return self
@@ -291,6 +303,8 @@ class FrameLog(InlineWidthLog):
                 "anyone reads): --record FILE keeps every frame ──",
             )
         if lines:
+            # The lines drawn before, cut at the view's edge, were kept by Rich for good.
+            forget_split_segments()
             # Log follows only when the view already sat at the end, and any layout
             # change (a resize, the candidate list) moves the end away from the view:
             # follow by this widget's own flag instead, until F4 freezes it.
@@ -306,11 +320,13 @@ class FrameLog(InlineWidthLog):
         return len(events)
 
     def _keep(self, events: list[Event]) -> tuple[int, list[Drawn]]:
-        """Keep new events with their gap (the oldest of their kind go past
-        KEPT); how many of them are shown, and the newest of those (all a flush may draw)."""
+        """Keep new events with their gap (the oldest of their kind go past KEPT or
+        KEPT_OTHERS, or KEPT_BYTES); how many of them are shown, and the newest of those
+        (all a flush may draw)."""
         polls, others, order = self._kept_polls, self._kept_others, self._order
         narrowed, passes = self._narrowed, self._passes
         last_time = self._last_time
+        poll_bytes, other_bytes = self._kept_bytes
         tail = 0 if narrowed else len(events) - MAX_LINES_PER_FLUSH - 1
         shown: list[Drawn] = []
         count = frames = 0
@@ -320,7 +336,12 @@ class FrameLog(InlineWidthLog):
                 gap = None if last_time is None else event.time - last_time
                 last_time = event.time
                 drawn: Drawn = (event, gap)
-                (polls if event.poll else others).append((next(order), drawn))
+                if event.poll:
+                    polls.append((next(order), drawn))
+                    poll_bytes += len(event.data)
+                else:
+                    others.append((next(order), drawn))
+                    other_bytes += len(event.data)
                 if narrowed:
                     if not passes(event):
                         continue
@@ -333,25 +354,31 @@ class FrameLog(InlineWidthLog):
                 shown.append(drawn)
         self._last_time = last_time
         self._frames_kept += frames
-        for kept in (polls, others):
-            if len(kept) > KEPT:
-                self._forget(kept, len(kept) - KEPT)
+        self._kept_bytes = [poll_bytes, other_bytes]
+        for kind, (kept, most) in enumerate(((polls, KEPT), (others, KEPT_OTHERS))):
+            if len(kept) > most or self._kept_bytes[kind] > KEPT_BYTES:
+                self._forget(kept, kind, most)
         return count, shown
 
-    def _forget(self, kept: deque[Kept], count: int) -> None:
-        """The oldest ``count`` events of one kind go, and their share of the counts."""
+    def _forget(self, kept: deque[Kept], kind: int, most: int) -> None:
+        """The oldest events of one kind (0: polls, 1: others) go while there are more
+        than ``most`` or their frames' bytes pass KEPT_BYTES, and their share of the
+        counts."""
         bodies = self._bodies
         narrowed = self._narrowed
-        for _ in range(count):
+        size = self._kept_bytes[kind]
+        while kept and (len(kept) > most or size > KEPT_BYTES):
             _, (event, _) = kept.popleft()
             if not isinstance(event, Frame):
                 continue
+            size -= len(event.data)
             self._frames_kept -= 1
             if narrowed and self._passes(event):
                 self._frames_shown -= 1
             if bodies:
                 bodies.pop(id(event), None)
             self._origin.pop(id(event), None)
+        self._kept_bytes[kind] = size
 
     def _walk(self) -> list[Drawn]:
         """Every kept event with its gap, in the order they came."""

@@ -16,10 +16,14 @@ from rich.console import RenderableType
 from textual import events
 from textual.widgets import RichLog
 
-from .compat import rich_log_sized
+from .compat import limit_drawn_lines, rich_log_sized
 
-#: Lines the pane keeps (and entries, each at least a line).
+#: Lines the pane keeps (and entries, each at least a line): about 6 KB a line with
+#: Textual's caches, and 0.5 KB its entry; 3.3 MB when full.
 MAX_LINES = 500
+#: Lines kept as drawn (cut to the view), more than a pane shows on any screen; RichLog
+#: keeps 1,024 (5 KB each) whatever the pane shows.
+DRAWN_LINES = 200
 
 
 class ResultsLog(RichLog):
@@ -36,6 +40,7 @@ class ResultsLog(RichLog):
             min_width=1,
             **kwargs,  # type: ignore[arg-type]
         )
+        limit_drawn_lines(self, DRAWN_LINES)
         self._entries: deque[RenderableType] = deque(maxlen=MAX_LINES)
         self._wrapped_for = 0  # the width the lines were wrapped for
         self._waiting = 0  # entries written before the first size: RichLog writes them again
