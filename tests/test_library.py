@@ -256,6 +256,31 @@ def test_a_broken_config_file_is_refused_naming_it(tmp_path: Path) -> None:
         rac.connect("cell3", config=broken)
 
 
+def test_a_config_file_named_but_not_there_is_refused_with_nothing_sent(
+    recording, tmp_path: Path
+) -> None:
+    """A typo in ``config=`` must not read as "no profiles": the read-only profile of the
+    endpoint would be lost and a put would write. ``~`` is the user's home, as in a shell."""
+    server = recording(Memory())
+    missing = tmp_path / "rules.tmol"
+    address = f"{HOST}:{server.port}"
+    with pytest.raises(rac.Refused, match=r"rules\.tmol \(named by config\) does not exist"):
+        rac.connect(address, config=missing)
+    with pytest.raises(rac.Refused, match=r"rules\.tmol \(named by config\) does not exist"):
+        rac.cell([address], config=str(missing))
+    with pytest.raises(rac.Refused, match="config is the path of a config file, not 5"):
+        rac.connect(address, config=5)  # type: ignore[arg-type]
+    home = Path.home()  # the test's own (the env fixture)
+    (home / "rules.toml").write_text(
+        profile("cell3", server.port, 'writes = "read-only"'), encoding="utf-8"
+    )
+    with rac.connect(address, config="~/rules.toml") as rc:
+        assert rc.writes == "read-only" and rc.profile == "cell3"
+        with pytest.raises(rac.Refused, match="profile cell3 is read-only"):
+            rc.put("I", 10, 5)
+    assert server.accepted == 1 and server.lines == []
+
+
 def test_a_closed_connection_sends_nothing(recording) -> None:
     server = recording(Memory())
     rc = rac.connect(HOST, port=server.port)

@@ -33,11 +33,16 @@ ConfigPath = str | os.PathLike[str] | None
 
 
 def loaded(config: ConfigPath) -> Config:
-    """The config file ``config`` names, else the one the command line reads (its
-    ``RAC_CONSOLE_CONFIG``, or the user's); Refused for a broken one, naming it (a broken
-    file must not quietly drop a profile's guard)."""
+    """The config file ``config`` names (``~`` expanded), else the one the command line
+    reads (its ``RAC_CONSOLE_CONFIG``, or the user's); Refused for one that is not there
+    or is broken, naming it (either must not quietly drop a profile's guard)."""
+    named = os.fspath(config) if isinstance(config, str | os.PathLike) else None
+    if config is not None and (not isinstance(named, str) or not named.strip()):
+        raise Refused(f"config is the path of a config file, not {config!r}")
     try:
-        return load_config(Path(config) if config is not None else None)
+        if config is None:
+            return load_config()
+        return load_config(Path(config), named_by="config")
     except InputError as exc:
         raise Refused(str(exc)) from None
 

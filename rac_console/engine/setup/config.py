@@ -1,9 +1,11 @@
 """The config file: target profiles (and the console's settings), read with tomllib.
 
 ``$RAC_CONSOLE_CONFIG``, or ``config.toml`` in the user's config directory
-(platformdirs). A missing file means no profiles; anything wrong with one that exists
-is an InputError of one line naming the file (a TOML syntax error with its line), never
-a traceback, so that a broken file cannot silently drop a profile's read-only guard.
+(platformdirs), or the file a script names (``rac.connect(..., config=PATH)``). No
+file at the default place means no profiles; a file a user named must exist. Anything
+wrong with one that exists is an InputError of one line naming the file (a TOML syntax
+error with its line), never a traceback, so that a broken file cannot silently drop a
+profile's read-only guard.
 """
 
 from __future__ import annotations
@@ -29,13 +31,19 @@ def config_path() -> Path:
     InputError when the variable names a path that cannot be expanded."""
     named = os.environ.get(CONFIG_ENV)
     if named:
-        try:
-            return Path(named).expanduser()
-        except RuntimeError as exc:  # ~user that does not exist, no home directory
-            raise InputError(f"{CONFIG_ENV}={named}: {exc}") from None
+        return named_path(named, CONFIG_ENV)
     from platformdirs import user_config_path
 
     return user_config_path("rac-console") / "config.toml"
+
+
+def named_path(named: str | os.PathLike[str], by: str) -> Path:
+    """A config file's path as a user named it (``by``: ``RAC_CONSOLE_CONFIG``,
+    ``config``), ``~`` expanded as a shell would; InputError when it cannot be."""
+    try:
+        return Path(named).expanduser()
+    except RuntimeError as exc:  # ~user that does not exist, no home directory
+        raise InputError(f"{by}={os.fspath(named)}: {exc}") from None
 
 
 @dataclass(frozen=True)
@@ -72,20 +80,30 @@ class Config:
         )
 
 
-def load_config(path: Path | None = None, where: Where | None = None) -> Config:
+def load_config(
+    path: Path | None = None, where: Where | None = None, *, named_by: str | None = None
+) -> Config:
     """The config file at ``path`` (default: :func:`config_path`) as ``where`` reads it
     (default: this process's place): a key that reaches more than that place may is not
     read at all, only named in ``withheld``. InputError, one line, for anything wrong
-    with what is read."""
-    named = path is None and bool(os.environ.get(CONFIG_ENV))
-    path = config_path() if path is None else path
+    with what is read.
+
+    A file a user named (``$RAC_CONSOLE_CONFIG``, or ``path`` with ``named_by`` saying
+    who named it, ``~`` expanded) must exist: read as no file, a typo would quietly drop
+    every profile's guard. Only the default place may hold none."""
+    if path is None and os.environ.get(CONFIG_ENV):
+        named_by = CONFIG_ENV
+    if path is None:
+        path = config_path()
+    elif named_by is not None:
+        path = named_path(path, named_by)
     where = this_process() if where is None else where
     try:
         exists = path.exists()
     except (OSError, RuntimeError) as exc:
         raise InputError(f"cannot read {path}: {getattr(exc, 'strerror', None) or exc}") from None
-    if not exists and named:  # a typo must not quietly drop a read-only profile
-        raise InputError(f"{path} (named by {CONFIG_ENV}) does not exist")
+    if not exists and named_by is not None:  # a typo must not quietly drop a read-only profile
+        raise InputError(f"{path} (named by {named_by}) does not exist")
     if not exists:
         return Config(path, where=where)
     from ...commands.config_keys import withhold
