@@ -14,6 +14,7 @@ from pathlib import Path
 
 import pytest
 
+from rac_console.commands.advice import COMMAND_LINE, Advice
 from rac_console.commands.language import Command
 from rac_console.commands.routing import Route
 from rac_console.commands.target import Target
@@ -118,10 +119,12 @@ def test_what_only_runs_at_a_terminal_is_refused_once_in_run_and_runs_nowhere() 
 class Broken(Registry):
     """The built-in commands, with a bug in the planner for one line."""
 
-    def plan(self, line: str, names: Sequence[str], current: str) -> Route:
+    def plan(
+        self, line: str, names: Sequence[str], current: str, advice: Advice = COMMAND_LINE
+    ) -> Route:
         if line == "boom":
             raise RuntimeError("a bug")
-        return super().plan(line, names, current)
+        return super().plan(line, names, current, advice)
 
 
 def test_a_bug_in_planning_a_line_answers_it_and_the_next_line_still_runs() -> None:

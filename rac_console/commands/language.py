@@ -25,6 +25,7 @@ from ..protocol import (
     parse_index,
 )
 from ..protocol.request import Request, get_for, put_for, raw_request
+from .advice import COMMAND_LINE, Advice
 from .plant import Publish
 
 
@@ -452,10 +453,12 @@ def parse_seconds(text: str, word: str = "interval") -> float:
     return seconds
 
 
-def parse_connect(text: str) -> Connect:
+def parse_connect(text: str, advice: Advice = COMMAND_LINE) -> Connect:
+    """``HOST``, ``HOST:PORT``, ``[IPv6]:PORT`` or ``sim``; InputError saying how to
+    write one as ``advice``'s front end takes it."""
     if not text or " " in text:
         raise InputError(
-            "connect needs one address: connect HOST or connect HOST:PORT "
+            f"connect needs one address: {advice.address} "
             "(or a profile's name, or sim for the built-in simulator)"
         )
     if text == "sim":
@@ -463,14 +466,14 @@ def parse_connect(text: str) -> Connect:
     if text.startswith("["):  # [IPv6]:PORT
         host, closed, port_part = text[1:].partition("]")
         if not closed or (port_part and not port_part.startswith(":")):
-            raise InputError("write an IPv6 address in brackets: connect [::1] or [::1]:5006")
+            raise InputError(f"write an IPv6 address in brackets: {advice.ipv6}")
         sep, port_text = (":", port_part[1:]) if port_part.startswith(":") else ("", "")
     elif text.count(":") == 1:
         host, sep, port_text = text.partition(":")
     else:
         host, sep, port_text = text, "", ""
     if not host:
-        raise InputError("connect needs a host: connect HOST or connect HOST:PORT")
+        raise InputError(f"connect needs a host: {advice.address}")
     if not sep:
         return Connect(host, 5006)
     if not (port_text.isascii() and port_text.isdigit()) or not 0 < int(port_text) < 65536:

@@ -15,6 +15,7 @@ from dataclasses import dataclass, replace
 from enum import Enum
 
 from ..protocol import InputError
+from .advice import COMMAND_LINE, Advice
 from .cells import not_open, split_address
 from .language import Command, Raw, Use, Wait
 from .names import find_name
@@ -111,10 +112,12 @@ def plan(
     current: str,
     parse: Callable[[str], Command | None],
     traits: Callable[[Command], Traits],
+    advice: Advice = COMMAND_LINE,
 ) -> Route:
     """The route of a typed line in a cell whose targets are ``names`` (one target is a
     cell of one), ``current`` taking the lines without ``@NAME``. ``parse`` reads a line
-    of the command language (None: blank, a comment); ``traits`` tells a command's."""
+    of the command language (None: blank, a comment); ``traits`` tells a command's;
+    ``advice`` is the front end's words for what a refusal says to do instead."""
     try:
         named, text = split_address(line)
         name = current if named is None else find_name(names, named)
@@ -125,7 +128,9 @@ def plan(
         return Refused(str(exc))
     if command is None:
         return Nothing()
-    return route_command(command, text, names, name, traits, addressed=named is not None)
+    return route_command(
+        command, text, names, name, traits, addressed=named is not None, advice=advice
+    )
 
 
 def route_command(
@@ -136,6 +141,7 @@ def route_command(
     traits: Callable[[Command], Traits],
     *,
     addressed: bool = True,
+    advice: Advice = COMMAND_LINE,
 ) -> Route:
     """The route of a command made or parsed already, for the target ``name``
     (``addressed``: the line named it with ``@NAME``)."""
@@ -151,7 +157,7 @@ def route_command(
         case Scope.ONE_TARGET if several:
             return Refused(
                 f"a cell's targets are fixed ({', '.join(names)}): use NAME picks one; "
-                "to open others, start rac-console with -H a,b or --cell NAME"
+                f"to open others, {advice.other_targets}"
             )
         case Scope.EVERY_TARGET if several and not addressed:
             return OnEveryTarget(command)

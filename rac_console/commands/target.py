@@ -13,6 +13,7 @@ from typing import TYPE_CHECKING, Literal
 
 from ..protocol.errors import InputError
 from ..protocol.text import close_match, endpoint, terminal_safe
+from .advice import COMMAND_LINE, Advice
 from .policy import TargetProfile, WritePolicy, Writes
 
 if TYPE_CHECKING:  # matching a name to a profile loads with the first host named
@@ -164,14 +165,17 @@ def no_profile_hint(
     return f"no profile named {host} ({known}){meant}"
 
 
-def host_and_port(host: str | None, port: int | None) -> tuple[str | None, int | None]:
+def host_and_port(
+    host: str | None, port: int | None, advice: Advice = COMMAND_LINE
+) -> tuple[str | None, int | None]:
     """``-H HOST:PORT`` (or ``[v6]:PORT``) as ``connect`` reads it, ``-H NAME:PORT``
-    too; ``-p`` with a port in ``-H`` too is refused unless both say the same."""
+    too; ``-p`` with a port in ``-H`` too is refused unless both say the same. A
+    refusal says how to write an address in ``advice``'s words."""
     if host is None or not (host.startswith("[") or host.count(":") == 1):
         return host, port
     from .language import parse_connect
 
-    address = parse_connect(host)
+    address = parse_connect(host, advice)
     if not address.port_given:
         return address.host, port
     if port is not None and port != address.port:
@@ -200,18 +204,22 @@ def cell_targets(
     addresses: Addresses,
     read_only_flag: bool = False,
     config_where: str | None = None,
+    advice: Advice = COMMAND_LINE,
 ) -> CellTargets:
     """A cell's targets: the ``hosts`` given (profiles' names or addresses, ``-H a,b``),
     or the cell named ``cell`` in the config file; each resolved as ``-H`` resolves one
     and named by its profile (else as typed). InputError for a cell that is not there, a
-    name that is no controller, or two names reaching one controller."""
+    name that is no controller, or two names reaching one controller (what to do said
+    in ``advice``'s words)."""
     from .cells import DEMO_CELL
     from .names import find_name
 
     def resolved(name: str) -> tuple[str, Target]:
-        host, port = host_and_port(name, None)  # a profile, HOST, HOST:PORT or [v6]:PORT
+        host, port = host_and_port(name, None, advice)  # a profile, HOST, HOST:PORT, [v6]:PORT
         if host is None or host == "sim":
-            raise InputError("a cell's targets are controllers; sim is not one (try --cell demo)")
+            raise InputError(
+                f"a cell's targets are controllers; sim is not one ({advice.demo_cell})"
+            )
         target = resolve_target(
             host,
             port,
@@ -233,7 +241,7 @@ def cell_targets(
         known = ", ".join(sorted(cells)) or f"none in {config_where}"
         raise InputError(
             f"no cell named {cell} (cells: {known}); name one with [cell.{cell}] and "
-            f'targets = ["cell3", "cell4"], or try --cell {DEMO_CELL}'
+            f'targets = ["cell3", "cell4"], or {advice.demo_cell}'
         )
     members = [resolved(name) for name in spec.targets]
     return CellTargets(one_controller_each(members, addresses), spec)

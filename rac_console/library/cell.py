@@ -15,6 +15,7 @@ import itertools
 from collections.abc import Iterator, Mapping, Sequence
 from typing import TYPE_CHECKING
 
+from ..commands.advice import LIBRARY
 from ..commands.language import Command, Get, Put, Raw, Use
 from ..commands.names import find_name
 from ..commands.outcome import Outcome
@@ -69,6 +70,7 @@ def cell(
             addresses=addresses,
             read_only_flag=bool(read_only),
             config_where=where,
+            advice=LIBRARY,
         )
     except InputError as exc:
         raise Refused(str(exc)) from None
@@ -139,7 +141,7 @@ class Cell(Mapping[str, Connection]):
         self._simulated = simulated
         self._names = tuple(connections)
         members = [(name, connection._target) for name, connection in connections.items()]
-        self._routes = Routes(_OnConnections(connections), members, _builtin, Where.RUN)
+        self._routes = Routes(_OnConnections(connections), members, _builtin, Where.RUN, LIBRARY)
         self._numbers = itertools.count(1)
 
     @property

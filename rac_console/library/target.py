@@ -11,6 +11,7 @@ import os
 from pathlib import Path
 from typing import TYPE_CHECKING, NamedTuple
 
+from ..commands.advice import LIBRARY
 from ..commands.check import CheckReport, Problem, StepName, StepResult, hint
 from ..commands.target import Target, host_and_port
 from ..commands.target import resolve_target as resolve_target_of
@@ -66,7 +67,7 @@ def resolve(target: str, port: int | None, read_only: bool, config: Config) -> T
         if target == SIMULATOR:
             host, given = None, port
         else:
-            host, given = host_and_port(target, None)
+            host, given = host_and_port(target, None, LIBRARY)
             if given is not None and port is not None and given != port:
                 raise InputError(
                     f"{terminal_safe(target)} and port={port} name two ports: give the port once"

@@ -28,6 +28,7 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Protocol
 
+from ...commands.advice import COMMAND_LINE, Advice
 from ...protocol.text import terminal_safe
 from ..published.feedback import Message
 
@@ -99,15 +100,18 @@ class Routes:
         members: Sequence[tuple[str, Target]],
         registry: Callable[[], Registry],
         where: Where,
+        advice: Advice = COMMAND_LINE,
     ) -> None:
         """``registry``: the commands the lines are planned and checked with, asked for
         when the first line comes; ``where``: where the lines run (what only works at a
-        terminal is refused in ``run``, said once for the line, not once a target)."""
+        terminal is refused in ``run``, said once for the line, not once a target);
+        ``advice``: the front end's words for what a refusal says to do instead."""
         self.targets = targets
         self.names = tuple(name for name, _ in members)
         self._labels = {name: target.label for name, target in members}
         self._registry = registry
         self.where = where
+        self.advice = advice
         self.current = self.names[0]
 
     @property
@@ -121,7 +125,7 @@ class Routes:
 
         registry = self.registry
         if line.command is None:
-            return registry.plan(line.text or "", self.names, self.current)
+            return registry.plan(line.text or "", self.names, self.current, self.advice)
         from ...commands.names import find_name
 
         name = self.current if line.name is None else find_name(self.names, line.name)
@@ -129,7 +133,9 @@ class Routes:
             from ...commands.cells import not_open
 
             return Refused(str(not_open(str(line.name), self.names)))
-        return route_command(line.command, line.text or "", self.names, name, registry.traits)
+        return route_command(
+            line.command, line.text or "", self.names, name, registry.traits, advice=self.advice
+        )
 
     def execute(self, route: Route, line: Line, finish: Callable[[Answer], None]) -> None:
         """Do what ``route`` says, then call ``finish`` once with the line's answer: at

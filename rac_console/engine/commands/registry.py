@@ -22,6 +22,7 @@ from collections.abc import Callable, Iterable, Iterator, Sequence
 from dataclasses import dataclass, field
 from typing import Any, Generic, TypeVar
 
+from ...commands.advice import COMMAND_LINE, Advice
 from ...commands.exchange_parsers import parse_exchange
 from ...commands.language import (
     Command,
@@ -305,9 +306,11 @@ class Registry:
         spec = self.find(command)
         return spec.traits if spec is not None else Traits()
 
-    def plan(self, line: str, names: Sequence[str], current: str) -> Route:
+    def plan(
+        self, line: str, names: Sequence[str], current: str, advice: Advice = COMMAND_LINE
+    ) -> Route:
         """The route of a typed line in a cell of ``names`` (see :func:`...routing.plan`)."""
-        return plan(line, names, current, self.parse, self.traits)
+        return plan(line, names, current, self.parse, self.traits, advice)
 
     def runs_in(self, where: Where) -> list[str]:
         return [spec.name for spec in self._specs.values() if spec.runs_in(where)]

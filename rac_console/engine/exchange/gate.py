@@ -24,6 +24,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import dataclass, replace
 
+from ...commands.advice import COMMAND_LINE, LIBRARY, Advice
 from ...commands.check import check_pointer
 from ...commands.language import Exchange, Get, Put, Raw, VarRef
 from ...commands.outcome import ExitStatus, Outcome, refused
@@ -50,6 +51,8 @@ class WriteGate:
     known_before: Callable[[VarRef], Variant | None] = nothing_known
     confirm: Confirm | None = None  # None: nobody to ask (the CLI without --yes)
     cancelled: Callable[[], bool] = never  # the job's cancel, asked before each send
+    #: How a refusal says to do it instead: the command line's words, or a script's.
+    advice: Advice = COMMAND_LINE
 
     @classmethod
     def for_library(
@@ -59,11 +62,14 @@ class WriteGate:
         the call :class:`rac_console.library.connection.Connection` makes, once. The
         target's rules as the console holds them; its ``put`` and ``send`` are declared
         to write; ``confirm`` asks a ``confirm`` target's question, and ``yes`` answers
-        it ahead, as ``--yes`` does. Read back unless :meth:`without_read_back`."""
+        it ahead, as ``--yes`` does. Read back unless :meth:`without_read_back`. Its
+        refusals say what a script passes, not what the command line takes."""
         policy = target.policy
         if yes and policy.confirms:  # said yes ahead, as --yes: nothing to ask
             policy = replace(policy, writes=Writes.OPEN)
-        return cls(policy, WriteTrait.ALWAYS, read_only=target.read_only, confirm=confirm)
+        return cls(
+            policy, WriteTrait.ALWAYS, read_only=target.read_only, confirm=confirm, advice=LIBRARY
+        )
 
     def without_read_back(self) -> WriteGate:
         """This gate, a PUT not read back (``put(..., verify=False)``, ``--no-verify``)."""
@@ -105,17 +111,17 @@ class WriteGate:
         var = written_var(command)
         if var is None:  # a raw line we cannot read: sent as typed, nothing to read back
             if policy.confirms:
-                return refused(line, no_one_to_ask("this line", policy), wire)
+                return refused(line, no_one_to_ask("this line", policy, self.advice), wire)
             return self._send(session, command, line)
         if policy.confirms and confirm is None:
-            return refused(line, no_one_to_ask(str(var), policy), wire)
+            return refused(line, no_one_to_ask(str(var), policy, self.advice), wire)
         written = value_of(command)
         if written is None and (policy.confirms or policy.allow is not None):
             return refused(
                 line,
                 "refused: the value of this raw PUT cannot be read, so "
                 f"{policy.source or 'the target'}'s rules cannot be checked; write it as "
-                f"put {var.kind.code} {var.index} VALUE (nothing was sent)",
+                f"{self.advice.put(var.kind.code, var.index)} (nothing was sent)",
                 wire,
             )
         before = self.known_before(var)

@@ -12,6 +12,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import replace
 
+from ...commands.advice import Advice
 from ...commands.language import Get, Put, Raw, VarRef
 from ...commands.outcome import ExitStatus, Outcome, refused
 from ...commands.policy import WritePolicy
@@ -28,7 +29,7 @@ Confirm = Callable[[VarRef, Variant | None, Variant, Put | Raw], bool]
 
 NO_ONE_TO_ASK = (
     'PUT {var} refused: {source}asks before every write (writes = "confirm"); '
-    "add --yes to write from a script or the command line (nothing was sent)"
+    "{say_yes} (nothing was sent)"
 )
 
 
@@ -131,6 +132,8 @@ def plain_value(var: VarRef, variant: Variant) -> str:
     return "  ".join(f"{label} {text}" if label else text for label, text in fields)
 
 
-def no_one_to_ask(what: str, policy: WritePolicy) -> str:
+def no_one_to_ask(what: str, policy: WritePolicy, advice: Advice) -> str:
+    """A write to a ``confirm`` target refused for want of an answer, and how to give
+    one ahead in the words of the front end (``advice``)."""
     source = f"{policy.source} " if policy.source else "this target "
-    return NO_ONE_TO_ASK.format(var=what, source=source)
+    return NO_ONE_TO_ASK.format(var=what, source=source, say_yes=advice.say_yes)
