@@ -27,6 +27,7 @@ if TYPE_CHECKING:
         ReadBackMismatch,
         Refused,
         Timeout,
+        UnknownTarget,
     )
     from .library.results import Reading, Sent, Value, Written
 
@@ -46,6 +47,7 @@ _names = exports(
                 "ReadBackMismatch",
                 "Refused",
                 "Timeout",
+                "UnknownTarget",
             ),
             ".library.errors",
         ),
@@ -75,6 +77,7 @@ __all__ = [
     "Refused",
     "Sent",
     "Timeout",
+    "UnknownTarget",
     "Value",
     "Written",
     "aio",

@@ -352,3 +352,22 @@ def test_an_s_ok_whose_read_back_gets_no_answer_is_not_taken_for_a_write(recordi
         rc.put("I", 10, 5)
     assert caught.value.written == rac.Written("I10", 5, 10, None, None)
     assert server.lines == [b"GET:RC8:10:I:", b"PUT:RC8:10:I:3,5", b"GET:RC8:10:I:"]
+
+
+def test_an_exception_in_the_script_s_confirm_comes_back_unchanged_and_no_put_goes_out(
+    recording, tmp_path: Path
+) -> None:
+    server = recording(Memory())
+    rules = _config(tmp_path, profile("cell3", server.port, 'writes = "confirm"'))
+
+    class Mine(Exception):
+        pass
+
+    def ask(variable: str, now: rac.Value | None, value: rac.Value) -> bool:
+        raise Mine(variable)
+
+    with rac.connect("cell3", config=rules, confirm=ask) as rc:
+        with pytest.raises(Mine, match="I10"):
+            rc.put("I", 10, 5)
+        assert rc.get("I", 10) == 10  # the connection goes on
+    assert server.lines == [b"GET:RC8:10:I:", b"GET:RC8:10:I:"]

@@ -29,6 +29,7 @@ PUBLIC = {
     "Refused",
     "Sent",
     "Timeout",
+    "UnknownTarget",
     "Value",
     "Written",
     "aio",
@@ -72,6 +73,10 @@ def main() -> None:
     cell: rac.Cell
     with rac.cell("demo", yes=True) as cell:
         robot: rac.Connection = cell["robotA"]
+        try:
+            cell["robotC"]
+        except rac.UnknownTarget as unknown:
+            print(unknown)
         result: rac.Value | rac.Written | rac.Sent | None = cell.run("@robotB get I 1")
         print(robot.profile, result, cell.names, cell.current)
     try:
@@ -122,7 +127,15 @@ def test_the_public_names_are_exactly_these() -> None:
     assert issubclass(rac.Timeout, TimeoutError) and issubclass(
         rac.ConnectionFailed, ConnectionError
     )
-    for error in ("Refused", "ControllerError", "OutcomeUnknown", "ConnectionFailed", "Timeout"):
+    assert issubclass(rac.UnknownTarget, KeyError)
+    for error in (
+        "Refused",
+        "ControllerError",
+        "OutcomeUnknown",
+        "ConnectionFailed",
+        "Timeout",
+        "UnknownTarget",
+    ):
         assert issubclass(getattr(rac, error), rac.RacError), error
     with pytest.raises(AttributeError, match="no attribute 'conect'"):
         rac.conect  # noqa: B018

@@ -88,3 +88,23 @@ def test_the_demo_cell_is_the_console_s_simulators() -> None:
         assert cell.names == ("robotA", "robotB")
         cell.run("@robotB put I 10 5")
         assert cell["robotb"].get("I", 10) == 5 and cell["robotA"].get("I", 10) != 5
+
+
+def test_a_name_the_cell_does_not_hold_or_a_cell_that_is_no_cell_is_a_rac_error(
+    recording,
+) -> None:
+    """``except rac.RacError`` catches every mistake a script can make with a cell: a
+    target it does not hold (also a KeyError, as a mapping's) and a cell named by
+    something that is neither a name nor a list of targets."""
+    server = recording(Memory())
+    with rac.cell([f"{HOST}:{server.port}"]) as cell:
+        with pytest.raises(rac.RacError) as unknown:
+            cell["robotC"]
+        assert isinstance(unknown.value, rac.UnknownTarget | KeyError)
+        assert str(unknown.value) == (
+            f"no target named 'robotC' in this cell; it holds {HOST}:{server.port}"
+        )
+    for wrong in (5, None, b"line2", [5]):
+        with pytest.raises(rac.Refused, match=r"a cell is a \[cell\.NAME\]'s name or a list"):
+            rac.cell(wrong)  # type: ignore[arg-type]
+    assert server.lines == []

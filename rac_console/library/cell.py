@@ -26,7 +26,7 @@ from ..engine.setup.where import Where
 from ..protocol import InputError
 from ..session import DEFAULT_TIMEOUT
 from .connection import Confirm, Connection
-from .errors import Refused
+from .errors import Refused, UnknownTarget
 from .results import Sent, Value, Written
 from .target import ConfigPath, check_timeout, config_named, loaded, open_session
 
@@ -52,13 +52,13 @@ def cell(
     addresses, as ``-H a,b``). Every target is connected before this returns; the
     options apply to each as :func:`~rac_console.connect` applies them."""
     seconds = check_timeout(timeout)
-    settings = loaded(config)
-    where = config_named(settings)
     hosts = None
     if not isinstance(targets, str):
-        hosts = list(targets)
+        hosts = list(targets) if isinstance(targets, Sequence) else []
         if not hosts or not all(isinstance(name, str) for name in hosts):
             raise Refused(f"a cell is a [cell.NAME]'s name or a list of targets, not {targets!r}")
+    settings = loaded(config)
+    where = config_named(settings)
     from ..session.endpoints import addresses
 
     try:
@@ -157,7 +157,7 @@ class Cell(Mapping[str, Connection]):
     def __getitem__(self, name: str) -> Connection:
         found = find_name(self._names, name) if isinstance(name, str) else None
         if found is None:
-            raise KeyError(
+            raise UnknownTarget(
                 f"no target named {name!r} in this cell; it holds {', '.join(self._names)}"
             )
         return self._connections[found]

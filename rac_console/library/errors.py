@@ -22,6 +22,14 @@ class Refused(RacError):
     broken config file. The message says why, and how to write it, as the console does."""
 
 
+class UnknownTarget(RacError, KeyError):
+    """A cell holds no target of that name (``cell["robotC"]``): nothing was sent. Also
+    a ``KeyError``, as a mapping's missing key is; its message names the cell's targets."""
+
+    def __str__(self) -> str:
+        return str(self.args[0]) if self.args else ""  # a KeyError would quote it
+
+
 class ControllerError(RacError):
     """The controller answered an error HRESULT: ``code`` (an int) and ``name``
     (``E_INVALIDARG``). For a write, ``written`` holds what the read-back found."""
