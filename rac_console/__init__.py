@@ -28,6 +28,7 @@ if TYPE_CHECKING:
         Refused,
         Timeout,
         UnknownTarget,
+        UnreadableReply,
     )
     from .library.results import Reading, Sent, Value, Written
 
@@ -48,6 +49,7 @@ _names = exports(
                 "Refused",
                 "Timeout",
                 "UnknownTarget",
+                "UnreadableReply",
             ),
             ".library.errors",
         ),
@@ -78,6 +80,7 @@ __all__ = [
     "Sent",
     "Timeout",
     "UnknownTarget",
+    "UnreadableReply",
     "Value",
     "Written",
     "aio",

@@ -371,3 +371,55 @@ def test_an_exception_in_the_script_s_confirm_comes_back_unchanged_and_no_put_go
             rc.put("I", 10, 5)
         assert rc.get("I", 10) == 10  # the connection goes on
     assert server.lines == [b"GET:RC8:10:I:", b"GET:RC8:10:I:"]
+
+
+def test_a_reply_that_cannot_be_read_is_said_so_not_a_lost_connection(recording) -> None:
+    server = recording(fixed_reply(b"garbage\x1b[31m\r"))
+    with rac.connect(HOST, port=server.port) as rc, pytest.raises(rac.RacError) as caught:
+        rc.get("I", 10)
+    unreadable = caught.value
+    assert isinstance(unreadable, rac.UnreadableReply)
+    assert not isinstance(unreadable, rac.ConnectionFailed | ConnectionError)
+    said = str(unreadable)
+    assert said.startswith("the controller's reply could not be read: bad reply 'garbage\\x1b[31m'")
+    assert "\x1b" not in said and said.endswith("(request GET:RC8:10:I:)")
+    assert unreadable.raw == b"garbage\x1b[31m"
+    assert server.lines == [b"GET:RC8:10:I:"]
+
+
+@pytest.mark.parametrize(
+    ("reply", "name", "says"),
+    [
+        (b"1\r", None, "controller answered 0x00000001: not S_OK, the one success RAC defines"),
+        (b"-2147000000\r", None, "controller answered 0x80076140: unknown error"),
+        (b"-2147024809\r", "E_INVALIDARG", "E_INVALIDARG 0x80070057: invalid argument"),
+    ],
+)
+def test_any_answer_but_s_ok_is_a_controller_error_said_as_what_it_is(
+    recording, reply: bytes, name: str | None, says: str
+) -> None:
+    server = recording(fixed_reply(reply))
+    with rac.connect(HOST, port=server.port) as rc, pytest.raises(rac.ControllerError) as error:
+        rc.get("I", 10)
+    assert error.value.name == name and says in str(error.value)
+    assert ": success" not in str(error.value)
+
+
+def test_a_read_before_a_put_that_times_out_is_named_as_the_request_that_did(
+    recording,
+) -> None:
+    server = recording(fixed_reply(None))
+    with (
+        rac.connect(HOST, port=server.port, timeout=0.5) as rc,
+        pytest.raises(rac.Timeout) as timed_out,
+    ):
+        rc.put("I", 10, 5)
+    said = str(timed_out.value)
+    assert said.startswith("PUT I10 not sent: reading its value first failed: no reply")
+    assert said.endswith("(request GET:RC8:10:I:)") and "request PUT" not in said
+    assert server.lines == [b"GET:RC8:10:I:"]
+
+
+def test_a_port_for_the_built_in_simulator_is_refused_not_ignored() -> None:
+    with pytest.raises(rac.Refused, match="port=5007 does not apply to 'sim'"):
+        rac.connect("sim", port=5007)

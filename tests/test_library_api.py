@@ -30,6 +30,7 @@ PUBLIC = {
     "Sent",
     "Timeout",
     "UnknownTarget",
+    "UnreadableReply",
     "Value",
     "Written",
     "aio",
@@ -93,6 +94,8 @@ def main() -> None:
         print(mismatch.written.read_back)
     except rac.Timeout as timeout:
         print(timeout)
+    except rac.UnreadableReply as unreadable:
+        print(unreadable.raw)
     except rac.RacError as other:
         print(other)
 
@@ -135,6 +138,7 @@ def test_the_public_names_are_exactly_these() -> None:
         "ConnectionFailed",
         "Timeout",
         "UnknownTarget",
+        "UnreadableReply",
     ):
         assert issubclass(getattr(rac, error), rac.RacError), error
     with pytest.raises(AttributeError, match="no attribute 'conect'"):

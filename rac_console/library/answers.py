@@ -12,7 +12,7 @@ from ..commands.language import Exchange, Get, VarRef
 from ..commands.outcome import ExitStatus, Outcome
 from ..engine.exchange.writes import plain_value as said_value
 from ..protocol import Variant
-from ..session import ConnectFailed, NotSent, RequestTimeout
+from ..session import BadReply, ConnectFailed, NotSent, RequestTimeout
 from .errors import (
     ConnectionFailed,
     ControllerError,
@@ -20,6 +20,7 @@ from .errors import (
     ReadBackMismatch,
     Refused,
     Timeout,
+    UnreadableReply,
 )
 from .results import Sent, Value, Written
 from .target import Endpoint, connection_failed
@@ -108,11 +109,25 @@ def failure(
         said = error if "outcome unknown" in error else f"{error}: {UNKNOWN}"
         what = f"PUT {written.variable}" if written is not None else f"'{outcome.request}'"
         return OutcomeUnknown(f"{what}: {said}{_held(outcome)}", written)
+    asked = _asked(outcome, writes)
+    if isinstance(failed, BadReply):
+        return UnreadableReply(
+            f"the controller's reply could not be read: {error} (request {asked})", failed.raw
+        )
     if isinstance(failed, RequestTimeout):
-        return Timeout(f"{error} (request {outcome.request})")
+        return Timeout(f"{error} (request {asked})")
     if isinstance(failed, ConnectFailed):
         return connection_failed(failed, at, message=error)
-    return ConnectionFailed(f"{error} (request {outcome.request})")
+    return ConnectionFailed(f"{error} (request {asked})")
+
+
+def _asked(outcome: Outcome, writes: bool) -> str | None:
+    """The request a failure that is no unknown write came on: for a write, the read of
+    its variable before it (or after the confirm question), the write never sent; else
+    the outcome's own."""
+    if writes and outcome.var is not None:
+        return Get(outcome.var).wire
+    return outcome.request
 
 
 def _went_out(outcome: Outcome) -> bool:

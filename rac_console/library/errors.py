@@ -32,7 +32,10 @@ class UnknownTarget(RacError, KeyError):
 
 class ControllerError(RacError):
     """The controller answered an error HRESULT: ``code`` (an int) and ``name``
-    (``E_INVALIDARG``). For a write, ``written`` holds what the read-back found."""
+    (``E_INVALIDARG``; None for a code outside RAC's table, such as a user-defined
+    error). Any code but S_OK is one, as in the console: RAC names no other success, so
+    a code with COM's success bit (S_FALSE, 1) is one too, and its message says so. For
+    a write, ``written`` holds what the read-back found."""
 
     def __init__(self, message: str, code: int, written: Written | None = None) -> None:
         super().__init__(message)
@@ -62,9 +65,20 @@ class ReadBackMismatch(RacError):
         self.written = written
 
 
+class UnreadableReply(RacError):
+    """The controller's reply to a read could not be read (not RAC, or not an answer to
+    that request): nothing was written. The message quotes the reply, escaped; ``raw``
+    is it as it came (None when it was too long to keep). A write that got such a reply
+    is :class:`OutcomeUnknown`."""
+
+    def __init__(self, message: str, raw: bytes | None = None) -> None:
+        super().__init__(message)
+        self.raw = raw
+
+
 class ConnectionFailed(RacError, ConnectionError):
-    """No connection could be opened, or it ended (or carried a reply that cannot be read)
-    before a read's answer: nothing was written. ``hint`` is what ``rac-console check``
+    """No connection could be opened, or it ended before a read's answer: nothing was
+    written. ``hint`` is what ``rac-console check``
     says to check for such a failure; ``problem`` names it in a word (``refused``,
     ``timed out``, ...; None when the connection ended after it was opened)."""
 

@@ -65,6 +65,11 @@ def resolve(target: str, port: int | None, read_only: bool, config: Config) -> T
     where = config_named(config)
     try:
         if target == SIMULATOR:
+            if port is not None:
+                raise InputError(
+                    f"port={port} does not apply to 'sim': the built-in simulator listens "
+                    "on a free port of its own (rc.port says which); nothing was started"
+                )
             host, given = None, port
         else:
             host, given = host_and_port(target, None, LIBRARY)

@@ -70,6 +70,11 @@ def succeeded(code: int) -> bool:
     return not code & 0x80000000
 
 
+#: Said of a code with COM's success bit but not S_OK (S_FALSE is 1): RAC's table names
+#: S_OK alone as success, so every front end takes such an answer as a failure.
+NOT_S_OK = "not S_OK, the one success RAC defines (taken as a failure)"
+
+
 def describe_hresult(code: int) -> str:
     """One line for people: ``E_INVALIDARG 0x80070057: invalid argument``."""
     info = HRESULTS.get(code)
@@ -77,4 +82,4 @@ def describe_hresult(code: int) -> str:
         return f"{info.name} 0x{code:08X}: {info.description}"
     if code in USER_RANGE:
         return f"0x{code:08X}: user-defined error"
-    return f"0x{code:08X}: {'success' if succeeded(code) else 'unknown error'}"
+    return f"0x{code:08X}: {NOT_S_OK if succeeded(code) else 'unknown error'}"
