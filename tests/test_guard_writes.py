@@ -21,6 +21,7 @@ from collections.abc import Callable, Iterator
 
 import pytest
 
+import rac_console as rac
 from rac_console.commands.outcome import Outcome
 from rac_console.engine import Engine
 from rac_console.present.render import error_text
@@ -29,7 +30,7 @@ from rac_console.protocol.request import raw_request
 from rac_console.session import Frame, NotSent, Session
 from rac_console.sim.thread import SimulatorThread
 from tests.support.drivers import Front, cli
-from tests.support.servers import Recording, RecordingServer, reset_first
+from tests.support.servers import Memory, Recording, RecordingServer, fixed_reply, reset_first
 
 DEADLINE = 20.0
 
@@ -314,3 +315,52 @@ def test_a_get_sent_again_is_marked_in_the_log(
         assert front.sent().count(b"GET:RC8:2:I:\r") == 2
     finally:
         engine.stop()
+
+
+# ------------------------------------------------------------------ unanswered writes
+
+
+def _garbles_puts(line: bytes) -> bytes | None:
+    """A controller that answers its GETs and answers a PUT with a line that is no RAC."""
+    return b"garbage\r" if line.startswith(b"PUT") else Memory()(line)  # type: ignore[return-value]
+
+
+@pytest.mark.parametrize(
+    ("reply", "args", "says"),
+    [
+        (_garbles_puts, ("put", "I", "10", "5"), "outcome unknown, the PUT may have been applied"),
+        (
+            fixed_reply(None),
+            ("--timeout", "0.5", "send", "HELLO"),
+            "outcome unknown, the line may have written or may still arrive",
+        ),
+    ],
+    ids=["a PUT answered with no RAC", "a line not a GET unanswered"],
+)
+def test_a_write_that_went_out_unanswered_is_said_unknown_by_the_console_and_the_library(
+    env: dict[str, str],
+    recording: Recording,
+    reply: Callable[[bytes], bytes | None],
+    args: tuple[str, ...],
+    says: str,
+) -> None:
+    """Whatever cut the answer off, a write that went out is said unknown, once, by the
+    command line and by a script (whose ``OutcomeUnknown`` reads the outcome's
+    ``write_unknown``): never a lost connection or an unreadable reply."""
+    server = recording(reply)
+    result = cli(env, *server.args, *args)
+    assert result.returncode == 3, result.stderr
+    assert result.stderr.count("outcome unknown") == 1 and says in result.stderr
+    writes = [line for line in server.lines if not line.startswith(b"GET")]
+    assert len(writes) == 1  # never sent again
+    server.lines.clear()
+    with (
+        rac.connect(f"127.0.0.1:{server.port}", timeout=0.5) as rc,
+        pytest.raises(rac.OutcomeUnknown) as unknown,
+    ):
+        if args[-1] == "HELLO":
+            rc.send("HELLO")
+        else:
+            rc.put("I", 10, 5)
+    assert str(unknown.value).count("outcome unknown") == 1 and says in str(unknown.value)
+    assert [line for line in server.lines if not line.startswith(b"GET")] == writes

@@ -72,6 +72,12 @@ class Outcome:
     read_back: Variant | None = None
     verified: bool | None = None
     read_back_error: str | None = None
+    #: The request may write (any line but a well-formed GET), it went out, and no
+    #: trustworthy answer came (a timeout, the connection cut, a reply that cannot be
+    #: read): it may have been applied, or may still arrive, and is never sent again.
+    #: Set once, where the exchange failed (engine/exchange/execute.py), and its error
+    #: says so; every front end reads it here (the library's ``OutcomeUnknown``).
+    write_unknown: bool = False
 
     @property
     def ok(self) -> bool:

@@ -26,9 +26,6 @@ from .results import Sent, Value, Written
 from .target import Endpoint, connection_failed
 from .values import plain_value, python_value
 
-#: Said of a write cut off on its way, where the console's words do not say it already.
-UNKNOWN = "outcome unknown, the PUT may have been applied"
-
 
 def value_of(outcome: Outcome, var: VarRef, at: Endpoint) -> Value:
     """A GET's value; the exception for anything but S_OK with one."""
@@ -105,10 +102,9 @@ def failure(
     if response is not None:
         text = error if written is None else f"PUT {written.variable}: {error}{_held(outcome)}"
         return ControllerError(text, response.code, written)
-    if writes and _went_out(outcome):
-        said = error if "outcome unknown" in error else f"{error}: {UNKNOWN}"
+    if outcome.write_unknown:  # its error says so, as the console's does
         what = f"PUT {written.variable}" if written is not None else f"'{outcome.request}'"
-        return OutcomeUnknown(f"{what}: {said}{_held(outcome)}", written)
+        return OutcomeUnknown(f"{what}: {error}{_held(outcome)}", written)
     asked = _asked(outcome, writes)
     if isinstance(failed, BadReply):
         return UnreadableReply(
@@ -128,22 +124,6 @@ def _asked(outcome: Outcome, writes: bool) -> str | None:
     if writes and outcome.var is not None:
         return Get(outcome.var).wire
     return outcome.request
-
-
-def _went_out(outcome: Outcome) -> bool:
-    """Whether the write itself went out and got no trustworthy answer. A read made before
-    a PUT fails with the PUT never sent, and says so: its outcome carries neither the
-    value written nor a read-back, which only the PUT's own does (or a raw line that
-    names no variable, which is sent alone)."""
-    failed = outcome.failure
-    if failed is None or isinstance(failed, ConnectFailed | NotSent):
-        return False
-    return (
-        outcome.var is None
-        or outcome.written is not None
-        or outcome.read_back is not None
-        or outcome.read_back_error is not None
-    )
 
 
 def _held(outcome: Outcome) -> str:

@@ -22,7 +22,6 @@ from ...protocol.text import terminal_safe
 from ...session import (
     BadReply,
     ConnectFailed,
-    Disconnected,
     NotSent,
     Reply,
     RequestTimeout,
@@ -99,14 +98,13 @@ def execute(
             reply = session.exchange(request, cancelled=cancelled)
     except TransportError as exc:
         reply = exc
-    return outcome_of(command, reply, line, cancelled, request)
+    return outcome_of(command, reply, line, request)
 
 
 def outcome_of(
     command: Exchange,
     reply: Reply | TransportError,
     line: str | None = None,
-    cancelled: Callable[[], bool] = never,
     request: Request | None = None,
 ) -> Outcome:
     """What came of sending ``command`` (its ``request``, when the caller has it): its
@@ -141,7 +139,7 @@ def outcome_of(
         )
         return outcome
     assert isinstance(reply, TransportError)
-    return _failed(request, var, reply, line, cancelled)
+    return _failed(request, var, reply, line)
 
 
 def _failed(
@@ -149,7 +147,6 @@ def _failed(
     var: VarRef | None,
     failure: TransportError,
     line: str | None,
-    cancelled: Callable[[], bool],
 ) -> Outcome:
     """The Outcome of an exchange that got no trustworthy reply."""
     wire = request.text
@@ -158,10 +155,10 @@ def _failed(
             wire, ExitStatus.REFUSED, var, error=str(failure), input_line=line, failure=failure
         )
     message = str(failure)
-    if isinstance(failure, RequestTimeout) and request.write:
-        message += ": outcome unknown, the PUT may have been applied or may still arrive"
-    elif isinstance(failure, Disconnected) and request.write and cancelled():
-        message += ": outcome unknown, the PUT may have been applied"  # cut on its way
+    # What may write went out (a connection that could not be opened sent nothing).
+    unknown = not isinstance(failure, ConnectFailed) and not request.read_only_safe
+    if unknown:
+        message += f": {_unknown(request, failure)}"
     raw = failure.raw if isinstance(failure, BadReply) else None
     return Outcome(
         wire,
@@ -171,7 +168,15 @@ def _failed(
         error=message,
         input_line=line,
         failure=failure,
+        write_unknown=unknown,
     )
+
+
+def _unknown(request: Request, failure: TransportError) -> str:
+    """An unanswered write said as unknown: a timed-out one may still arrive."""
+    what = "the PUT may have been applied" if request.write else "the line may have written"
+    later = " or may still arrive" if isinstance(failure, RequestTimeout) else ""
+    return f"outcome unknown, {what}{later}"
 
 
 def measure_latency(

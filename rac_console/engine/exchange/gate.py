@@ -163,4 +163,4 @@ class WriteGate:
             reply: Reply | TransportError = session.exchange(request, cancelled=self.cancelled)
         except TransportError as exc:
             reply = exc
-        return outcome_of(command, reply, line, self.cancelled, request)
+        return outcome_of(command, reply, line, request)
