@@ -19,12 +19,10 @@ from ..protocol import InputError
 from ..protocol.text import terminal_safe
 
 if TYPE_CHECKING:
-    from ..commands.target import Target
+    from ..engine.setup.targets import Members
 
 #: Simulators of ``--cell demo``.
 DEMO_TARGETS = 2
-
-Members = list[tuple[str, "Target"]]
 
 
 def settle_cell(args: argparse.Namespace) -> bool | None:
@@ -118,21 +116,10 @@ def _members(args: argparse.Namespace) -> Members | None:
         raise InputError(f"--cell {cell} and -H {args.host}: give one (a cell names its targets)")
     if args.port is not None:
         raise InputError("-p applies to one target; in a cell each profile has its port")
-    from ..commands.target import cell_targets
     from ..engine.setup.config import load_config
-    from ..session.endpoints import addresses
+    from ..engine.setup.targets import cell_of
 
-    config = load_config()
-    where = str(config.path) if config.found else f"{config.path} (no such file)"
-    found = cell_targets(
-        hosts,
-        cell,
-        profiles=config.profiles,
-        cells=config.cells,
-        addresses=addresses,
-        read_only_flag=bool(args.read_only),
-        config_where=where,
-    )
+    found = cell_of(hosts, cell, load_config(), read_only_flag=bool(args.read_only))
     args.cell_watch = ()
     if found.demo:
         return _demo(args)
@@ -145,7 +132,7 @@ def _members(args: argparse.Namespace) -> Members | None:
 def _demo(args: argparse.Namespace) -> Members:
     """Simulators playing a handshake, said to be simulators (on stderr; the console
     under its banner), and the handshake watched from the start."""
-    from ..commands.target import Target
+    from ..engine.setup.targets import demo_members
     from ..sim.cell import DEMO_WATCH, SimulatedCellThread
 
     simulated = SimulatedCellThread(DEMO_TARGETS).start()
@@ -158,16 +145,4 @@ def _demo(args: argparse.Namespace) -> Members:
             file=sys.stderr,
         )
     args.cell_watch = DEMO_WATCH
-    return [
-        (
-            name,
-            Target(
-                host,
-                port,
-                read_only=bool(args.read_only),
-                read_only_flag=bool(args.read_only),
-                simulated=True,  # the console says so under its banner
-            ),
-        )
-        for name, host, port in simulated.cell.addresses
-    ]
+    return demo_members(simulated, bool(args.read_only))

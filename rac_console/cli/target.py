@@ -15,8 +15,8 @@ from contextlib import ExitStack, contextmanager
 from typing import TYPE_CHECKING
 
 from ..commands.target import Target, host_and_port
-from ..commands.target import resolve_target as resolve_target_of
 from ..engine.setup.config import load_config
+from ..engine.setup.targets import one_target, session_to
 from ..protocol.errors import InputError
 from ..protocol.text import terminal_safe
 
@@ -29,24 +29,8 @@ def resolve_target(args: argparse.Namespace) -> Target:
     console's ``connect`` uses too; InputError (one line, naming the file) when the
     config file is broken: a broken file must not silently drop a profile's guard."""
     config = load_config()
-    where = str(config.path) if config.found else f"{config.path} (no such file)"
     host, port = host_and_port(args.host, args.port)
-    return resolve_target_of(
-        host,
-        port,
-        profiles=config.profiles,
-        read_only_flag=bool(args.read_only),
-        resolve=_addresses,
-        config_where=where,
-    )
-
-
-def _addresses(host: str) -> frozenset[str] | None:
-    """:func:`~rac_console.session.endpoints.addresses`, imported when a host is named
-    (the package of sessions is not needed to start the console)."""
-    from ..session.endpoints import addresses
-
-    return addresses(host)
+    return one_target(host, port, config, read_only_flag=bool(args.read_only))
 
 
 def settle_target(args: argparse.Namespace) -> bool:
@@ -79,25 +63,16 @@ def open_session(
     Raises InputError when the config file is broken (only when not resolved before)."""
     from ..engine.files.recorder import FrameRecorder
     from ..engine.files.transcript import FrameTranscript
-    from ..session import Session
 
     if target is None:
         target = getattr(args, "target", None) or resolve_target(args)
     with ExitStack() as stack:
-        if target.host:
-            session = Session(
-                target.host,
-                target.port,
-                timeout=args.timeout,
-                unreachable_hint=target.unreachable_hint,
-            )
-        else:
+        session, sim = session_to(target, args.timeout)
+        if sim is not None:
             from ..engine import SIMULATOR_NOTICE
-            from ..sim.thread import SimulatorThread
 
-            sim = stack.enter_context(SimulatorThread())
+            stack.callback(sim.stop)
             print(f"rac-console: {SIMULATOR_NOTICE} (at {sim.host}:{sim.port})", file=sys.stderr)
-            session = Session(sim.host, sim.port, timeout=args.timeout)
         if args.record:
             recorder = FrameRecorder(args.record, on_record_failure)
             stack.callback(recorder.close)

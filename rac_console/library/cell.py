@@ -19,16 +19,16 @@ from ..commands.advice import LIBRARY
 from ..commands.language import Command, Get, Put, Raw, Use
 from ..commands.names import find_name
 from ..commands.outcome import Outcome
-from ..commands.target import Target, cell_targets
 from ..engine.cell.routes import Done, Line, Routes
 from ..engine.published.feedback import Message
+from ..engine.setup.targets import Members, cell_of, demo_members
 from ..engine.setup.where import Where
 from ..protocol import InputError
 from ..session import DEFAULT_TIMEOUT
 from .connection import Confirm, Connection
 from .errors import Refused, UnknownTarget
 from .results import Sent, Value, Written
-from .target import ConfigPath, check_timeout, config_named, loaded, open_session
+from .target import ConfigPath, check_timeout, loaded, open_session
 
 if TYPE_CHECKING:
     from ..engine.commands.registry import Registry
@@ -58,18 +58,12 @@ def cell(
         if not hosts or not all(isinstance(name, str) for name in hosts):
             raise Refused(f"a cell is a [cell.NAME]'s name or a list of targets, not {targets!r}")
     settings = loaded(config)
-    where = config_named(settings)
-    from ..session.endpoints import addresses
-
     try:
-        found = cell_targets(
+        found = cell_of(
             hosts,
             targets if isinstance(targets, str) else None,
-            profiles=settings.profiles,
-            cells=settings.cells,
-            addresses=addresses,
+            settings,
             read_only_flag=bool(read_only),
-            config_where=where,
             advice=LIBRARY,
         )
     except InputError as exc:
@@ -92,16 +86,12 @@ def cell(
     return Cell(connections, simulated)
 
 
-def _demo(read_only: bool) -> tuple[SimulatedCellThread, list[tuple[str, Target]]]:
+def _demo(read_only: bool) -> tuple[SimulatedCellThread, Members]:
     """The console's demo cell: simulators playing a handshake, in this process."""
     from ..sim.cell import SimulatedCellThread
 
     simulated = SimulatedCellThread().start()
-    members = [
-        (name, Target(host, port, read_only=read_only, read_only_flag=read_only, simulated=True))
-        for name, host, port in simulated.cell.addresses
-    ]
-    return simulated, members
+    return simulated, demo_members(simulated, read_only)
 
 
 class _OnConnections:

@@ -14,8 +14,8 @@ from typing import TYPE_CHECKING, NamedTuple
 from ..commands.advice import LIBRARY
 from ..commands.check import CheckReport, Problem, StepName, StepResult, hint
 from ..commands.target import Target, host_and_port
-from ..commands.target import resolve_target as resolve_target_of
 from ..engine.setup.config import Config, load_config
+from ..engine.setup.targets import one_target, session_to
 from ..protocol import InputError
 from ..protocol.text import terminal_safe
 from ..session import ConnectFailed, Disconnected, Session
@@ -48,11 +48,6 @@ def loaded(config: ConfigPath) -> Config:
         raise Refused(str(exc)) from None
 
 
-def config_named(config: Config) -> str:
-    """The config file as a message names it (``... (no such file)`` when there is none)."""
-    return str(config.path) if config.found else f"{config.path} (no such file)"
-
-
 def resolve(target: str, port: int | None, read_only: bool, config: Config) -> Target:
     """The target ``target`` names, with its profile's rules; Refused for a name or a
     port that cannot be one."""
@@ -62,7 +57,6 @@ def resolve(target: str, port: int | None, read_only: bool, config: Config) -> T
         raise Refused(f"port is a number from 1 to 65535, got {port!r}")
     if port is not None and not 0 < port < 65536:
         raise Refused(f"port must be a number from 1 to 65535, got {port}")
-    where = config_named(config)
     try:
         if target == SIMULATOR:
             if port is not None:
@@ -78,25 +72,12 @@ def resolve(target: str, port: int | None, read_only: bool, config: Config) -> T
                     f"{terminal_safe(target)} and port={port} name two ports: give the port once"
                 )
             given = port if given is None else given
-        resolved = resolve_target_of(
-            host,
-            given,
-            profiles=config.profiles,
-            read_only_flag=read_only,
-            resolve=_addresses,
-            config_where=where,
-        )
+        resolved = one_target(host, given, config, read_only_flag=read_only)
     except InputError as exc:
         raise Refused(str(exc)) from None
     for notice in resolved.notices:
         log.warning("%s", notice)
     return resolved
-
-
-def _addresses(host: str) -> frozenset[str] | None:
-    from ..session.endpoints import addresses
-
-    return addresses(host)
 
 
 def check_timeout(timeout: float) -> float:
@@ -114,16 +95,7 @@ def check_timeout(timeout: float) -> float:
 def open_session(target: Target, timeout: float) -> tuple[Session, SimulatorThread | None]:
     """A session to ``target``, connected (ConnectionFailed with ``check``'s words when
     it cannot be), or to the built-in simulator started here when it names no host."""
-    simulator = None
-    if target.host is None:
-        from ..sim.thread import SimulatorThread
-
-        simulator = SimulatorThread().start()
-        session = Session(simulator.host, simulator.port, timeout=timeout)
-    else:
-        session = Session(
-            target.host, target.port, timeout=timeout, unreachable_hint=target.unreachable_hint
-        )
+    session, simulator = session_to(target, timeout)
     try:
         session.connect()
     except (ConnectFailed, Disconnected) as exc:

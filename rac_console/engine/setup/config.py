@@ -62,6 +62,11 @@ class Config:
     where: Where = Where.CONSOLE
     withheld: Withheld = ()
 
+    @property
+    def named(self) -> str:
+        """The file as a message names it: ``PATH``, or ``PATH (no such file)``."""
+        return str(self.path) if self.found else f"{self.path} (no such file)"
+
     def credentials(self) -> Credentials:
         """Who the console is to an MQTT broker: the environment's
         ``RAC_MQTT_USERNAME``, ``RAC_MQTT_PASSWORD`` and ``RAC_MQTT_CA_FILE`` where set,
