@@ -216,23 +216,25 @@ def test_the_soak_in_a_real_terminal_keeps_drawing_with_short_timers_lost(tmp_pa
     assert seen["said_engine_stopped"] == 0, seen
 
 
+def live(kind: type) -> int:
+    """How many objects of ``kind`` are alive (what a leak keeps counts here)."""
+    gc.collect()
+    return sum(isinstance(thing, kind) for thing in gc.get_objects())
+
+
 async def test_the_footers_old_keys_go_with_each_line_run(tmp_path: Path) -> None:
     """Each line run changes the keys shown (Esc cancels), and the footer is composed
     again: Textual kept every old key, data-bound to the footer's ``compact``, until that
     changed, which it never does: about 430 KB a line, for as long as the console ran."""
     from textual.widgets._footer import FooterKey
 
-    def live_keys() -> int:
-        gc.collect()
-        return sum(isinstance(thing, FooterKey) for thing in gc.get_objects())
-
     async def steps(pilot: Pilot[Any], app: RacConsoleApp) -> None:
         await connected(pilot, app)
         await answered(pilot, app, 50)
-        before = live_keys()
+        before = live(FooterKey)
         for n in range(30):
             await answered(pilot, app, 51 + n % 40)
-        assert live_keys() <= 2 * before, (before, live_keys())
+        assert live(FooterKey) <= 2 * before, (before, live(FooterKey))
 
     await run_console(tmp_path, steps)
 
@@ -243,16 +245,12 @@ async def test_the_style_caches_of_the_footers_old_keys_go_with_them(tmp_path: P
     run, kept theirs, about 4 KB each, 4 MB once full."""
     from textual._styles_cache import StylesCache
 
-    def live_caches() -> int:
-        gc.collect()
-        return sum(isinstance(thing, StylesCache) for thing in gc.get_objects())
-
     async def steps(pilot: Pilot[Any], app: RacConsoleApp) -> None:
         await connected(pilot, app)
         await answered(pilot, app, 50)
-        before = live_caches()
+        before = live(StylesCache)
         for n in range(30):
             await answered(pilot, app, 51 + n % 40)
-        assert live_caches() < before + 30, (before, live_caches())  # not one a line
+        assert live(StylesCache) < before + 30, (before, live(StylesCache))  # not one a line
 
     await run_console(tmp_path, steps)

@@ -16,8 +16,9 @@ import pytest
 from rac_console.engine import Cycle
 from rac_console.protocol import Variant
 from rac_console.protocol.vartypes import VT, VT_ARRAY
+from rac_console.tui import panes as panes_module
 from rac_console.tui.app import RacConsoleApp
-from tests.support.drivers import make_app, stage, until, watch_then_pause
+from tests.support.drivers import HeldClock, make_app, stage, until, watch_then_pause
 
 pytestmark = pytest.mark.slow
 
@@ -58,42 +59,51 @@ async def staged(pilot) -> None:
     )
 
 
-def hold_ages(app: RacConsoleApp) -> None:
-    """The ages as stage() set them, just before the screenshot (the waits moved them)."""
+def hold_ages(app: RacConsoleApp, monkeypatch: pytest.MonkeyPatch) -> None:
+    """The ages as stage() set them, just before the screenshot (the waits moved them),
+    and held there: the table's clock stands still until the screenshot, which a busy
+    machine may take seconds to come to (the clock's tick would draw "6s")."""
     now = time.monotonic()
     for var, view in list(app.main_screen.members.rows.items()):
         app.main_screen.members.rows[var] = replace(view, changed_at=now - 5.001)
+    monkeypatch.setattr(panes_module, "time", HeldClock(now))
     app.main_screen.refresh_table()
 
 
 @pytest.mark.usefixtures("utc")
-def test_table_focused_with_a_cursor_and_trends(snap_compare, tmp_path: Path) -> None:
+def test_table_focused_with_a_cursor_and_trends(
+    snap_compare, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
     app = make_app(tmp_path)
 
     async def run_before(pilot) -> None:
         await staged(pilot)
         await pilot.press("f6", "down", "s")  # the cursor on IO128, sorted by name
-        hold_ages(app)
+        hold_ages(app, monkeypatch)
         await pilot.pause(0.1)
 
     assert snap_compare(app, terminal_size=(120, 34), run_before=run_before)
 
 
 @pytest.mark.usefixtures("utc")
-def test_trend_view_small_terminal(snap_compare, tmp_path: Path) -> None:
+def test_trend_view_small_terminal(
+    snap_compare, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
     app = make_app(tmp_path)
 
     async def run_before(pilot) -> None:
         await staged(pilot)
         await pilot.press("f6", "t", "f", "f")  # P1's trend, its Z field
-        hold_ages(app)
+        hold_ages(app, monkeypatch)
         await pilot.pause(0.1)
 
     assert snap_compare(app, terminal_size=(80, 24), run_before=run_before)
 
 
 @pytest.mark.usefixtures("utc")
-def test_row_detail_small_terminal(snap_compare, tmp_path: Path) -> None:
+def test_row_detail_small_terminal(
+    snap_compare, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
     """``d`` on P1 at 80x24: the row the table cuts after Y, a field a line."""
     app = make_app(tmp_path)
 
@@ -103,7 +113,7 @@ def test_row_detail_small_terminal(snap_compare, tmp_path: Path) -> None:
         await until(
             pilot, lambda: "Fig" in app.main_screen.panes.row_detail.shown_text, "the detail"
         )
-        hold_ages(app)
+        hold_ages(app, monkeypatch)
         await pilot.pause()  # the held ages drawn (messages processed, no time waited)
 
     assert snap_compare(app, terminal_size=(80, 24), run_before=run_before)

@@ -5,10 +5,13 @@ each target, the help's keys in the order a user looks for them."""
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 import pytest
+from textual import events
 from textual.command import CommandPalette
 from textual.pilot import Pilot
+from textual.widgets import DataTable
 
 from rac_console.commands.language import VarRef
 from rac_console.commands.policy import TargetProfile, WritePolicy, Writes, parse_allow
@@ -20,6 +23,7 @@ from rac_console.protocol import Variant, kind_of
 from rac_console.tui.app import RacConsoleApp
 from rac_console.tui.help_screen import console_key_groups
 from rac_console.tui.palette_commands import profile_help
+from rac_console.tui.watch_table import REVEAL_TRIES
 from tests.support.drivers import make_app, type_line, until
 
 P = kind_of("P")
@@ -247,3 +251,46 @@ def palette_text(app: RacConsoleApp) -> str:
 
     options = app.screen.query_one(CommandList).options
     return "\n".join(str(option.prompt) for option in options)
+
+
+@pytest.mark.slow
+async def test_rows_are_scrolled_to_however_long_the_table_takes_to_measure_them(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The table measures rows added when its queue runs dry; under load that can be
+    after many screen refreshes. The new rows are still brought into view then."""
+    app = make_app(tmp_path)
+    async with app.run_test(size=(80, 24)) as pilot:
+        table = app.main_screen.panes.table
+        await watch_ok(pilot, "watch J 1 T 1", 2)
+        held = True
+        measure = DataTable._on_idle
+
+        async def busy(self: DataTable[Any], event: Any) -> None:  # no dry queue meanwhile
+            if not held:
+                await measure(self, event)
+
+        monkeypatch.setattr(DataTable, "_on_idle", busy)
+        draws = 0
+        draw = table.render_lines
+
+        def counted(crop: Any) -> Any:
+            nonlocal draws
+            draws += 1
+            return draw(crop)
+
+        monkeypatch.setattr(table, "render_lines", counted)
+        await type_line(pilot, "watch IO 128-131")
+        await until(pilot, lambda: table.row_count == 6, "the new rows")
+        for _ in range(3 * REVEAL_TRIES):  # screens drawn before the rows are measured
+            table.refresh()
+            await until(pilot, lambda seen=draws: draws > seen, "the table drawn again")
+        held = False
+        table.post_message(events.Idle())
+        room = table.scrollable_content_region.height - table.header_height
+        await until(
+            pilot,
+            lambda: round(table.scroll_y) <= 5 < round(table.scroll_y) + room,
+            "the new rows in view",
+            timeout=5,
+        )

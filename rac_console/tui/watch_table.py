@@ -50,7 +50,9 @@ TARGET_COLUMN = ("target", "Target")
 #: The bottom border while values are cut: how to read a row whole.
 CUT_HINT = "values cut: F6, then d shows a row in full"
 CUT_FOCUSED = "values cut: d shows the row in full"
-#: Refreshes to wait at most for new rows to be measured before they are scrolled to.
+#: Measurings of the table to wait at most for new rows to count before they are
+#: scrolled to (the rows added are measured once the table's queue runs dry, which
+#: under load can be many screen refreshes later).
 REVEAL_TRIES = 5
 
 
@@ -173,6 +175,8 @@ class WatchTable(DataTable[object]):
         self._now = 0.0  # the clock of the last refresh, for a re-filter between two
         #: Rows out of view not brought up to date by the last refreshes (see refresh_rows).
         self._stale: set[str] = set()
+        #: Rows to bring into view once the table has measured them (first, last, tries).
+        self._reveal: tuple[int, int, int] | None = None
 
     def on_mount(self) -> None:
         for key, label in self.columns_shown:
@@ -264,6 +268,8 @@ class WatchTable(DataTable[object]):
         second took most of the UI's time, for a dozen rows seen; built all at once every
         half second, they made the keys typed then wait."""
         cell = bool(self.cell)
+        if removed:  # the rows waiting to be shown are counted in the old order
+            self._reveal = None
         for name, var in removed:
             key = table_key(name, var, cell)
             self._added.pop(key, None)
@@ -327,7 +333,8 @@ class WatchTable(DataTable[object]):
         """Bring rows just added into view (``watch I 0-99`` below the rows there): all
         of them when they fit, else the first; the least scroll that does it. The
         cursor stays where it is. Until the table has measured its new rows it cannot
-        scroll that far: then again after the next refresh, a few times at most."""
+        scroll that far: then again each time it measures, a few times at most."""
+        self._reveal = None
         room = self.scrollable_content_region.height - (
             self.header_height if self.show_header else 0
         )
@@ -337,9 +344,20 @@ class WatchTable(DataTable[object]):
         # All of them with the least scroll when they fit; else the first at the top.
         target = min(max(top, last - room + 1), first) if last - first < room else first
         if target > self.max_scroll_y and tries > 0:
-            self.call_after_refresh(self.reveal_rows, first, last, tries - 1)
+            self._reveal = (first, last, tries - 1)
         elif target != top:
             self.scroll_to(y=target, animate=False, immediate=True)
+
+    def watch_virtual_size(self) -> None:
+        """The table measured its rows: rows waiting to be shown can be scrolled to
+        (after the refresh that lays the new size out)."""
+        if self._reveal is not None:
+            self.call_after_refresh(self._reveal_waiting)
+
+    def _reveal_waiting(self) -> None:
+        """The rows waiting to be shown then (newer rows may have taken their turn)."""
+        if self._reveal is not None:
+            self.reveal_rows(*self._reveal)
 
     def _apply(self, now: float | None = None, *, every_row: bool = True) -> None:
         """Show the rows that pass the filter, in order, keeping the cursor on its

@@ -158,12 +158,14 @@ class FrameTap:
 def console(
     tmp_path: Path, profile: TargetProfile | None = None, **options: object
 ) -> RacConsoleApp:
-    """The console on the built-in simulator, or on ``profile`` (as ``-H cell3``)."""
+    """The console on the built-in simulator, or on ``profile`` (as ``-H cell3``), with
+    the tests' request timeout (an in-process simulator answering late on a busy machine
+    is no timeout of the controller's)."""
     profiles = options.pop("profiles", {profile.name: profile} if profile else {})
     engine = Engine(
         profile.host if profile else None,
         profile.port if profile else 5006,
-        timeout=1.0,
+        timeout=REQUEST_TIMEOUT,
         interval=0.05,
         record=str(tmp_path / WIRE_RECORD),
         cycles=True,
