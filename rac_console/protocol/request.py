@@ -179,6 +179,16 @@ def _get_check(kind: VarKind) -> ReplyCheck:
     return check
 
 
+def get_check(kind: VarKind) -> ReplyCheck:
+    """The reply check of a GET of ``kind`` (the same object each time)."""
+    return _get_check(kind)
+
+
+def put_for_check() -> ReplyCheck:
+    """The reply check of a PUT."""
+    return _put_check
+
+
 def _put_check(response: Response) -> str | None:
     if response.variant is not None:
         return "a PUT reply carries no value"

@@ -86,6 +86,9 @@ class Frame:
     response: Response | None = None
     problem: str | None = None
     request: RequestLine | None = None
+    #: Who asked, when the connection is an agent's, shared by its clients: the client
+    #: named (``console 2``), for the frames of another client's request.
+    source: str | None = None
 
 
 class Reply(NamedTuple):

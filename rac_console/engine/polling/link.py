@@ -18,6 +18,9 @@ from ..published.status import described
 from .backoff import Backoff
 from .publisher import Publisher
 
+#: Makes the session to ``host:port`` with a request timeout (see :class:`Link`).
+SessionMaker = Callable[[str, int, float], Session]
+
 if TYPE_CHECKING:  # asyncio and the simulator load only when a target names no host
     from ...sim.thread import SimulatorThread
 
@@ -31,12 +34,16 @@ class Link:
         went_down: Callable[[], None],
         connecting: Callable[[], None],
         unlisted_simulator: bool = False,
+        sessions: SessionMaker | None = None,
     ) -> None:
         """``went_down``: the connection is gone (figures measured on it go);
         ``connecting``: a connect starts (the status says so at once);
         ``unlisted_simulator``: the built-in simulator listens on no port, reached over
-        a socket pair of this process (see :data:`..setup.where.UNLISTED_SIMULATOR`)."""
+        a socket pair of this process (see :data:`..setup.where.UNLISTED_SIMULATOR`);
+        ``sessions``: makes the session to a host in place of a connection of its own
+        (the agent's engines share one per controller)."""
         self._unlisted = unlisted_simulator
+        self._sessions = sessions
         self._publisher = publisher
         self.timeout = timeout
         self._went_down = went_down
@@ -76,12 +83,16 @@ class Link:
         self.opened += 1
         self.backoff, self.early_drop, self.lost = Backoff(), False, False
         self.ever_connected = False
-        session = Session(
-            host,
-            port,
-            timeout=self.timeout,
-            unreachable_hint=target.unreachable_hint,
-            opener=opener,
+        session = (
+            self._sessions(host, port, self.timeout)
+            if self._sessions is not None and opener is None
+            else Session(
+                host,
+                port,
+                timeout=self.timeout,
+                unreachable_hint=target.unreachable_hint,
+                opener=opener,
+            )
         )
         session.add_frame_observer(self._publisher.frame)
         session.add_state_observer(self._on_state)

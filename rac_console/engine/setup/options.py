@@ -7,7 +7,7 @@ options before it makes an engine.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
@@ -18,6 +18,7 @@ from .poll_bounds import UNBOUNDED, PollBounds
 
 if TYPE_CHECKING:
     from ...plant.metrics import MetricsBoard
+    from ...session import Session
 
 DEFAULT_INTERVAL = 0.5
 
@@ -46,6 +47,8 @@ class EngineOptions:
     plant_name: str | None = None
     #: How much polling may be asked of the controller (a served console's bounds).
     bounds: PollBounds = UNBOUNDED
+    #: Makes the session to a host (host, port, timeout): the agent's shared ones.
+    sessions: Callable[[str, int, float], Session] | None = None
 
 
 _TARGET_WORDS = ("read_only", "policy", "profile", "profiles")

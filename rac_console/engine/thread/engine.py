@@ -148,6 +148,7 @@ class Engine:
                 went_down=self._went_down,
                 connecting=self._connecting,
                 unlisted_simulator=self.where in UNLISTED_SIMULATOR,
+                sessions=options.sessions,
             )
             self._poller: Poller = Poller(
                 self._link,

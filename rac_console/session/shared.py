@@ -1,0 +1,254 @@
+"""One connection to a controller, shared by the agent's engines (one per client).
+
+Each engine gets a :class:`SharedSession`, a :class:`Session` to its code: requests go
+out one at a time in the order they asked (a queue of turns), on the one connection.
+A poll is answered without a request when the controller was read for it since the
+engine's previous answer to that poll: the union of what the clients watch is read
+once per cycle, each variable as often as the fastest client asks, and no engine ever
+gets an answer older than the one it had. A typed ``get`` always goes out.
+
+Every frame goes to the engine that asked, and to the others tagged with who asked
+(``Frame.source``), through their ``foreign`` sink (thread-safe: it runs on the asking
+engine's thread). A poll's frames go to another engine only while it shows its own.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import threading
+import time
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+
+from ..protocol import Request
+from .blocking import Session
+from .types import Frame, NotSent, Reply, State
+
+ForeignSink = Callable[[Frame], None]
+
+
+class Turns:
+    """A queue of turns: whoever asked first goes first (a lock is not fair)."""
+
+    def __init__(self) -> None:
+        self._changed = threading.Condition()
+        self._next = 0
+        self._serving = 0
+
+    @contextmanager
+    def turn(self) -> Iterator[None]:
+        with self._changed:
+            ticket = self._next
+            self._next += 1
+            while self._serving != ticket:
+                self._changed.wait()
+        try:
+            yield
+        finally:
+            with self._changed:
+                self._serving += 1
+                self._changed.notify_all()
+
+
+class SharedConnection:
+    """The agent's one session to one controller; :meth:`attach` gives an engine its
+    :class:`SharedSession`."""
+
+    def __init__(self, session: Session) -> None:
+        self.session = session
+        self.turns = Turns()
+        self._sessions: list[SharedSession] = []
+        self._lock = threading.Lock()
+        self._asking: SharedSession | None = None  # whose request is on the wire
+        self._asking_polls = False
+        #: The last good answer to each GET (its bytes): when it came, and the reply.
+        self._read: dict[bytes, tuple[float, Reply]] = {}
+        self.requests = 0  # requests sent
+        self.shared_polls = 0  # polls answered by a read made for another
+        session.add_frame_observer(self._frame)
+        session.add_state_observer(self._state)
+        session.add_resend_observer(self._resend)
+
+    @property
+    def host(self) -> str:
+        return self.session.host
+
+    @property
+    def port(self) -> int:
+        return self.session.port
+
+    def attach(self, source: str, foreign: ForeignSink, timeout: float) -> SharedSession:
+        """A session for the engine of client ``source``; ``foreign`` takes the frames
+        of the other clients' requests."""
+        shared = SharedSession(self, source, foreign, timeout)
+        with self._lock:
+            self._sessions.append(shared)
+        return shared
+
+    def detach(self, shared: SharedSession) -> None:
+        with self._lock:
+            if shared in self._sessions:
+                self._sessions.remove(shared)
+
+    @property
+    def clients(self) -> int:
+        with self._lock:
+            return len(self._sessions)
+
+    def close(self) -> None:
+        """The agent stops: the connection closes; a request waiting its turn fails."""
+        self.session.interrupt()
+        with self.turns.turn():
+            self.session.close()
+
+    # ------------------------------------------------------------ on the asker's thread
+
+    def exchange(
+        self,
+        asker: SharedSession,
+        request: Request,
+        poll: bool,
+        cancelled: Callable[[], bool] | None,
+        observe: bool,
+    ) -> Reply:
+        if poll:
+            asker.shows_polls = observe
+        key = request.data
+        with self.turns.turn():
+            if cancelled is not None and cancelled():
+                raise NotSent("cancelled before it was sent")
+            if poll:
+                read = self._read.get(key)
+                if read is not None and read[0] > asker.answered.get(key, -1.0):
+                    self.shared_polls += 1
+                    asker.answered[key] = read[0]
+                    return read[1]
+            with self._lock:
+                others = [s for s in self._sessions if s is not asker]
+            observed = observe or any(not poll or s.shows_polls for s in others)
+            self._asking, self._asking_polls = asker, poll
+            self.session.timeout = asker.timeout
+            try:
+                self.requests += 1
+                reply = self.session.exchange(
+                    request, poll=poll, cancelled=cancelled, observe=observed
+                )
+            finally:
+                self._asking = None
+            now = time.monotonic()
+            if request.read_only_safe:
+                self._read[key] = (now, reply)
+                asker.answered[key] = now
+            asker.last_rtt = reply.rtt
+            return reply
+
+    def check_idle(self, asker: SharedSession) -> str | None:
+        with self.turns.turn():
+            self._asking = asker
+            try:
+                return self.session.check_idle()
+            finally:
+                self._asking = None
+
+    def connect(self, asker: SharedSession) -> None:
+        with self.turns.turn():
+            self._asking = asker
+            try:
+                self.session.connect()
+            finally:
+                self._asking = None
+
+    # ------------------------------------------------------------ the real session's observers
+
+    def _frame(self, frame: Frame) -> None:
+        asker = self._asking
+        for_all = frame.unsolicited or not frame.poll  # a poll's only where polls show
+        if asker is not None and (for_all or asker.shows_polls):
+            asker.frame(frame)
+        tagged = frame
+        if asker is not None and not frame.unsolicited:
+            tagged = dataclasses.replace(frame, source=asker.source)
+        for shared in self._attached():
+            if shared is not asker and (for_all or shared.shows_polls):
+                shared.foreign(tagged)
+
+    def _state(self, state: State) -> None:
+        asker = self._asking
+        if asker is not None:
+            asker.state_changed(state)
+
+    def _resend(self, reason: str) -> None:
+        asker = self._asking
+        if asker is not None:
+            asker.resent(reason)
+
+    def _attached(self) -> list[SharedSession]:
+        with self._lock:
+            return list(self._sessions)
+
+
+class SharedSession(Session):
+    """What one engine of the agent holds: a session whose requests take their turn on
+    the shared connection. The engine's observers hear its own requests' frames and the
+    state changes they make; the state read is the connection's own."""
+
+    def __init__(
+        self, connection: SharedConnection, source: str, foreign: ForeignSink, timeout: float
+    ) -> None:
+        real = connection.session
+        super().__init__(real.host, real.port, timeout=timeout)
+        self.connection = connection
+        self.source = source
+        self.foreign = foreign
+        self.shows_polls = True
+        #: When this engine last had an answer to each GET it polls.
+        self.answered: dict[bytes, float] = {}
+        self._cancelled = False
+
+    @property
+    def state(self) -> State:
+        return self.connection.session.state
+
+    def frame(self, frame: Frame) -> None:
+        self._observers.publish(frame)
+
+    def state_changed(self, state: State) -> None:
+        self._observers.state(state)
+
+    def resent(self, reason: str) -> None:
+        self._observers.resend(reason)
+
+    def exchange(
+        self,
+        request: Request,
+        *,
+        poll: bool = False,
+        cancelled: Callable[[], bool] | None = None,
+        observe: bool = True,
+    ) -> Reply:
+        if self._cancelled:
+            raise NotSent("this client's session is closed")
+        return self.connection.exchange(self, request, poll, cancelled, observe)
+
+    def connect(self) -> None:
+        self.connection.connect(self)
+
+    def check_idle(self) -> str | None:
+        return self.connection.check_idle(self)
+
+    def has_unread(self, timeout: float = 0.0) -> bool:
+        return False
+
+    def cancel(self) -> None:
+        """Cut this engine's request short: when it is on the wire the connection
+        goes (the others' next requests open it again), as with a session of its own."""
+        if self.connection._asking is self:
+            self.connection.session.cancel()
+
+    def interrupt(self) -> None:
+        self._cancelled = True
+        self.cancel()
+
+    def close(self) -> None:
+        """This engine is done with the connection (it stays open for the others)."""
+        self.connection.detach(self)
