@@ -107,6 +107,16 @@ class Outbox:
         if woke:
             self._notify()
 
+    def put_dropped(self, frames: int, cycles: int) -> None:
+        """Frames and cycles shed before they came here (an agent's client that read
+        slowly): counted as if shed here."""
+        with self.lock:
+            self._batch.frames_dropped += frames
+            self._batch.cycles_dropped += cycles
+            woke = self._wake()
+        if woke:
+            self._notify()
+
     def drain(self) -> Batch:
         with self.lock:
             batch, self._batch = self._batch, Batch()

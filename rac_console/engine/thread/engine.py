@@ -208,7 +208,7 @@ class Engine:
 
     def submit_command(
         self,
-        command: Command,
+        command: Command | str,
         line: str | None = None,
         seq: int | None = None,
         then: Callable[[Result], None] | None = None,

@@ -1,0 +1,318 @@
+"""A front end's engine when an agent holds its target: the engine runs in the agent,
+this stands in for it (the same calls as :class:`~rac_console.engine.Engine`), and what
+the agent's engine publishes comes into this one's outbox as if it were made here.
+
+If the agent goes away, this says so in one line and goes on with an engine of its own
+(its own session), watching what was watched; a line the agent had not answered is
+answered here: a write's outcome unknown, never sent again.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import itertools
+import os
+import threading
+from collections.abc import Callable, Iterator, Mapping
+from dataclasses import asdict
+from typing import TYPE_CHECKING, Any
+
+from ..commands.target import Target
+from ..engine import Engine, EngineOptions, Outbox
+from ..engine.setup.where import Where
+from . import endpoint as endpoints
+from .server import CLIENT_OPTIONS
+from .wire import PROTOCOL, RELEASE, Channel, ChannelClosed, Message
+
+if TYPE_CHECKING:
+    from ..commands.language import Command, VarRef
+    from ..commands.policy import TargetProfile
+    from ..engine import Result, RowView
+    from ..engine.commands.registry import Registry
+    from ..session import Frame
+
+#: Said when the agent went away and this front end goes on by itself.
+AGENT_GONE = "the agent stopped: going on with a session of our own to {target}"
+#: The answer to a line the agent took and never answered.
+UNANSWERED = (
+    "the agent stopped before this line was answered: its outcome is unknown "
+    "(a write may have reached the controller; it is not sent again)"
+)
+
+
+class Refused(Exception):
+    """The agent turned this client away (another release): said in one line."""
+
+
+def attach(
+    target: Target,
+    options: EngineOptions,
+    *,
+    client: str,
+    where: Where,
+    outbox: Outbox | None = None,
+) -> RemoteEngine | None:
+    """An engine through the running agent that holds ``target``; None when no agent
+    runs, or it does not hold that target. :class:`Refused` when it turns us away."""
+    reached = endpoints.reach()
+    if reached is None:
+        return None
+    sock, endpoint = reached
+    channel = Channel(sock)
+    given = asdict(options)
+    hello: Message = {
+        "op": "hello",
+        "protocol": PROTOCOL,
+        "release": RELEASE,
+        "token": endpoint.token,
+        "client": client,
+        "pid": os.getpid(),
+        "host": target.host,
+        "port": target.port,
+        "read_only": target.read_only_flag,
+        "where": where.value,
+        "options": {k: given[k] for k in CLIENT_OPTIONS},
+    }
+    try:
+        channel.send(hello)
+        answer = channel.receive()
+    except (ChannelClosed, OSError):
+        channel.close()
+        return None
+    if answer.get("op") == "refused":
+        channel.close()
+        raise Refused(str(answer.get("why")))
+    if answer.get("op") != "welcome":
+        channel.close()
+        return None
+    return RemoteEngine(channel, answer, target, options, where, outbox)
+
+
+def agent_status() -> Message | None:
+    """What the running agent says of itself (``agent status``), or None."""
+    reached = endpoints.reach()
+    if reached is None:
+        return None
+    sock, endpoint = reached
+    channel = Channel(sock)
+    try:
+        channel.send(
+            {
+                "op": "hello",
+                "protocol": PROTOCOL,
+                "release": RELEASE,
+                "token": endpoint.token,
+                "want": "status",
+            }
+        )
+        return channel.receive()
+    except (ChannelClosed, OSError):
+        return None
+    finally:
+        channel.close()
+
+
+class RemoteEngine:
+    """Start it, submit lines, drain :attr:`outbox`, stop it: as an Engine."""
+
+    def __init__(
+        self,
+        channel: Channel,
+        welcome: Message,
+        target: Target,
+        options: EngineOptions,
+        where: Where,
+        outbox: Outbox | None,
+    ) -> None:
+        self._channel = channel
+        self.name = str(welcome.get("client", "client"))
+        self.via = f"via agent (pid {welcome.get('agent_pid')})"
+        self._rules = target
+        self.options = options
+        self.where = where
+        self.outbox = outbox if outbox is not None else Outbox()
+        self.numbers: Iterator[int] = itertools.count(1)
+        self._registry: Registry | None = None
+        self._then: dict[int, tuple[Callable[[Result], None] | None, bool]] = {}
+        self._pending: dict[int, str | None] = {}  # submitted, not answered: the line
+        self._lock = threading.Lock()
+        self._observers: list[Callable[[Frame], None]] = []
+        self._rows: dict[VarRef, RowView] = {}  # what the agent's engine watches
+        self._local: Engine | None = None  # after the agent went away
+        self._stopping = False
+        self.died: str | None = None
+        self._reader = threading.Thread(target=self._read, name="rac-agent-client", daemon=True)
+
+    # ------------------------------------------------------------ as an Engine
+
+    @property
+    def registry(self) -> Registry:
+        if self._registry is None:
+            from ..engine.commands.builtin import BUILTIN
+
+            self._registry = BUILTIN
+        return self._registry
+
+    @property
+    def target(self) -> Target:
+        return self._rules
+
+    @property
+    def profiles(self) -> Mapping[str, TargetProfile]:
+        return self._rules.profiles
+
+    @property
+    def ended(self) -> bool:
+        return self._local.ended if self._local is not None else False
+
+    def start(self, connect: bool = True) -> None:
+        self._reader.start()
+
+    def submit(self, line: str) -> int:
+        return self._submit(line, line, None, None, True)
+
+    def submit_command(
+        self,
+        command: Command,
+        line: str | None = None,
+        seq: int | None = None,
+        then: Callable[[Result], None] | None = None,
+        publish: bool = True,
+    ) -> int:
+        return self._submit(command, line, seq, then, publish)
+
+    def _submit(
+        self,
+        what: str | Command,
+        line: str | None,
+        seq: int | None,
+        then: Callable[[Result], None] | None,
+        publish: bool,
+    ) -> int:
+        local = self._local
+        if local is not None:
+            return local.submit_command(what, line, seq, then, publish)
+        number = next(self.numbers) if seq is None else seq
+        with self._lock:
+            self._then[number] = (then, publish)
+            self._pending[number] = line
+        self._send({"op": "line", "seq": number, "what": what, "line": line})
+        return number
+
+    def stop(self, timeout: float = 5.0) -> None:
+        self._stopping = True
+        if self._local is not None:
+            self._local.stop(timeout)
+        self._send({"op": "bye"})
+        self._channel.close()
+        self._reader.join(timeout)
+
+    def cancel(self, queued: bool = False) -> None:
+        if self._local is not None:
+            self._local.cancel(queued)
+        else:
+            self._send({"op": "cancel", "queued": queued})
+
+    def answer_confirm(self, seq: int, yes: bool) -> None:
+        if self._local is not None:
+            self._local.answer_confirm(seq, yes)
+        else:
+            self._send({"op": "answer", "seq": seq, "yes": yes})
+
+    def set_poll_frames(self, shown: bool) -> None:
+        self._poll_frames = shown
+        if self._local is not None:
+            self._local.set_poll_frames(shown)
+        else:
+            self._send({"op": "poll_frames", "shown": shown})
+
+    def add_frame_observer(self, observer: Callable[[Frame], None]) -> None:
+        self._observers.append(observer)
+
+    def alert(self, text: str) -> None:
+        from ..engine import Alert
+
+        self.outbox.put(Alert(text))
+
+    def publish_target(self) -> None:
+        """Nothing to publish ahead: the agent's engine is up, its status comes first."""
+
+    # ------------------------------------------------------------ from the agent
+
+    def _send(self, message: Message) -> None:
+        with contextlib.suppress(ChannelClosed):  # the reader finds out, goes on alone
+            self._channel.send(message)
+
+    def _read(self) -> None:
+        try:
+            for message in self._channel.messages():
+                if message["op"] == "batch":
+                    self._take(message)
+        except ChannelClosed:
+            pass
+        if not self._stopping:
+            self._go_alone()
+
+    def _take(self, message: Message) -> None:
+        from ..engine import Result
+        from ..session import Frame
+
+        events: list[Any] = []
+        for event in message["events"]:
+            if isinstance(event, Frame):
+                for observer in self._observers:
+                    observer(event)
+            if isinstance(event, Result):
+                with self._lock:
+                    then, publish = self._then.pop(event.seq, (None, True))
+                    self._pending.pop(event.seq, None)
+                if then is not None:
+                    then(event)
+                if not publish:
+                    continue
+            events.append(event)
+        outbox = self.outbox
+        for var in message["removed"]:
+            self._rows.pop(var, None)
+        self._rows.update(message["rows"])
+        outbox.put_many(events, message["rows"])
+        if message["removed"]:
+            outbox.put_removed(list(message["removed"]))
+        if message["status"] is not None:
+            outbox.put_status(message["status"])
+        dropped = message["frames_dropped"], message["cycles_dropped"]
+        if any(dropped):
+            outbox.put_dropped(*dropped)
+
+    def _go_alone(self) -> None:
+        """The agent went away: one line, then an engine of our own on the same
+        outbox, watching what the agent's engine watched; unanswered lines answered."""
+        from ..commands.language import Watch
+        from ..engine import Alert, Message, Result
+
+        self.outbox.put(Alert(AGENT_GONE.format(target=self._target_text())))
+        with self._lock:
+            pending, self._pending = dict(self._pending), {}
+            thens, self._then = dict(self._then), {}
+        for seq, line in pending.items():
+            result = Result(seq, (Message(UNANSWERED, "error"),), line, None)
+            then, publish = thens.get(seq, (None, True))
+            if then is not None:
+                then(result)
+            if publish:
+                self.outbox.put(result)
+        local = Engine(
+            target=self._rules, options=self.options, outbox=self.outbox, where=self.where,
+            numbers=self.numbers,
+        )  # fmt: skip
+        for observer in self._observers:
+            local.add_frame_observer(observer)
+        local.start()
+        for row in self._rows.values():  # in the order they were added
+            local.submit_command(Watch((row.var,), row.label, row.every), None, publish=False)
+        self._local = local
+        self.via = ""
+
+    def _target_text(self) -> str:
+        host = self._rules.host
+        return "the built-in simulator" if host is None else f"{host}:{self._rules.port}"

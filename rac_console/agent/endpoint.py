@@ -1,0 +1,189 @@
+"""Where the agent listens, reachable by its user on this machine only.
+
+On Linux and macOS: a Unix socket, mode 0600, in a folder of the user's (0700) under the
+user's runtime folder (``$XDG_RUNTIME_DIR/rac-console`` on Linux), and a peer of another
+user is turned away even if it got that far (its credentials are asked of the kernel).
+On Windows, where asyncio and older Pythons have no Unix sockets: a TCP port on
+127.0.0.1 and a token in a file of the user's folder; a client proves it read the file.
+Nothing listens on another address.
+
+A socket left by an agent that died is no agent: connecting to it is refused, so a
+client goes direct at once, and the next agent takes its place.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import json
+import os
+import secrets
+import socket
+import stat
+import sys
+import tempfile
+from dataclasses import dataclass
+from pathlib import Path
+
+#: How long a client waits to reach an agent that is there (a local socket: at once).
+CONNECT_TIMEOUT = 2.0
+SOCKET_NAME = "agent.sock"
+PORT_FILE = "agent.json"  # Windows: the port and the token
+WINDOWS = sys.platform == "win32"
+
+
+class EndpointError(OSError):
+    """The agent's folder or socket cannot be made safely (said in one line)."""
+
+
+def folder() -> Path:
+    """The user's own folder for the agent's endpoint, made 0700 if it is not there;
+    refused when it is another user's or others can write it."""
+    override = os.environ.get("RAC_CONSOLE_AGENT_DIR")
+    if override:
+        base = Path(override)
+    elif WINDOWS:
+        from platformdirs import user_runtime_dir
+
+        base = Path(user_runtime_dir("rac-console", appauthor=False))
+    else:
+        runtime = os.environ.get("XDG_RUNTIME_DIR")
+        if runtime and Path(runtime).is_dir():
+            base = Path(runtime) / "rac-console"
+        else:
+            from platformdirs import user_runtime_dir
+
+            base = Path(user_runtime_dir("rac-console"))
+            if not base.parent.is_dir():
+                base = Path(tempfile.gettempdir()) / f"rac-console-{os.getuid()}"
+    base.mkdir(mode=0o700, parents=True, exist_ok=True)
+    if not WINDOWS:
+        info = base.stat()
+        if info.st_uid != os.getuid():
+            raise EndpointError(f"{base} belongs to another user: the agent will not use it")
+        if stat.S_IMODE(info.st_mode) & 0o077:
+            base.chmod(0o700)
+    return base
+
+
+@dataclass(frozen=True)
+class Endpoint:
+    """Where the agent is: a socket's path, or (Windows) a port with its token."""
+
+    path: Path | None = None
+    port: int | None = None
+    token: str = ""
+
+    def __str__(self) -> str:
+        return str(self.path) if self.path is not None else f"127.0.0.1:{self.port}"
+
+
+def listen() -> tuple[socket.socket, Endpoint]:
+    """The agent's listening socket; a socket left by a dead agent is replaced, a
+    living agent's is not (EndpointError says it is running)."""
+    base = folder()
+    if WINDOWS:
+        return _listen_tcp(base)
+    path = base / SOCKET_NAME
+    if path.exists() or path.is_symlink():
+        if _alive(path):
+            raise EndpointError(f"an agent is already running ({path})")
+        path.unlink()
+    server = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
+    old = os.umask(0o177)  # made 0600: no moment when another user could connect
+    try:
+        server.bind(str(path))
+    finally:
+        os.umask(old)
+    path.chmod(0o600)
+    server.listen(16)
+    return server, Endpoint(path=path)
+
+
+def _listen_tcp(base: Path) -> tuple[socket.socket, Endpoint]:
+    found = _read_port_file(base / PORT_FILE)
+    if found is not None and _reach_tcp(found) is not None:
+        raise EndpointError(f"an agent is already running (127.0.0.1:{found.port})")
+    server = socket.create_server(("127.0.0.1", 0))
+    server.listen(16)
+    endpoint = Endpoint(port=server.getsockname()[1], token=secrets.token_hex(16))
+    written = base / (PORT_FILE + ".new")
+    with contextlib.suppress(FileNotFoundError):
+        written.unlink()
+    fd = os.open(written, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600)
+    with os.fdopen(fd, "w", encoding="utf-8") as file:
+        json.dump({"port": endpoint.port, "token": endpoint.token, "pid": os.getpid()}, file)
+    os.replace(written, base / PORT_FILE)
+    return server, endpoint
+
+
+def forget(endpoint: Endpoint) -> None:
+    """The agent stops: its socket or port file goes (if still its own)."""
+    base = folder()
+    with contextlib.suppress(OSError):
+        if endpoint.path is not None:
+            endpoint.path.unlink()
+        else:
+            found = _read_port_file(base / PORT_FILE)
+            if found is not None and found.port == endpoint.port:
+                (base / PORT_FILE).unlink()
+
+
+def reach() -> tuple[socket.socket, Endpoint] | None:
+    """A connection to the running agent, or None when there is none (no socket, or
+    one left by an agent that died)."""
+    try:
+        base = folder()
+    except OSError:
+        return None
+    if WINDOWS:
+        found = _read_port_file(base / PORT_FILE)
+        if found is None:
+            return None
+        sock = _reach_tcp(found)
+        return None if sock is None else (sock, found)
+    path = base / SOCKET_NAME
+    sock = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
+    sock.settimeout(CONNECT_TIMEOUT)
+    try:
+        sock.connect(str(path))
+    except OSError:
+        sock.close()
+        return None
+    return sock, Endpoint(path=path)
+
+
+def _alive(path: Path) -> bool:
+    with socket.socket(socket.AF_UNIX, socket.SOCK_STREAM) as probe:
+        probe.settimeout(CONNECT_TIMEOUT)
+        try:
+            probe.connect(str(path))
+        except OSError:
+            return False
+    return True
+
+
+def _read_port_file(path: Path) -> Endpoint | None:
+    try:
+        data = json.loads(path.read_text(encoding="utf-8"))
+        return Endpoint(port=int(data["port"]), token=str(data["token"]))
+    except (OSError, ValueError, KeyError, TypeError):
+        return None
+
+
+def _reach_tcp(endpoint: Endpoint) -> socket.socket | None:
+    try:
+        return socket.create_connection(("127.0.0.1", endpoint.port or 0), CONNECT_TIMEOUT)
+    except OSError:
+        return None
+
+
+def peer_is_us(sock: socket.socket) -> bool:
+    """Whether the peer of an accepted Unix socket runs as this user (Linux: the
+    kernel's credentials of the peer; elsewhere the socket's mode is the guard)."""
+    if WINDOWS or not hasattr(socket, "SO_PEERCRED"):
+        return True
+    import struct
+
+    creds = sock.getsockopt(socket.SOL_SOCKET, socket.SO_PEERCRED, struct.calcsize("3i"))
+    _pid, uid, _gid = struct.unpack("3i", creds)
+    return bool(uid == os.getuid())

@@ -1,0 +1,364 @@
+"""The agent: one connection to each controller it holds, shared by every client.
+
+Each client (a console, a REPL, a one-shot command, a served console, a script) gets an
+engine of its own here, with the client's options and the strictest rules of the target
+(the agent's profiles, and the client's ``--read-only``), whose session takes its turn
+on the target's one connection (:mod:`rac_console.session.shared`). What the engine
+publishes goes to the client as it drains it; a client that reads slowly gets the
+latest rows and status and a count of the frames it missed, and never slows the polling
+(the engine's outbox is bounded and only the client's own writer waits on it).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import dataclasses
+import itertools
+import os
+import socket
+import threading
+import time
+from collections.abc import Callable, Iterator
+from dataclasses import dataclass, field
+
+from ..commands.target import Target
+from ..engine import Engine, EngineOptions, Outbox
+from ..engine.setup.where import Where
+from ..session import Session
+from ..session.shared import SharedConnection, SharedSession
+from . import endpoint as endpoints
+from .wire import Channel, ChannelClosed, Message, hello_problem
+
+#: A client has this long to say hello.
+HELLO_TIMEOUT = 5.0
+#: The options a client may set on its engine, by name (anything else is the agent's).
+CLIENT_OPTIONS = (
+    "timeout",
+    "interval",
+    "verify",
+    "cycles",
+    "frames",
+    "cut_cycles",
+    "max_cycles",
+    "readings",
+    "record",
+    "transcript",
+    "log_csv",
+)
+
+
+@dataclass
+class Held:
+    """A controller the agent holds: its name, its rules, its one connection."""
+
+    name: str
+    target: Target
+    connection: SharedConnection
+    stop_simulator: Callable[[], None] | None = None
+
+    @property
+    def address(self) -> str:
+        return f"{self.connection.host}:{self.connection.port}"
+
+
+@dataclass
+class Client:
+    """One client attached: who, which target, its engine here."""
+
+    number: int
+    kind: str
+    pid: int
+    held: Held
+    channel: Channel
+    engine: Engine | None = None
+    wake: threading.Event = field(default_factory=threading.Event)  # its engine published
+    since: float = field(default_factory=time.time)
+    missed: int = 0
+
+    @property
+    def name(self) -> str:
+        return f"{self.kind} {self.number}"
+
+
+class Given:
+    """An engine's job numbers as its client gave them (the client numbers its lines)."""
+
+    def __init__(self) -> None:
+        self.next = 0
+
+    def __iter__(self) -> Iterator[int]:
+        return self
+
+    def __next__(self) -> int:
+        return self.next
+
+
+class Agent:
+    """Holds ``targets`` (name, target) and serves clients until :meth:`stop`."""
+
+    def __init__(
+        self,
+        targets: list[tuple[str, Target]],
+        *,
+        timeout: float = 2.0,
+        say: Callable[[str], None] = print,
+        simulators: dict[str, Callable[[], None]] | None = None,
+    ) -> None:
+        self.say = say
+        self.timeout = timeout
+        self.held: list[Held] = []
+        for name, target in targets:
+            assert target.host is not None
+            session = Session(target.host, target.port, timeout=timeout)
+            stop = (simulators or {}).get(name)
+            self.held.append(Held(name, target, SharedConnection(session), stop))
+        self.clients: dict[int, Client] = {}
+        self._numbers = itertools.count(1)
+        self._lock = threading.Lock()
+        self._stopping = threading.Event()
+        self._server: socket.socket | None = None
+        self.endpoint: endpoints.Endpoint | None = None
+        self.started = time.time()
+
+    # ------------------------------------------------------------ its life
+
+    def open(self) -> endpoints.Endpoint:
+        """Listen (EndpointError when another agent runs), and connect to each target."""
+        self._server, self.endpoint = endpoints.listen()
+        for held in self.held:
+            try:
+                held.connection.session.connect()
+                state = "connected"
+            except OSError as exc:
+                state = f"not connected yet: {exc}"
+            except Exception as exc:  # a TransportError: said, and the clients retry
+                state = f"not connected yet: {exc}"
+            self.say(f"holding {held.name} ({held.address}): {state}")
+        return self.endpoint
+
+    def serve(self) -> None:
+        """Accept clients until :meth:`stop` (on the calling thread)."""
+        server = self._server
+        assert server is not None
+        server.settimeout(0.2)
+        while not self._stopping.is_set():
+            try:
+                sock, _ = server.accept()
+            except TimeoutError:
+                continue
+            except OSError:
+                break
+            sock.settimeout(None)
+            threading.Thread(target=self._serve_client, args=(sock,), daemon=True).start()
+
+    def stop(self) -> None:
+        self._stopping.set()
+        with self._lock:
+            clients = list(self.clients.values())
+        for client in clients:
+            self._end(client, "the agent stopped")
+        for held in self.held:
+            held.connection.close()
+            if held.stop_simulator is not None:
+                held.stop_simulator()
+        if self._server is not None:
+            self._server.close()
+        if self.endpoint is not None:
+            endpoints.forget(self.endpoint)
+
+    # ------------------------------------------------------------ one client
+
+    def _serve_client(self, sock: socket.socket) -> None:
+        channel = Channel(sock)
+        unix = self.endpoint is not None and self.endpoint.path is not None
+        if unix and not endpoints.peer_is_us(sock):
+            channel.close()
+            return
+        sock.settimeout(HELLO_TIMEOUT)
+        try:
+            hello = channel.receive()
+        except (ChannelClosed, TimeoutError, OSError):
+            channel.close()
+            return
+        sock.settimeout(None)
+        client = self._welcome(channel, hello)
+        if client is None:
+            channel.close()
+            return
+        try:
+            for message in channel.messages():
+                if not self._take(client, message):
+                    break
+        except ChannelClosed:
+            pass
+        self._end(client, "gone")
+
+    def _welcome(self, channel: Channel, hello: Message) -> Client | None:
+        problem = hello_problem(hello)
+        tcp = self.endpoint is not None and self.endpoint.port is not None
+        if problem is None and tcp and hello.get("token") != self.endpoint.token:  # type: ignore[union-attr]
+            problem = "the agent's token was not given"
+        if problem is not None:
+            self._send_quietly(channel, {"op": "refused", "why": problem})
+            return None
+        if hello.get("want") == "status":
+            self._send_quietly(channel, {"op": "status", **self.status()})
+            return None
+        held = self._holding(hello.get("host"), hello.get("port"))
+        if held is None:
+            self._send_quietly(channel, {"op": "not_held"})
+            return None
+        client = Client(
+            next(self._numbers), str(hello.get("client", "client")), int(hello.get("pid", 0)),
+            held, channel,
+        )  # fmt: skip
+        try:
+            client.engine = self._engine_for(client, hello)
+        except Exception as exc:  # InputError: a file the client named cannot be opened
+            self._send_quietly(channel, {"op": "refused", "why": str(exc)})
+            return None
+        with self._lock:
+            self.clients[client.number] = client
+        self._send_quietly(
+            channel,
+            {
+                "op": "welcome",
+                "client": client.name,
+                "agent_pid": os.getpid(),
+                "target": held.name,
+                "address": held.address,
+            },
+        )
+        threading.Thread(target=self._write_to, args=(client,), daemon=True).start()
+        client.engine.start(connect=True)
+        self.say(f"{client.name} (pid {client.pid}) attached to {held.name}")
+        return client
+
+    def _holding(self, host: object, port: object) -> Held | None:
+        for held in self.held:
+            if host is None and held.target.simulated and held.name == "sim":
+                return held
+            same_host = isinstance(host, str) and host.lower() == str(held.target.host).lower()
+            if same_host and port == held.target.port:
+                return held
+        return None
+
+    def _engine_for(self, client: Client, hello: Message) -> Engine:
+        given = hello.get("options") or {}
+        options = {k: given[k] for k in CLIENT_OPTIONS if k in given}
+        held = client.held
+        client_outbox = Outbox(notify=client.wake.set)
+
+        def session(host: str, port: int, timeout: float) -> SharedSession:
+            return held.connection.attach(client.name, client_outbox.put, timeout)
+
+        target = dataclasses.replace(
+            held.target,
+            read_only=held.target.read_only or bool(hello.get("read_only")),
+            read_only_flag=bool(hello.get("read_only")),
+        )
+        engine_options = EngineOptions(**options, sessions=session)
+        where = Where(hello.get("where", Where.CONSOLE.value))
+        engine = Engine(
+            target=target, options=engine_options, outbox=client_outbox, where=where,
+            numbers=Given(),
+        )  # fmt: skip
+        return engine
+
+    def _take(self, client: Client, message: Message) -> bool:
+        """One message from a client; False when it said goodbye."""
+        engine = client.engine
+        assert engine is not None
+        op = message["op"]
+        if op == "line":
+            numbers = engine.numbers
+            assert isinstance(numbers, Given)
+            numbers.next = int(message["seq"])
+            what = message["what"]
+            if isinstance(what, str):
+                engine.submit(what)  # numbered as the client numbered it
+            else:
+                engine.submit_command(what, message.get("line"), numbers.next)
+        elif op == "answer":
+            engine.answer_confirm(int(message["seq"]), bool(message["yes"]))
+        elif op == "cancel":
+            engine.cancel(bool(message.get("queued")))
+        elif op == "poll_frames":
+            engine.set_poll_frames(bool(message["shown"]))
+        elif op == "bye":
+            return False
+        return True
+
+    def _write_to(self, client: Client) -> None:
+        """Send the client what its engine publishes, as it comes (its own thread: a
+        client that reads slowly holds only this)."""
+        engine, wake = client.engine, client.wake
+        assert engine is not None
+        while not client.channel.closed:
+            wake.wait(0.5)
+            wake.clear()
+            batch = engine.outbox.drain()
+            if not (batch.events or batch.rows or batch.removed or batch.status):
+                continue
+            client.missed += batch.frames_dropped
+            try:
+                client.channel.send(
+                    {
+                        "op": "batch",
+                        "events": batch.events,
+                        "rows": batch.rows,
+                        "removed": batch.removed,
+                        "status": batch.status,
+                        "frames_dropped": batch.frames_dropped,
+                        "cycles_dropped": batch.cycles_dropped,
+                    }
+                )
+            except ChannelClosed:
+                return
+
+    def _end(self, client: Client, why: str) -> None:
+        with self._lock:
+            if self.clients.pop(client.number, None) is None:
+                return
+        if client.engine is not None:
+            client.engine.stop()
+        client.channel.close()
+        self.say(f"{client.name} detached ({why})")
+
+    @staticmethod
+    def _send_quietly(channel: Channel, message: Message) -> None:
+        with contextlib.suppress(ChannelClosed):
+            channel.send(message)
+
+    # ------------------------------------------------------------ agent status
+
+    def status(self) -> Message:
+        """What ``agent status`` shows: the targets, their connections, the clients."""
+        with self._lock:
+            clients = list(self.clients.values())
+        return {
+            "pid": os.getpid(),
+            "since": self.started,
+            "endpoint": str(self.endpoint),
+            "targets": [
+                {
+                    "name": held.name,
+                    "address": held.address,
+                    "state": held.connection.session.state,
+                    "requests": held.connection.requests,
+                    "shared_polls": held.connection.shared_polls,
+                    "clients": sum(1 for c in clients if c.held is held),
+                }
+                for held in self.held
+            ],
+            "clients": [
+                {
+                    "name": c.name,
+                    "pid": c.pid,
+                    "target": c.held.name,
+                    "since": c.since,
+                    "missed": c.missed,
+                }
+                for c in clients
+            ],
+        }

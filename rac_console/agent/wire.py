@@ -1,0 +1,96 @@
+"""The agent's messages on a socket: each a msgpack map with an ``op`` (see
+``docs/agent.md``), sent whole under a lock, read one at a time.
+
+The first message each way is the hello: the protocol's number and the release, which
+must both be this one's, else the client is refused in one line and goes direct.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import socket
+import threading
+from collections.abc import Iterator
+from typing import Any
+
+from .. import __version__
+from . import codec
+
+#: Changes whenever a message changes; the release must match too (the events are the
+#: engine's own dataclasses).
+PROTOCOL = 1
+#: A message larger than this is refused (a batch of 100,000 frames is about 8 MB).
+MAX_MESSAGE = 64 * 1024 * 1024
+RELEASE = __version__
+
+Message = dict[str, Any]
+
+
+class ChannelClosed(ConnectionError):
+    """The other end went away (or sent what no message of this release is)."""
+
+
+class Channel:
+    """One end of a connection between the agent and a client (any thread sends)."""
+
+    def __init__(self, sock: socket.socket) -> None:
+        self.sock = sock
+        self._send_lock = threading.Lock()
+        self._unpacker = codec.unpacker(MAX_MESSAGE)
+        self.closed = False
+
+    def send(self, message: Message) -> None:
+        data = codec.pack(message)
+        with self._send_lock:
+            try:
+                self.sock.sendall(data)
+            except OSError as exc:
+                self.closed = True
+                raise ChannelClosed(str(exc)) from None
+
+    def messages(self) -> Iterator[Message]:
+        """The messages received, in order, until the other end closes."""
+        while True:
+            try:
+                for message in self._unpacker:
+                    if not isinstance(message, dict) or "op" not in message:
+                        raise ChannelClosed("a message with no op")
+                    yield message
+            except codec.DecodeError as exc:
+                raise ChannelClosed(str(exc)) from None
+            except ValueError as exc:  # msgpack's: over MAX_MESSAGE, or malformed
+                raise ChannelClosed(f"a message that cannot be read: {exc}") from None
+            try:
+                data = self.sock.recv(1 << 20)
+            except OSError as exc:
+                self.closed = True
+                raise ChannelClosed(str(exc)) from None
+            if not data:
+                self.closed = True
+                return
+            self._unpacker.feed(data)
+
+    def receive(self) -> Message:
+        """The next message (ChannelClosed when none comes)."""
+        for message in self.messages():
+            return message
+        raise ChannelClosed("the other end closed the connection")
+
+    def close(self) -> None:
+        self.closed = True
+        with contextlib.suppress(OSError):
+            self.sock.shutdown(socket.SHUT_RDWR)
+        self.sock.close()
+
+
+def hello_problem(message: Message) -> str | None:
+    """Why a hello cannot be taken (another protocol or release), or None."""
+    if message.get("op") != "hello":
+        return "the first message was no hello"
+    release = message.get("release")
+    if message.get("protocol") != PROTOCOL or release != RELEASE:
+        return (
+            f"the agent runs rac-console {RELEASE}, this is {release}: "
+            "restart the agent with this release, or use --direct"
+        )
+    return None

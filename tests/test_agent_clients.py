@@ -1,0 +1,122 @@
+"""Front ends through the agent, judged from the controller's side: one connection for
+every client, each client's own rules at the gate, and a client that goes on alone when
+the agent goes away."""
+
+from __future__ import annotations
+
+import threading
+from collections.abc import Iterator
+from pathlib import Path
+
+import pytest
+
+from rac_console.agent.client import AGENT_GONE, RemoteEngine, attach
+from rac_console.agent.server import Agent
+from rac_console.commands.target import Target
+from rac_console.engine import EngineOptions
+from rac_console.engine.setup.where import Where
+from tests.support.drivers import Front
+from tests.support.servers import Memory, RecordingServer
+
+
+@pytest.fixture
+def agent_dir(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Path:
+    folder = tmp_path / "agent"
+    monkeypatch.setenv("RAC_CONSOLE_AGENT_DIR", str(folder))
+    return folder
+
+
+class Running:
+    def __init__(self, server: RecordingServer) -> None:
+        self.target = Target("127.0.0.1", server.port)
+        self.said: list[str] = []
+        self.agent = Agent([("robot", self.target)], timeout=5.0, say=self.said.append)
+        self.agent.open()
+        self.thread = threading.Thread(target=self.agent.serve, daemon=True)
+        self.thread.start()
+
+    def stop(self) -> None:
+        self.agent.stop()
+        self.thread.join(5)
+
+
+@pytest.fixture
+def controller(recording) -> RecordingServer:
+    server: RecordingServer = recording(Memory())
+    return server
+
+
+@pytest.fixture
+def running(agent_dir: Path, controller: RecordingServer) -> Iterator[Running]:
+    started = Running(controller)
+    yield started
+    started.stop()
+
+
+def client(target: Target, *, read_only: bool = False) -> Front:
+    rules = Target(target.host, target.port, read_only=read_only, read_only_flag=read_only)
+    engine = attach(
+        rules, EngineOptions(timeout=5.0, interval=0.05), client="test", where=Where.CONSOLE
+    )
+    assert isinstance(engine, RemoteEngine)
+    engine.start()
+    return Front(engine)  # type: ignore[arg-type]
+
+
+def test_two_clients_share_one_connection_and_each_sees_the_other_write(
+    running: Running, controller: RecordingServer
+) -> None:
+    a, b = client(running.target), client(running.target)
+    try:
+        a.run("watch I 7")
+        assert b.outcome("put I 7 42").verified
+        a.until(
+            lambda: a.rows["I7"].variant is not None and a.rows["I7"].variant.value == 42, "42 at a"
+        )
+        a.engine.set_poll_frames(False)
+        a.until(
+            lambda: any(f.source == "test 2" and f.data.startswith(b"PUT") for f in a.frames),
+            "b's PUT in a's log",
+        )
+    finally:
+        a.engine.stop()
+        b.engine.stop()
+    assert controller.accepted == 1
+    assert controller.lines.count(b"PUT:RC8:7:I:3,42") == 1
+
+
+def test_a_read_only_client_is_refused_at_the_agents_gate(
+    running: Running, controller: RecordingServer
+) -> None:
+    a = client(running.target, read_only=True)
+    try:
+        outcome = a.outcome("put I 7 42")
+    finally:
+        a.engine.stop()
+    assert outcome.status.name == "REFUSED", outcome
+    assert not any(line.startswith(b"PUT") for line in controller.lines)
+
+
+def test_no_agent_means_no_attach(agent_dir: Path, controller: RecordingServer) -> None:
+    target = Target("127.0.0.1", controller.port)
+    assert attach(target, EngineOptions(), client="test", where=Where.CONSOLE) is None
+    assert controller.accepted == 0
+
+
+def test_a_client_goes_on_alone_when_the_agent_stops(
+    running: Running, controller: RecordingServer
+) -> None:
+    a = client(running.target)
+    try:
+        a.run("watch I 9")
+        running.stop()
+        a.until(lambda: any("the agent stopped" in text for text in a.alerts), "the one line")
+        seen = len(controller.lines)
+        a.until(
+            lambda: controller.accepted == 2 and len(controller.lines) > seen + 2,
+            "polls of its own",
+        )
+        assert a.run("get I 9")
+    finally:
+        a.engine.stop()
+    assert AGENT_GONE.split(":")[0] in " ".join(a.alerts)
