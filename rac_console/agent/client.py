@@ -14,7 +14,7 @@ import itertools
 import os
 import threading
 from collections.abc import Callable, Iterator, Mapping
-from dataclasses import asdict
+from dataclasses import asdict, replace
 from typing import TYPE_CHECKING, Any
 
 from ..commands.target import Target
@@ -31,6 +31,10 @@ if TYPE_CHECKING:
     from ..engine.commands.registry import Registry
     from ..session import Frame
 
+#: On the status line while the engine runs in the agent.
+VIA = "via agent"
+#: The target on the status line when it is the agent's built-in simulator.
+AGENT_SIMULATOR = "SIMULATOR (the agent's)"
 #: Said when the agent went away and this front end goes on by itself.
 AGENT_GONE = "the agent stopped: going on with a session of our own to {target}"
 #: The answer to a line the agent took and never answered.
@@ -51,6 +55,7 @@ def attach(
     client: str,
     where: Where,
     outbox: Outbox | None = None,
+    numbers: Iterator[int] | None = None,
 ) -> RemoteEngine | None:
     """An engine through the running agent that holds ``target``; None when no agent
     runs, or it does not hold that target. :class:`Refused` when it turns us away."""
@@ -85,7 +90,10 @@ def attach(
     if answer.get("op") != "welcome":
         channel.close()
         return None
-    return RemoteEngine(channel, answer, target, options, where, outbox)
+    engine = RemoteEngine(channel, answer, target, options, where, outbox)
+    if numbers is not None:
+        engine.numbers = numbers
+    return engine
 
 
 def agent_status() -> Message | None:
@@ -126,7 +134,6 @@ class RemoteEngine:
     ) -> None:
         self._channel = channel
         self.name = str(welcome.get("client", "client"))
-        self.via = f"via agent (pid {welcome.get('agent_pid')})"
         self._rules = target
         self.options = options
         self.where = where
@@ -173,7 +180,7 @@ class RemoteEngine:
 
     def submit_command(
         self,
-        command: Command,
+        command: Command | str,
         line: str | None = None,
         seq: int | None = None,
         then: Callable[[Result], None] | None = None,
@@ -278,8 +285,11 @@ class RemoteEngine:
         outbox.put_many(events, message["rows"])
         if message["removed"]:
             outbox.put_removed(list(message["removed"]))
-        if message["status"] is not None:
-            outbox.put_status(message["status"])
+        status = message["status"]
+        if status is not None:
+            if self._rules.host is None:  # the agent's built-in simulator
+                status = replace(status, target=AGENT_SIMULATOR, is_simulator=True)
+            outbox.put_status(replace(status, via=VIA))
         dropped = message["frames_dropped"], message["cycles_dropped"]
         if any(dropped):
             outbox.put_dropped(*dropped)
@@ -311,7 +321,6 @@ class RemoteEngine:
         for row in self._rows.values():  # in the order they were added
             local.submit_command(Watch((row.var,), row.label, row.every), None, publish=False)
         self._local = local
-        self.via = ""
 
     def _target_text(self) -> str:
         host = self._rules.host

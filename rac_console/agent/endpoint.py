@@ -149,6 +149,7 @@ def reach() -> tuple[socket.socket, Endpoint] | None:
     except OSError:
         sock.close()
         return None
+    sock.settimeout(None)  # a client waits on the agent as long as it runs
     return sock, Endpoint(path=path)
 
 
@@ -172,9 +173,11 @@ def _read_port_file(path: Path) -> Endpoint | None:
 
 def _reach_tcp(endpoint: Endpoint) -> socket.socket | None:
     try:
-        return socket.create_connection(("127.0.0.1", endpoint.port or 0), CONNECT_TIMEOUT)
+        sock = socket.create_connection(("127.0.0.1", endpoint.port or 0), CONNECT_TIMEOUT)
     except OSError:
         return None
+    sock.settimeout(None)
+    return sock
 
 
 def peer_is_us(sock: socket.socket) -> bool:

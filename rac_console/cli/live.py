@@ -34,7 +34,7 @@ from ..engine import (
     Alert,
     Batch,
     Cycle,
-    Engine,
+    EngineLike,
     EngineOptions,
     Message,
     Result,
@@ -168,7 +168,7 @@ class _LiveRun(BatchReader):
 
     def __init__(
         self,
-        engine: Engine,
+        engine: EngineLike,
         name: str | None,
         output: Output,
         variables: tuple[VarRef, ...],

@@ -81,6 +81,10 @@ def _dispatch(args: argparse.Namespace) -> int:
             else:
                 from .check import check as measure
             return each_member(args, measure)
+    if args.command == "agent":
+        from .agent import agent_command
+
+        return agent_command(args)
     if args.command == "get" and (args.repeat, args.repeat_interval) != (None, None):
         from .live import repeat_get
 
@@ -161,7 +165,10 @@ def make_cell(args: argparse.Namespace) -> Cell:
         **getattr(args, "plant", {}),
     )
     members = getattr(args, "cell_targets", None) or [(member_name(args.target), args.target)]
-    return Cell(members, options=options, where=where)
+    from .agent import attach_for
+
+    kind = "console" if args.command is None else "REPL"
+    return Cell(members, options=options, where=where, attach=attach_for(args, kind, where))
 
 
 def _after_first_paint() -> None:

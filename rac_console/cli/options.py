@@ -156,6 +156,12 @@ def global_options(parser: argparse.ArgumentParser, suppress: bool) -> list[argp
             default=default(False),
             help='write to a target whose profile says writes = "confirm" without asking',
         ),
+        parser.add_argument(
+            "--direct",
+            action="store_true",
+            default=default(False),
+            help="open a session of its own even when a running agent holds the target",
+        ),
     ]
 
 

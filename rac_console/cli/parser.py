@@ -48,6 +48,18 @@ POLLING_COMMANDS = (None, "repl", "watch")
 ``--log-csv``, ``--mqtt`` and ``--metrics`` mean something."""
 
 
+AGENT_HELP = (
+    "hold one session to each target for every console, REPL, command and script of "
+    "yours on this machine"
+)
+AGENT_EPILOG = """\
+While it runs, a console, a REPL, a one-shot command or a script for a target it
+holds goes through it (the status line says "via agent"): one connection to the
+controller, polled once for everyone, every write through its one gate in the order
+received. --direct opens a session of its own. See docs/agent.md.
+"""
+
+
 def build_parser() -> argparse.ArgumentParser:
     return build_cli().parser
 
@@ -209,6 +221,15 @@ def build_cli(commands: bool = True) -> CliParser:
         help="log the watched values to FILE, one CSV row per poll cycle",
     )
     plant_options(repl, suppress=True)
+    agent, _ = command("agent", AGENT_HELP, epilog=AGENT_EPILOG)
+    agent.add_argument(
+        "action",
+        nargs="?",
+        choices=("run", "status"),
+        default="run",
+        help="run (the default): hold the targets until Ctrl-C; status: what a running "
+        "agent holds and who is attached",
+    )
     serve = subparsers.add_parser(
         "serve",
         help=SERVE_HELP,

@@ -41,11 +41,13 @@ if TYPE_CHECKING:
     from .published.status import Status
     from .setup.options import DEFAULT_INTERVAL, EngineOptions
     from .thread.engine import SIMULATOR_NOTICE, Engine
+    from .thread.surface import EngineLike
 
 #: Where each name lives: imported when first used, so ``engine.setup.config`` (read to
 #: settle a target) or the outbox load neither the events nor the engine's parts.
 _WHERE = {
     **dict.fromkeys(("SIMULATOR_NOTICE", "Engine"), ".thread.engine"),
+    "EngineLike": ".thread.surface",
     **dict.fromkeys(("DEFAULT_INTERVAL", "EngineOptions"), ".setup.options"),
     **dict.fromkeys(
         (
@@ -77,6 +79,7 @@ __all__ = [
     "ConfirmWrite",
     "Cycle",
     "Engine",
+    "EngineLike",
     "EngineOptions",
     "Feedback",
     "Measured",

@@ -6,7 +6,7 @@ import time
 from functools import lru_cache
 from typing import TYPE_CHECKING
 
-from ..protocol.text import describe_response, wire_text
+from ..protocol.text import describe_response, terminal_safe, wire_text
 
 if TYPE_CHECKING:
     from ..session import Frame
@@ -94,6 +94,8 @@ def frame_line(frame: Frame) -> str:
 def frame_body(frame: Frame) -> str:
     """A frame line after its time: ``← 0,3,123↵   0.21 ms  S_OK  VT_I4  123``."""
     line = f"{ARROWS[frame.direction]} {wire_text(frame.data)}"
+    if frame.source is not None:  # another client of the agent asked: said whose
+        line = f"{line}   [{terminal_safe(frame.source)}]"
     if frame.direction == "tx":
         return line
     notes = []

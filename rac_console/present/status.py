@@ -187,6 +187,8 @@ def _fields(
     if status.csv_log is None and status.csv_failure is not None:
         fields.append(_badge("CSV LOG STOPPED", ALARM_STYLE, essential=True))
     fields.append(_connection(status))
+    if status.via:  # the session is the agent's, shared with its other clients
+        fields.append(_figure(terminal_safe(status.via), essential=True))
     if running is not None and running[1] >= RUNNING_SHOWN_AFTER:
         fields.append(_running(*running))
     connected = status.connection == "connected" and status.has_session

@@ -140,6 +140,7 @@ class SharedConnection:
                 self._read[key] = (now, reply)
                 asker.answered[key] = now
             asker.last_rtt = reply.rtt
+            self._tell_state(asker)
             return reply
 
     def check_idle(self, asker: SharedSession) -> str | None:
@@ -157,6 +158,14 @@ class SharedConnection:
                 self.session.connect()
             finally:
                 self._asking = None
+            self._tell_state(asker)
+
+    def _tell_state(self, asker: SharedSession) -> None:
+        """An engine attached to a connection opened before it hears its state: its
+        status line must not say "not connected yet" while the connection serves it."""
+        state = self.session.state
+        if asker.known_state != state:
+            asker.state_changed(state)
 
     # ------------------------------------------------------------ the real session's observers
 
@@ -204,6 +213,7 @@ class SharedSession(Session):
         #: When this engine last had an answer to each GET it polls.
         self.answered: dict[bytes, float] = {}
         self._cancelled = False
+        self.known_state: State = "closed"  # as this engine last heard it
 
     @property
     def state(self) -> State:
@@ -213,6 +223,7 @@ class SharedSession(Session):
         self._observers.publish(frame)
 
     def state_changed(self, state: State) -> None:
+        self.known_state = state
         self._observers.state(state)
 
     def resent(self, reason: str) -> None:

@@ -16,7 +16,7 @@ from ..protocol.text import terminal_safe
 
 if TYPE_CHECKING:  # the first paint loads no engine module
     from ..commands.language import VarRef
-    from ..engine import Engine, RowView, Status
+    from ..engine import EngineLike, RowView, Status
     from ..engine.cell.cell import Cell, Member
 
 
@@ -64,7 +64,7 @@ class Members:
         return self.states[self.cell.current]
 
     @property
-    def engine(self) -> Engine:
+    def engine(self) -> EngineLike:
         return self.current.member.engine
 
     @property

@@ -38,6 +38,11 @@ from ..published.outbox import Batch, Outbox
 from ..setup.options import EngineOptions
 from ..setup.where import Where
 from ..thread.engine import CellFiles, Engine
+from ..thread.surface import EngineLike
+
+#: Gives a target's engine through the agent that holds it (target, options, outbox,
+#: the cell's job numbers), or None to run one here (see :class:`Cell`).
+Attach = Callable[["Target", EngineOptions, Outbox, Iterator[int]], EngineLike | None]
 
 if TYPE_CHECKING:  # the console's first paint loads none of these
     from ...commands.language import Command
@@ -79,7 +84,7 @@ class Member:
 
     name: str  # the profile's name, or host:port for an address
     target: Target
-    engine: Engine
+    engine: EngineLike
 
 
 def member_name(target: Target) -> str:
@@ -102,9 +107,13 @@ class Cell:
         notify: Callable[[], None] | None = None,
         where: Where = Where.CONSOLE,
         registry: Registry | None = None,
+        attach: Attach | None = None,
     ) -> None:
         """One engine per ``(name, target)``, in order; the first is the current one.
-        Raises InputError when a file cannot be opened (before any thread starts)."""
+        ``attach`` gives a target's engine through an agent, where one holds it (not
+        for a cell that keeps one file of its frames for all its targets: those run
+        here). Raises InputError when a file cannot be opened (before any thread
+        starts)."""
         if not targets:
             raise InputError("a cell needs at least one target")
         self._registry, self.where = registry, where
@@ -142,24 +151,28 @@ class Cell:
             name: replace(own, plant_name=name) if name != member_name(target) else own
             for name, target in targets
         }
-        self.members: tuple[Member, ...] = tuple(
-            Member(
-                name,
-                target,
-                Engine(
-                    target=target,
-                    options=named[name],
-                    outbox=Outbox(notify, lock),
-                    where=where,
-                    registry=registry,
-                    numbers=self._numbers,
-                    cell_files=(
-                        None
-                        if files is None or csv is None
-                        else CellFiles(name, files.view(name, place), csv)
-                    ),
+        def engine_for(place: int, name: str, target: Target) -> EngineLike:
+            outbox = Outbox(notify, lock)
+            if attach is not None and files is None:
+                attached = attach(target, named[name], outbox, self._numbers)
+                if attached is not None:
+                    return attached
+            return Engine(
+                target=target,
+                options=named[name],
+                outbox=outbox,
+                where=where,
+                registry=registry,
+                numbers=self._numbers,
+                cell_files=(
+                    None
+                    if files is None or csv is None
+                    else CellFiles(name, files.view(name, place), csv)
                 ),
             )
+
+        self.members: tuple[Member, ...] = tuple(
+            Member(name, target, engine_for(place, name, target))
             for place, (name, target) in enumerate(targets, 1)
         )
         self._queue_parts()

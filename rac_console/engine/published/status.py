@@ -81,6 +81,8 @@ class Status:
     #: The MQTT broker the watched values go to, by its state: connected, connecting,
     #: away, silent, refused, stopped; None: not publishing.
     broker: str | None = None
+    #: "via agent" when the engine runs in the agent (the status line says so).
+    via: str | None = None
 
     def exit_status(self, status: int) -> int:
         """A front end's exit status: 4 (a local I/O error) when it would be 0 but the

@@ -1,0 +1,140 @@
+"""``rac-console agent``: hold the targets for every front end of this user; ``agent
+status``: what a running agent holds. And the one place a front end asks to go through
+a running agent (:func:`attach_for`)."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import threading
+import time
+from collections.abc import Iterator
+from typing import TYPE_CHECKING
+
+from ..protocol.text import terminal_safe
+
+if TYPE_CHECKING:
+    from ..commands.target import Target
+    from ..engine import EngineLike, EngineOptions, Outbox
+    from ..engine.cell.cell import Attach
+    from ..engine.setup.where import Where
+
+
+def attach_for(args: argparse.Namespace, kind: str, where: Where) -> Attach | None:
+    """How ``kind`` (the console, the REPL, …) attaches a target to a running agent;
+    None with ``--direct``. A front end that feeds the plant itself (``--mqtt``,
+    ``--metrics``) goes direct: the agent's exporters are the agent's own."""
+    if getattr(args, "direct", False):
+        return None
+
+    def attach(
+        target: Target, options: EngineOptions, outbox: Outbox, numbers: Iterator[int]
+    ) -> EngineLike | None:
+        from ..agent.client import Refused, attach
+
+        if options.publish is not None or options.metrics is not None:
+            return None
+        try:
+            return attach(
+                target, options, client=kind, where=where, outbox=outbox, numbers=numbers
+            )
+        except Refused as exc:
+            print(f"rac-console: {terminal_safe(str(exc))}; going direct", file=sys.stderr)
+            return None
+
+    return attach
+
+
+def agent_command(args: argparse.Namespace) -> int:
+    if args.action == "status":
+        return _status(args)
+    return _run(args)
+
+
+def _say(text: str) -> None:
+    print(f"{time.strftime('%H:%M:%S')} agent: {terminal_safe(text)}", flush=True)
+
+
+def _run(args: argparse.Namespace) -> int:
+    from ..agent.endpoint import EndpointError
+    from ..agent.server import Agent
+    from ..engine.cell.cell import member_name
+
+    members: list[tuple[str, Target]] = getattr(args, "cell_targets", None) or [
+        (member_name(args.target), args.target)
+    ]
+    held: list[tuple[str, Target]] = []
+    stops = {}
+    for name, target in members:
+        if target.host is None:  # the built-in simulator, listening for the clients
+            from dataclasses import replace
+
+            from ..sim.thread import SimulatorThread
+
+            simulator = SimulatorThread().start()
+            target = replace(target, host=simulator.host, port=simulator.port, simulated=True)
+            name, stops[name] = "sim", simulator.stop
+        held.append((name, target))
+    agent = Agent(held, timeout=args.timeout, say=_say, simulators=stops)
+    try:
+        endpoint = agent.open()
+    except EndpointError as exc:
+        print(f"rac-console: {terminal_safe(str(exc))}", file=sys.stderr)
+        for stop in stops.values():
+            stop()
+        return 2
+    _say(f"listening on {endpoint} for this user's front ends; Ctrl-C stops")
+    serving = threading.Thread(target=agent.serve, name="rac-agent-accept", daemon=True)
+    serving.start()
+    _stop_on_terminate()
+    try:
+        while serving.is_alive():
+            serving.join(0.5)
+    except KeyboardInterrupt:
+        pass
+    agent.stop()
+    _say("stopped")
+    return 0
+
+
+def _stop_on_terminate() -> None:
+    """SIGTERM (systemd's stop, kill) stops the agent as Ctrl-C does: its clients are
+    told, its socket removed."""
+    import signal
+
+    def stop(signum: int, frame: object) -> None:
+        raise KeyboardInterrupt
+
+    if hasattr(signal, "SIGTERM"):
+        signal.signal(signal.SIGTERM, stop)
+
+
+def _status(args: argparse.Namespace) -> int:
+    from ..agent.client import agent_status
+
+    status = agent_status()
+    if status is None or status.get("op") != "status":
+        if args.json:
+            print(json.dumps({"running": False}))
+        else:
+            print("no agent is running for this user", file=sys.stderr)
+        return 1
+    del status["op"]
+    if args.json:
+        print(json.dumps({"running": True, **status}))
+        return 0
+    print(f"agent pid {status['pid']}, listening on {terminal_safe(str(status['endpoint']))}")
+    for target in status["targets"]:
+        print(
+            f"  target {terminal_safe(target['name'])} {terminal_safe(target['address'])}: "
+            f"{terminal_safe(str(target['state']))}, {target['clients']} client(s), "
+            f"{target['requests']} requests, {target['shared_polls']} polls shared"
+        )
+    for client in status["clients"]:
+        missed = f", {client['missed']} frames missed" if client["missed"] else ""
+        print(
+            f"  client {terminal_safe(client['name'])} (pid {client['pid']}) on "
+            f"{terminal_safe(client['target'])}{missed}"
+        )
+    return 0
