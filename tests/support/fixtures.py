@@ -50,6 +50,12 @@ def env(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> dict[str, str]:
     monkeypatch.setenv("XDG_DATA_HOME", str(home / ".local" / "share"))
     monkeypatch.setenv("XDG_STATE_HOME", str(home / ".local" / "state"))
     monkeypatch.setenv("XDG_CACHE_HOME", str(home / ".cache"))
+    # No agent of the machine's user is found: a test's front ends go direct unless
+    # the test starts an agent of its own there.
+    runtime = home / "run"
+    runtime.mkdir(mode=0o700)
+    monkeypatch.setenv("XDG_RUNTIME_DIR", str(runtime))
+    monkeypatch.delenv("RAC_CONSOLE_AGENT_DIR", raising=False)
     return dict(os.environ) | {"PYTHONIOENCODING": "utf-8", "COLUMNS": "200"}
 
 
