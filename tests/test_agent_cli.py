@@ -1,0 +1,98 @@
+"""``rac-console agent`` and ``agent status`` as a user runs them, and a console that
+goes through the agent, judged from the controller's side."""
+
+from __future__ import annotations
+
+import json
+import signal
+import socket
+import sys
+from pathlib import Path
+
+import pytest
+
+from tests.support.drivers import Running, cli, one_error_line
+from tests.support.servers import Memory, RecordingServer
+
+pytestmark = [
+    pytest.mark.slow,
+    pytest.mark.skipif(sys.platform == "win32", reason="the Unix socket's tests"),
+]
+
+
+def agent_socket(env: dict[str, str]) -> Path:
+    return Path(env["XDG_RUNTIME_DIR"]) / "rac-console" / "agent.sock"
+
+
+def start_agent(env: dict[str, str], *args: str) -> Running:
+    agent = Running(env, *args, "agent")
+    agent.wait_for("the agent listening", lambda: any("listening on" in line for line in agent.out))
+    return agent
+
+
+def test_the_agent_holds_its_target_says_so_and_leaves_nothing_behind(
+    env: dict[str, str], recording
+) -> None:
+    controller: RecordingServer = recording(Memory())
+    agent = start_agent(env, "-H", "127.0.0.1", "-p", str(controller.port))
+    try:
+        path = agent_socket(env)
+        assert oct(path.stat().st_mode & 0o777) == "0o600"
+        assert oct(path.parent.stat().st_mode & 0o777) == "0o700"
+        status = json.loads(cli(env, "agent", "status", "--json").stdout)
+        assert status["running"] is True
+        (target,) = status["targets"]
+        assert target["address"] == f"127.0.0.1:{controller.port}"
+        assert target["state"] == "connected"
+        again = cli(env, "-H", "127.0.0.1", "-p", str(controller.port), "agent")
+        assert again.returncode == 2
+        assert "an agent is already running" in one_error_line(again)
+        agent.process.send_signal(signal.SIGTERM)
+        assert agent.process.wait(20) == 0
+    finally:
+        agent.stop()
+    assert not agent_socket(env).exists()
+    gone = cli(env, "agent", "status")
+    assert gone.returncode == 1
+    assert "no agent is running" in gone.stderr
+    assert controller.accepted == 1  # the agent's one connection, and nothing after it
+
+
+def test_a_socket_left_by_a_dead_agent_is_no_agent(env: dict[str, str]) -> None:
+    path = agent_socket(env)
+    path.parent.mkdir(mode=0o700)
+    left = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
+    left.bind(str(path))
+    left.close()  # as an agent killed with SIGKILL leaves it: a file nobody listens on
+    status = cli(env, "agent", "status")
+    assert status.returncode == 1
+    agent = start_agent(env)  # takes its place
+    try:
+        assert json.loads(cli(env, "agent", "status", "--json").stdout)["running"] is True
+    finally:
+        agent.stop()
+
+
+def test_a_console_goes_through_the_agent_and_says_so(
+    env: dict[str, str], recording, terminal
+) -> None:
+    controller: RecordingServer = recording(Memory())
+    where = ["-H", "127.0.0.1", "-p", str(controller.port)]
+    agent = start_agent(env, *where)
+    try:
+        runtime = env["XDG_RUNTIME_DIR"]
+        command = f"env XDG_RUNTIME_DIR={runtime} {sys.executable} -m rac_console {' '.join(where)}"
+        terminal.tmux("new-session", "-d", "-s", "t", "-x", "100", "-y", "30", command)
+        terminal.until("via agent")
+        terminal.tmux("send-keys", "-t", "t", "put I 5 17", "Enter")
+        terminal.until("read back 17")
+        status = json.loads(cli(env, "agent", "status", "--json").stdout)
+        assert [c["target"] for c in status["clients"]] == [f"127.0.0.1:{controller.port}"]
+        assert controller.accepted == 1  # the agent's, which the console used
+        assert controller.lines.count(b"PUT:RC8:5:I:3,17") == 1
+    finally:
+        agent.stop()
+    terminal.until("the agent stopped: going on with a session of our own")
+    terminal.tmux("send-keys", "-t", "t", "get I 5", "Enter")
+    terminal.until("I5 = 17")
+    assert controller.accepted == 2  # its own, once the agent was gone
