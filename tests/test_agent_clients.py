@@ -120,3 +120,34 @@ def test_a_client_goes_on_alone_when_the_agent_stops(
     finally:
         a.engine.stop()
     assert AGENT_GONE.split(":")[0] in " ".join(a.alerts)
+
+
+def test_writes_reach_the_controller_in_the_order_the_agent_received_them(
+    agent_dir: Path, recording
+) -> None:
+    """a's put arrives first while a's engine waits on a slow GET; b's put arrives
+    next, b's engine idle: a's PUT still reaches the controller first."""
+    release = threading.Event()
+    controller: RecordingServer = recording(Memory(hold=(b"GET:RC8:1:I:", release)))
+    running = Running(controller)
+    a, b = client(running.target), client(running.target)
+    try:
+        a.engine.submit("get I 1")  # held by the controller until released
+        put_a = a.engine.submit("put I 2 5")
+        a.until(lambda: _lines_received(running, "test 1") == 2, "a's two lines at the agent")
+        put_b = b.engine.submit("put I 3 6")
+        b.until(lambda: _lines_received(running, "test 2") == 1, "b's line at the agent")
+        release.set()
+        a.until(lambda: put_a in a.results, "a's put answered")
+        b.until(lambda: put_b in b.results, "b's put answered")
+    finally:
+        release.set()
+        a.engine.stop()
+        b.engine.stop()
+        running.stop()
+    puts = [line for line in controller.lines if line.startswith(b"PUT")]
+    assert puts == [b"PUT:RC8:2:I:3,5", b"PUT:RC8:3:I:3,6"]
+
+
+def _lines_received(running: Running, name: str) -> int:
+    return next((c.lines for c in running.agent.clients.values() if c.name == name), 0)

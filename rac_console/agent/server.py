@@ -22,7 +22,7 @@ from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 
 from ..commands.target import Target
-from ..engine import Engine, EngineOptions, Outbox
+from ..engine import Engine, EngineOptions, Outbox, Result
 from ..engine.setup.where import Where
 from ..session import Session
 from ..session.shared import SharedConnection, SharedSession
@@ -74,6 +74,7 @@ class Client:
     wake: threading.Event = field(default_factory=threading.Event)  # its engine published
     since: float = field(default_factory=time.time)
     missed: int = 0
+    lines: int = 0  # lines received
 
     @property
     def name(self) -> str:
@@ -274,11 +275,16 @@ class Agent:
             numbers = engine.numbers
             assert isinstance(numbers, Given)
             numbers.next = int(message["seq"])
-            what = message["what"]
-            if isinstance(what, str):
-                engine.submit(what)  # numbered as the client numbered it
-            else:
-                engine.submit_command(what, message.get("line"), numbers.next)
+            what, line = message["what"], message.get("line")
+            order = client.held.connection.order
+            ticket = order.take(client.name) if self._may_write(engine, what) else None
+            client.lines += 1
+
+            def finished(result: Result, ticket: int | None = ticket) -> None:
+                if ticket is not None:
+                    order.done(ticket)
+
+            engine.submit_command(what, line, numbers.next, then=finished)
         elif op == "answer":
             engine.answer_confirm(int(message["seq"]), bool(message["yes"]))
         elif op == "cancel":
@@ -288,6 +294,22 @@ class Agent:
         elif op == "bye":
             return False
         return True
+
+    @staticmethod
+    def _may_write(engine: Engine, what: object) -> bool:
+        """Whether a line may write (its command's traits); a line that does not parse
+        writes nothing (its engine answers it with why)."""
+        registry = engine.registry
+        try:
+            command = registry.parse(what) if isinstance(what, str) else what
+        except Exception:
+            return False
+        if command is None:
+            return False
+        try:
+            return bool(registry.traits(command).writes_with(command))  # type: ignore[arg-type]
+        except LookupError:
+            return False
 
     def _write_to(self, client: Client) -> None:
         """Send the client what its engine publishes, as it comes (its own thread: a
@@ -322,6 +344,7 @@ class Agent:
                 return
         if client.engine is not None:
             client.engine.stop()
+        client.held.connection.order.done_all(client.name)
         client.channel.close()
         self.say(f"{client.name} detached ({why})")
 
@@ -358,6 +381,7 @@ class Agent:
                     "target": c.held.name,
                     "since": c.since,
                     "missed": c.missed,
+                    "lines": c.lines,
                 }
                 for c in clients
             ],

@@ -36,9 +36,7 @@ def attach_for(args: argparse.Namespace, kind: str, where: Where) -> Attach | No
         if options.publish is not None or options.metrics is not None:
             return None
         try:
-            return attach(
-                target, options, client=kind, where=where, outbox=outbox, numbers=numbers
-            )
+            return attach(target, options, client=kind, where=where, outbox=outbox, numbers=numbers)
         except Refused as exc:
             print(f"rac-console: {terminal_safe(str(exc))}; going direct", file=sys.stderr)
             return None

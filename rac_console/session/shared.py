@@ -50,6 +50,49 @@ class Turns:
                 self._changed.notify_all()
 
 
+class WriteOrder:
+    """Writes in the order the agent received them, whichever client sent them: a line
+    that may write takes a ticket as it arrives (:meth:`take`), and its request that
+    writes waits until every line that may write and came before it has finished
+    (:meth:`done`). Reads never wait. A client's lines run in its order, so the line it
+    is running is its oldest ticket not done."""
+
+    def __init__(self) -> None:
+        self._changed = threading.Condition()
+        self._next = 0
+        self._open: dict[int, str] = {}  # ticket -> the client that holds it
+
+    def take(self, client: str) -> int:
+        with self._changed:
+            ticket = self._next
+            self._next += 1
+            self._open[ticket] = client
+            return ticket
+
+    def done(self, ticket: int) -> None:
+        with self._changed:
+            if self._open.pop(ticket, None) is not None:
+                self._changed.notify_all()
+
+    def done_all(self, client: str) -> None:
+        """A client went away: its lines will never run."""
+        with self._changed:
+            for ticket in [t for t, c in self._open.items() if c == client]:
+                del self._open[ticket]
+            self._changed.notify_all()
+
+    def wait_turn(self, client: str) -> None:
+        """Before a write of ``client``: until the lines that arrived before its own
+        (its oldest ticket) have finished."""
+        with self._changed:
+            mine = [t for t, c in self._open.items() if c == client]
+            if not mine:
+                return
+            first = min(mine)
+            while any(t < first for t in self._open):
+                self._changed.wait()
+
+
 class SharedConnection:
     """The agent's one session to one controller; :meth:`attach` gives an engine its
     :class:`SharedSession`."""
@@ -57,6 +100,7 @@ class SharedConnection:
     def __init__(self, session: Session) -> None:
         self.session = session
         self.turns = Turns()
+        self.order = WriteOrder()
         self._sessions: list[SharedSession] = []
         self._lock = threading.Lock()
         self._asking: SharedSession | None = None  # whose request is on the wire
@@ -113,6 +157,8 @@ class SharedConnection:
     ) -> Reply:
         if poll:
             asker.shows_polls = observe
+        elif request.write:
+            self.order.wait_turn(asker.source)
         key = request.data
         with self.turns.turn():
             if cancelled is not None and cancelled():

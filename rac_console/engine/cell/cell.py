@@ -151,6 +151,7 @@ class Cell:
             name: replace(own, plant_name=name) if name != member_name(target) else own
             for name, target in targets
         }
+
         def engine_for(place: int, name: str, target: Target) -> EngineLike:
             outbox = Outbox(notify, lock)
             if attach is not None and files is None:
