@@ -12,8 +12,9 @@ import pytest
 
 from rac_console.agent.client import AGENT_GONE, RemoteEngine, attach
 from rac_console.agent.server import Agent
+from rac_console.commands.policy import TargetProfile, WritePolicy, Writes
 from rac_console.commands.target import Target
-from rac_console.engine import EngineOptions
+from rac_console.engine import ConfirmWrite, EngineOptions
 from rac_console.engine.setup.where import Where
 from tests.support.drivers import Front
 from tests.support.servers import Memory, RecordingServer
@@ -27,8 +28,8 @@ def agent_dir(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Path:
 
 
 class Running:
-    def __init__(self, server: RecordingServer) -> None:
-        self.target = Target("127.0.0.1", server.port)
+    def __init__(self, server: RecordingServer, target: Target | None = None) -> None:
+        self.target = target or Target("127.0.0.1", server.port)
         self.said: list[str] = []
         self.agent = Agent([("robot", self.target)], timeout=5.0, say=self.said.append)
         self.agent.open()
@@ -151,3 +152,44 @@ def test_writes_reach_the_controller_in_the_order_the_agent_received_them(
 
 def _lines_received(running: Running, name: str) -> int:
     return next((c.lines for c in running.agent.clients.values() if c.name == name), 0)
+
+
+class Answering(Front):
+    """A front end that answers each write's question as told."""
+
+    def __init__(self, engine: object, yes: bool) -> None:
+        super().__init__(engine)  # type: ignore[arg-type]
+        self.yes = yes
+        self.asked: list[str] = []
+
+    def take_confirm(self, target: str | None, question: ConfirmWrite) -> None:
+        self.asked.append(question.request)
+        self.engine.answer_confirm(question.seq, self.yes)
+
+
+@pytest.mark.parametrize("yes", [False, True], ids=["no", "yes"])
+def test_a_confirm_targets_question_is_asked_at_the_client(
+    agent_dir: Path, controller: RecordingServer, yes: bool
+) -> None:
+    policy = WritePolicy(Writes.CONFIRM, None, "profile cell3")
+    profile = TargetProfile("cell3", "127.0.0.1", controller.port, "Cell 3", "red", policy)
+    held = Target("127.0.0.1", controller.port, profile, policy)
+    running = Running(controller, held)
+    engine = attach(
+        Target("127.0.0.1", controller.port),
+        EngineOptions(timeout=5.0, interval=0.05),
+        client="test",
+        where=Where.CONSOLE,
+    )
+    assert isinstance(engine, RemoteEngine)
+    engine.start()
+    front = Answering(engine, yes)
+    try:
+        seq = engine.submit("put I 4 9")
+        front.until(lambda: seq in front.results, "the put's answer")
+    finally:
+        engine.stop()
+        running.stop()
+    assert front.asked == ["PUT:RC8:4:I:3,9"]
+    puts = [line for line in controller.lines if line.startswith(b"PUT")]
+    assert puts == ([b"PUT:RC8:4:I:3,9"] if yes else [])
