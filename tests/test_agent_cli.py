@@ -96,3 +96,50 @@ def test_a_console_goes_through_the_agent_and_says_so(
     terminal.tmux("send-keys", "-t", "t", "get I 5", "Enter")
     terminal.until("I5 = 17")
     assert controller.accepted == 2  # its own, once the agent was gone
+
+
+def test_a_one_shot_command_goes_through_the_agent_and_prints_what_it_would_alone(
+    env: dict[str, str], recording
+) -> None:
+    controller: RecordingServer = recording(Memory())
+    where = ["-H", "127.0.0.1", "-p", str(controller.port)]
+    alone = cli(env, *where, "put", "I", "5", "17", "--json")
+    agent = start_agent(env, *where)
+    try:
+        via = cli(env, *where, "put", "I", "5", "18", "--json")
+        read = cli(env, *where, "get", "I", "5")
+        direct = cli(env, *where, "get", "I", "5", "--direct")
+        accepted_with_agent = controller.accepted
+    finally:
+        agent.stop()
+    assert via.returncode == alone.returncode == 0
+    assert "via agent" in via.stderr and "via agent" not in alone.stderr
+    shown, before = json.loads(via.stdout), json.loads(alone.stdout)
+    assert set(shown) == set(before)  # the same fields, the same meaning
+    assert (shown["read_back"], shown["verified"]) == (18, True)
+    assert read.stdout.startswith("I5 = 18") and "via agent" in read.stderr
+    assert "via agent" not in direct.stderr
+    # alone: one; the agent: one for every command through it; --direct: one of its own
+    assert accepted_with_agent == 3
+    puts = [line for line in controller.lines if line.startswith(b"PUT")]
+    assert puts == [b"PUT:RC8:5:I:3,17", b"PUT:RC8:5:I:3,18"]
+
+
+def test_a_write_to_the_agents_simulator_stays_for_the_next_command(env: dict[str, str]) -> None:
+    agent = start_agent(env)
+    try:
+        put = cli(env, "put", "I", "1", "55")
+        get = cli(env, "get", "I", "1")
+    finally:
+        agent.stop()
+    assert put.returncode == 0 and "the write is gone" not in put.stderr
+    assert get.stdout.startswith("I1 = 55"), get.stdout
+
+
+def test_without_a_runtime_folder_nothing_unmeant_is_said(env: dict[str, str]) -> None:
+    bare = {k: v for k, v in env.items() if k != "XDG_RUNTIME_DIR"}
+    result = cli(bare, "get", "I", "1", "--direct")
+    assert result.returncode == 0
+    assert "Warning" not in result.stderr and "Traceback" not in result.stderr
+    status = cli(bare, "agent", "status")
+    assert "Warning" not in status.stderr and "Traceback" not in status.stderr

@@ -21,6 +21,7 @@ from ..commands.target import Target
 from ..engine import Engine, EngineOptions, Outbox
 from ..engine.setup.where import Where
 from . import endpoint as endpoints
+from .lines import may_write
 from .server import CLIENT_OPTIONS
 from .wire import PROTOCOL, RELEASE, Channel, ChannelClosed, Message
 
@@ -141,7 +142,8 @@ class RemoteEngine:
         self.numbers: Iterator[int] = itertools.count(1)
         self._registry: Registry | None = None
         self._then: dict[int, tuple[Callable[[Result], None] | None, bool]] = {}
-        self._pending: dict[int, str | None] = {}  # submitted, not answered: the line
+        #: Submitted, not answered: the line as shown, and whether it may write.
+        self._pending: dict[int, tuple[str | None, bool]] = {}
         self._lock = threading.Lock()
         self._observers: list[Callable[[Frame], None]] = []
         self._rows: dict[VarRef, RowView] = {}  # what the agent's engine watches
@@ -202,7 +204,7 @@ class RemoteEngine:
         number = next(self.numbers) if seq is None else seq
         with self._lock:
             self._then[number] = (then, publish)
-            self._pending[number] = line
+            self._pending[number] = (line, may_write(self.registry, what))
         self._send({"op": "line", "seq": number, "what": what, "line": line})
         return number
 
@@ -298,14 +300,18 @@ class RemoteEngine:
         """The agent went away: one line, then an engine of our own on the same
         outbox, watching what the agent's engine watched; unanswered lines answered."""
         from ..commands.language import Watch
-        from ..engine import Alert, Message, Result
+        from ..commands.outcome import ExitStatus, Outcome
+        from ..engine import Alert, Result
 
         self.outbox.put(Alert(AGENT_GONE.format(target=self._target_text())))
         with self._lock:
             pending, self._pending = dict(self._pending), {}
             thens, self._then = dict(self._then), {}
-        for seq, line in pending.items():
-            result = Result(seq, (Message(UNANSWERED, "error"),), line, None)
+        for seq, (line, writes) in pending.items():
+            unknown = Outcome(
+                None, ExitStatus.TRANSPORT, error=UNANSWERED, input_line=line, write_unknown=writes
+            )
+            result = Result(seq, (unknown,), line, None)
             then, publish = thens.get(seq, (None, True))
             if then is not None:
                 then(result)

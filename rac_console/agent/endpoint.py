@@ -49,12 +49,12 @@ def folder() -> Path:
         runtime = os.environ.get("XDG_RUNTIME_DIR")
         if runtime and Path(runtime).is_dir():
             base = Path(runtime) / "rac-console"
-        else:
+        elif sys.platform == "darwin":
             from platformdirs import user_runtime_dir
 
             base = Path(user_runtime_dir("rac-console"))
-            if not base.parent.is_dir():
-                base = Path(tempfile.gettempdir()) / f"rac-console-{os.getuid()}"
+        else:  # no runtime folder (a bare ssh or su session): one of the user's in /tmp
+            base = Path(tempfile.gettempdir()) / f"rac-console-{os.getuid()}"
     base.mkdir(mode=0o700, parents=True, exist_ok=True)
     if not WINDOWS:
         info = base.stat()

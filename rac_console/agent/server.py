@@ -27,6 +27,7 @@ from ..engine.setup.where import Where
 from ..session import Session
 from ..session.shared import SharedConnection, SharedSession
 from . import endpoint as endpoints
+from .lines import may_write
 from .wire import Channel, ChannelClosed, Message, hello_problem
 
 #: A client has this long to say hello.
@@ -277,7 +278,7 @@ class Agent:
             numbers.next = int(message["seq"])
             what, line = message["what"], message.get("line")
             order = client.held.connection.order
-            ticket = order.take(client.name) if self._may_write(engine, what) else None
+            ticket = order.take(client.name) if may_write(engine.registry, what) else None
             client.lines += 1
 
             def finished(result: Result, ticket: int | None = ticket) -> None:
@@ -294,22 +295,6 @@ class Agent:
         elif op == "bye":
             return False
         return True
-
-    @staticmethod
-    def _may_write(engine: Engine, what: object) -> bool:
-        """Whether a line may write (its command's traits); a line that does not parse
-        writes nothing (its engine answers it with why)."""
-        registry = engine.registry
-        try:
-            command = registry.parse(what) if isinstance(what, str) else what
-        except Exception:
-            return False
-        if command is None:
-            return False
-        try:
-            return bool(registry.traits(command).writes_with(command))  # type: ignore[arg-type]
-        except LookupError:
-            return False
 
     def _write_to(self, client: Client) -> None:
         """Send the client what its engine publishes, as it comes (its own thread: a

@@ -15,8 +15,9 @@ from typing import TYPE_CHECKING
 from ..protocol.text import terminal_safe
 
 if TYPE_CHECKING:
+    from ..commands.language import Command
     from ..commands.target import Target
-    from ..engine import EngineLike, EngineOptions, Outbox
+    from ..engine import EngineLike, EngineOptions, Feedback, Outbox
     from ..engine.cell.cell import Attach
     from ..engine.setup.where import Where
 
@@ -42,6 +43,65 @@ def attach_for(args: argparse.Namespace, kind: str, where: Where) -> Attach | No
             return None
 
     return attach
+
+
+#: The longest a one-shot command waits for the agent's answer beyond its own timeout
+#: (the agent answers every line; this only bounds a wait on an agent that hangs).
+ANSWER_MARGIN = 30.0
+
+
+def one_line_via_agent(
+    args: argparse.Namespace, command: Command, line: str
+) -> list[Feedback] | None:
+    """``get``, ``put`` or ``send`` through a running agent that holds the target: what
+    it said, as the command line shows it run here; None to run it here (no agent, not
+    held, ``--direct``, or a ``--record``/``--log`` file of the command's own). Said on
+    stderr only: stdout and ``--json`` are as without an agent."""
+    if getattr(args, "direct", False) or args.record or getattr(args, "transcript", None):
+        return None
+    from ..agent.client import Refused, attach
+    from ..engine import ConfirmWrite, EngineOptions, Result
+    from ..engine.setup.where import Where
+
+    options = EngineOptions(timeout=args.timeout, verify=args.verify, frames=False)
+    try:
+        engine = attach(args.target, options, client="command", where=Where.COMMAND_LINE)
+    except Refused as exc:
+        print(f"rac-console: {terminal_safe(str(exc))}; going direct", file=sys.stderr)
+        return None
+    if engine is None:
+        return None
+    print(f"rac-console: via agent, as {terminal_safe(engine.name)}", file=sys.stderr)
+    woken = threading.Event()
+    engine.outbox.notify = woken.set
+    engine.start()
+    answer: list[Result] = []
+    try:
+        seq = engine.submit_command(command, line, then=answer.append)
+        deadline = time.monotonic() + args.timeout * 4 + ANSWER_MARGIN
+        while not answer and time.monotonic() < deadline:
+            woken.wait(0.1)
+            woken.clear()
+            for event in engine.outbox.drain().events:
+                if isinstance(event, ConfirmWrite) and event.seq == seq:
+                    engine.answer_confirm(seq, bool(args.yes))  # --yes: said yes ahead
+    finally:
+        engine.stop()
+    if not answer:
+        from ..agent.lines import may_write
+        from ..commands.outcome import ExitStatus, Outcome
+
+        writes = may_write(engine.registry, command)
+        return [Outcome(None, ExitStatus.TRANSPORT, error=UNANSWERED_IN_TIME, input_line=line,
+                        write_unknown=writes)]  # fmt: skip
+    return list(answer[0].feedback)
+
+
+#: Said when the agent took a line and gave no answer in time.
+UNANSWERED_IN_TIME = (
+    "the agent gave no answer in time: the outcome is unknown (use --direct, or "
+    "rac-console agent status)"
+)
 
 
 def agent_command(args: argparse.Namespace) -> int:

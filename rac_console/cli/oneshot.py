@@ -119,13 +119,21 @@ def one_command(args: argparse.Namespace) -> ExitStatus:
         output.target = pick_member(args)  # a cell: get @cell3 I 10
         command = exchange_from_words(args.command, args.words)
         writes = BUILTIN.traits(command).writes_with(command)
-        with open_session(args, output.local_failure) as session:
-            results = _results(session, command, args, line, Where.COMMAND_LINE)
+        from .agent import one_line_via_agent
+
+        feedback = one_line_via_agent(args, command, line)
+        via_agent = feedback is not None
+        if feedback is not None:
+            results = _shown(feedback, line)
+        else:
+            with open_session(args, output.local_failure) as session:
+                results = _results(session, command, args, line, Where.COMMAND_LINE)
         outcome = next(r for r in results if isinstance(r, Outcome))  # an exchange has one
     except InputError as exc:
-        outcome = refused(line, str(exc))
+        outcome, via_agent = refused(line, str(exc)), False
     output.show(pointed_to_check(outcome, args.target))
-    if writes and outcome.status is not ExitStatus.REFUSED and own_simulator(args.target):
+    gone = own_simulator(args.target) and not via_agent  # the agent's simulator keeps it
+    if writes and outcome.status is not ExitStatus.REFUSED and gone:
         print_error(output.err, WRITE_GONE)  # stderr only: stdout and --json stay as they are
     return output.status(outcome.status)
 
