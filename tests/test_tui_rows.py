@@ -4,6 +4,7 @@ each target, the help's keys in the order a user looks for them."""
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -280,11 +281,15 @@ async def test_rows_are_scrolled_to_however_long_the_table_takes_to_measure_them
             return draw(crop)
 
         monkeypatch.setattr(table, "render_lines", counted)
+
+        def drawn_since(seen: int) -> Callable[[], bool]:
+            return lambda: draws > seen
+
         await type_line(pilot, "watch IO 128-131")
         await until(pilot, lambda: table.row_count == 6, "the new rows")
         for _ in range(3 * REVEAL_TRIES):  # screens drawn before the rows are measured
             table.refresh()
-            await until(pilot, lambda seen=draws: draws > seen, "the table drawn again")
+            await until(pilot, drawn_since(draws), "the table drawn again")
         held = False
         table.post_message(events.Idle())
         room = table.scrollable_content_region.height - table.header_height
