@@ -39,22 +39,7 @@ def folder() -> Path:
     """The user's own folder for the agent's endpoint, made 0700 if it is not there;
     refused when it is another user's or others can write it."""
     override = os.environ.get("RAC_CONSOLE_AGENT_DIR")
-    if override:
-        base = Path(override)
-    elif WINDOWS:
-        from platformdirs import user_runtime_dir
-
-        base = Path(user_runtime_dir("rac-console", appauthor=False))
-    else:
-        runtime = os.environ.get("XDG_RUNTIME_DIR")
-        if runtime and Path(runtime).is_dir():
-            base = Path(runtime) / "rac-console"
-        elif sys.platform == "darwin":
-            from platformdirs import user_runtime_dir
-
-            base = Path(user_runtime_dir("rac-console"))
-        else:  # no runtime folder (a bare ssh or su session): one of the user's in /tmp
-            base = Path(tempfile.gettempdir()) / f"rac-console-{os.getuid()}"
+    base = Path(override) if override else _runtime_base()
     base.mkdir(mode=0o700, parents=True, exist_ok=True)
     if not WINDOWS:
         info = base.stat()
@@ -63,6 +48,23 @@ def folder() -> Path:
         if stat.S_IMODE(info.st_mode) & 0o077:
             base.chmod(0o700)
     return base
+
+
+def _runtime_base() -> Path:
+    """The user's runtime folder for the agent (not made here)."""
+    if WINDOWS:
+        from platformdirs import user_runtime_dir
+
+        return Path(user_runtime_dir("rac-console", appauthor=False))
+    runtime = os.environ.get("XDG_RUNTIME_DIR")
+    if runtime and Path(runtime).is_dir():
+        return Path(runtime) / "rac-console"
+    if sys.platform == "darwin":
+        from platformdirs import user_runtime_dir
+
+        return Path(user_runtime_dir("rac-console"))
+    # No runtime folder (a bare ssh or su session): one of the user's in /tmp.
+    return Path(tempfile.gettempdir()) / f"rac-console-{os.getuid()}"
 
 
 @dataclass(frozen=True)
@@ -126,6 +128,17 @@ def forget(endpoint: Endpoint) -> None:
             found = _read_port_file(base / PORT_FILE)
             if found is not None and found.port == endpoint.port:
                 (base / PORT_FILE).unlink()
+
+
+def present() -> bool:
+    """Whether an agent may be running (its socket or port file is there): checked
+    before a front end loads what talking to one needs. No file is made."""
+    try:
+        runtime = os.environ.get("RAC_CONSOLE_AGENT_DIR") or _runtime_base()
+        name = PORT_FILE if WINDOWS else SOCKET_NAME
+        return (Path(runtime) / name).exists()
+    except OSError:
+        return False
 
 
 def reach() -> tuple[socket.socket, Endpoint] | None:

@@ -32,10 +32,12 @@ def attach_for(args: argparse.Namespace, kind: str, where: Where) -> Attach | No
     def attach(
         target: Target, options: EngineOptions, outbox: Outbox, numbers: Iterator[int]
     ) -> EngineLike | None:
+        from ..agent.endpoint import present
+
+        if options.publish is not None or options.metrics is not None or not present():
+            return None
         from ..agent.client import Refused, attach
 
-        if options.publish is not None or options.metrics is not None:
-            return None
         try:
             return attach(target, options, client=kind, where=where, outbox=outbox, numbers=numbers)
         except Refused as exc:
@@ -58,6 +60,10 @@ def one_line_via_agent(
     held, ``--direct``, or a ``--record``/``--log`` file of the command's own). Said on
     stderr only: stdout and ``--json`` are as without an agent."""
     if getattr(args, "direct", False) or args.record or getattr(args, "transcript", None):
+        return None
+    from ..agent.endpoint import present
+
+    if not present():
         return None
     from ..agent.client import Refused, attach
     from ..engine import ConfirmWrite, EngineOptions, Result
