@@ -4,9 +4,14 @@ goes through the agent, judged from the controller's side."""
 from __future__ import annotations
 
 import json
+import os
+import shutil
 import signal
 import socket
+import subprocess
 import sys
+import tempfile
+from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
@@ -143,3 +148,80 @@ def test_without_a_runtime_folder_nothing_unmeant_is_said(env: dict[str, str]) -
     assert "Warning" not in result.stderr and "Traceback" not in result.stderr
     status = cli(bare, "agent", "status")
     assert "Warning" not in status.stderr and "Traceback" not in status.stderr
+
+
+def _as_nobody() -> list[str]:
+    """A command prefix that runs as another user, or a skip where that cannot be."""
+    if not hasattr(os, "geteuid") or os.geteuid() != 0 or shutil.which("setpriv") is None:
+        pytest.skip("needs root and setpriv to run a client as another user")
+    return ["setpriv", "--reuid=65534", "--regid=65534", "--clear-groups"]
+
+
+def _their_env(env: dict[str, str], base: Path) -> dict[str, str]:
+    """The other user's home and folders, where they may write."""
+    home = base / "home"
+    home.mkdir(exist_ok=True)
+    home.chmod(0o777)
+    places = ("XDG_CONFIG_HOME", "XDG_STATE_HOME", "XDG_CACHE_HOME", "XDG_DATA_HOME")
+    return env | {"HOME": str(home)} | {name: str(home / name) for name in places}
+
+
+@pytest.fixture
+def open_folder() -> Iterator[Path]:
+    """A folder another user can walk to (the test's own tmp_path is root's alone)."""
+    base = Path(tempfile.mkdtemp(prefix="rac-agent-"))
+    base.chmod(0o755)
+    yield base
+    shutil.rmtree(base, ignore_errors=True)
+
+
+def test_another_user_finds_no_agent(env: dict[str, str], open_folder: Path) -> None:
+    prefix = _as_nobody()
+    folder = open_folder / "agent"
+    env = env | {"RAC_CONSOLE_AGENT_DIR": str(folder)}
+    agent = start_agent(env)
+    try:
+        theirs = _their_env(env, open_folder)
+        status = subprocess.run(
+            [*prefix, sys.executable, "-m", "rac_console", "agent", "status"],
+            env=theirs, capture_output=True, text=True, timeout=60,
+        )  # fmt: skip
+        assert status.returncode == 1, status.stderr
+        assert "no agent is running" in status.stderr
+        assert "Traceback" not in status.stderr
+    finally:
+        agent.stop()
+    assert not any("attached" in line for line in agent.out)
+
+
+def test_the_agent_turns_away_another_user_even_through_an_open_socket(
+    env: dict[str, str], open_folder: Path
+) -> None:
+    prefix = _as_nobody()
+    folder = open_folder / "agent"
+    env = env | {"RAC_CONSOLE_AGENT_DIR": str(folder)}
+    agent = start_agent(env)
+    try:
+        folder.chmod(0o755)  # as a mistake would leave them
+        (folder / "agent.sock").chmod(0o666)
+        probe = (
+            "import socket, sys\n"
+            "from rac_console.agent.wire import Channel, PROTOCOL, RELEASE\n"
+            "s = socket.socket(socket.AF_UNIX)\n"
+            f"s.connect({str(folder / 'agent.sock')!r})\n"
+            "c = Channel(s)\n"
+            "try:\n"
+            "    hello = {'op': 'hello', 'protocol': PROTOCOL, 'release': RELEASE}\n"
+            "    c.send(hello | {'want': 'status'})\n"
+            "    print('ANSWER', c.receive())\n"
+            "except Exception as e:\n"
+            "    print('CLOSED', type(e).__name__)\n"
+        )
+        result = subprocess.run(
+            [*prefix, sys.executable, "-c", probe],
+            env=_their_env(env, open_folder), capture_output=True, text=True, timeout=60,
+            cwd=str(Path(__file__).parent.parent),
+        )  # fmt: skip
+    finally:
+        agent.stop()
+    assert result.stdout.startswith("CLOSED"), result.stdout + result.stderr
