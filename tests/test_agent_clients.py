@@ -193,3 +193,32 @@ def test_a_confirm_targets_question_is_asked_at_the_client(
     assert front.asked == ["PUT:RC8:4:I:3,9"]
     puts = [line for line in controller.lines if line.startswith(b"PUT")]
     assert puts == ([b"PUT:RC8:4:I:3,9"] if yes else [])
+
+
+def test_a_client_that_goes_away_leaves_no_watch_behind(
+    running: Running, controller: RecordingServer
+) -> None:
+    from rac_console.agent import endpoint
+    from rac_console.agent.wire import PROTOCOL, RELEASE, Channel
+
+    reached = endpoint.reach()
+    assert reached is not None
+    gone = Channel(reached[0])  # a client killed: it says no goodbye
+    gone.send(
+        {"op": "hello", "protocol": PROTOCOL, "release": RELEASE, "client": "killed",
+         "host": "127.0.0.1", "port": controller.port, "options": {"interval": 0.05}}
+    )  # fmt: skip
+    assert gone.receive()["op"] == "welcome"
+    gone.send({"op": "line", "seq": 1, "what": "watch I 20", "line": "watch I 20"})
+    b = client(running.target)
+    try:
+        b.run("watch I 21")
+        b.until(lambda: controller.lines.count(b"GET:RC8:20:I:") >= 2, "the killed one's polls")
+        gone.sock.close()
+        b.until(lambda: len(running.agent.clients) == 1, "the killed one gone")
+        left = controller.lines.count(b"GET:RC8:20:I:")
+        ours = controller.lines.count(b"GET:RC8:21:I:")
+        b.until(lambda: controller.lines.count(b"GET:RC8:21:I:") >= ours + 5, "five more polls")
+    finally:
+        b.engine.stop()
+    assert controller.lines.count(b"GET:RC8:20:I:") == left

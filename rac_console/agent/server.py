@@ -76,6 +76,7 @@ class Client:
     since: float = field(default_factory=time.time)
     missed: int = 0
     lines: int = 0  # lines received
+    ending: bool = False
 
     @property
     def name(self) -> str:
@@ -324,13 +325,18 @@ class Agent:
                 return
 
     def _end(self, client: Client, why: str) -> None:
+        """The client is gone: its engine stops (its watches with it) before it leaves
+        the list, so a client no longer listed polls nothing."""
         with self._lock:
-            if self.clients.pop(client.number, None) is None:
+            if client.ending:
                 return
+            client.ending = True
         if client.engine is not None:
             client.engine.stop()
         client.held.connection.order.done_all(client.name)
         client.channel.close()
+        with self._lock:
+            self.clients.pop(client.number, None)
         self.say(f"{client.name} detached ({why})")
 
     @staticmethod
