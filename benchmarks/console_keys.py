@@ -1,7 +1,7 @@
 """Key to screen in a real terminal: the console in tmux polling 200 rows flat out.
 
     python benchmarks/console_keys.py [--seconds 8] [--rounds 3] [--package DIR ...]
-                                      [--json FILE]
+                                      [--agent] [--json FILE]
 
 Each console (this checkout's, then each ``--package DIR``: ``PYTHONPATH=DIR``, run from
 DIR) runs in its own tmux session at 120x40 (COLUMNS and LINES unset) against the C
@@ -18,6 +18,11 @@ alone while the others are stopped (SIGSTOP), so they share nothing but the mach
     own "N polls/s" is shown beside it;
   - the session client: ``Session.get`` in a loop in its own process
     (``bench_clients.py session``).
+
+With ``--agent``, this checkout's console runs a second time through an agent of its
+own (``rac-console -H ... agent``), measured beside the first: its polls counted on the
+agent's socket, its CPU the console's and the agent's together, both stopped while the
+other sides run.
 
 Targets: key-to-screen p95 <= 50 ms, console polls >= 0.5x the session client's rate.
 """
@@ -117,6 +122,16 @@ class Console:
     polls: list[float] = field(default_factory=list)  # per round: polls/s (socket bytes)
     shown_rates: list[float] = field(default_factory=list)  # the status line's figure
     cpu: list[float] = field(default_factory=list)  # per round: CPU % of one core
+    via_agent: bool = False  # the console attached to an agent of its own (--agent)
+    agent: subprocess.Popen[str] | None = None
+
+    @property
+    def poller(self) -> int:
+        """The process whose socket polls the responder: the agent's, when there is one."""
+        return self.agent.pid if self.agent is not None else self.pid
+
+    def pids(self) -> list[int]:
+        return [self.pid] + ([self.agent.pid] if self.agent is not None else [])
 
 
 def received_bytes(pid: int) -> int:
@@ -166,7 +181,10 @@ def start_console(
         "XDG_CONFIG_HOME": home,
         "XDG_STATE_HOME": home,
         "PYTHONPATH": console.package,
+        "RAC_CONSOLE_AGENT_DIR": home / "agent",
     }
+    if console.via_agent:
+        console.agent = start_agent(console.package, port, env)
     command = (
         f"cd {shlex.quote(str(console.package))} && exec env -u COLUMNS -u LINES "
         + " ".join(f"{k}={shlex.quote(str(v))}" for k, v in env.items())
@@ -194,10 +212,28 @@ def start_console(
         wait_for(control, console.name, f"{share * len(names)} rows")
         for name in names:
             type_line(control, console.name, f"@{name} interval 0")
-    before = received_bytes(console.pid)
+    if console.via_agent:
+        wait_for(control, console.name, "via agent")
+    before = received_bytes(console.poller)
     time.sleep(1.0)
-    if received_bytes(console.pid) <= before:
+    if received_bytes(console.poller) <= before:
         raise RuntimeError(f"{console.label}: the console is not polling")
+
+
+def start_agent(package: Path, port: int, env: dict[str, object]) -> subprocess.Popen[str]:
+    """``rac-console -H 127.0.0.1 -p PORT agent`` for one console; once it listens."""
+    agent = subprocess.Popen(
+        [sys.executable, "-m", "rac_console", "-H", "127.0.0.1", "-p", str(port), "agent"],
+        cwd=package,
+        env={**os.environ, **{k: str(v) for k, v in env.items()}},
+        stdout=subprocess.PIPE,
+        text=True,
+    )
+    assert agent.stdout is not None
+    for line in agent.stdout:
+        if "listening on" in line:
+            return agent
+    raise RuntimeError("the agent did not start")
 
 
 def screen_value(control: Control, name: str, fmt: str) -> str:
@@ -218,11 +254,14 @@ def clear_line(control: Control, console: Console) -> str:
 
 
 def measure_console(control: Control, console: Console, seconds: float) -> None:
-    """One round: keys timed for ``seconds`` while the console polls; its poll rate."""
-    os.kill(console.pid, signal.SIGCONT)
+    """One round: keys timed for ``seconds`` while the console polls; its poll rate
+    (with an agent: the agent's socket, and the CPU of both)."""
+    for pid in console.pids():
+        os.kill(pid, signal.SIGCONT)
     time.sleep(1.0)  # polling back at speed
     typed = clear_line(control, console)
-    cpu0, bytes0, t0 = proc_cpu(console.pid), received_bytes(console.pid), time.monotonic()
+    cpu0 = sum(proc_cpu(pid) for pid in console.pids())
+    bytes0, t0 = received_bytes(console.poller), time.monotonic()
     lines: list[str] = []
     next_key = time.monotonic() + KEY_EVERY
     n = 0
@@ -249,14 +288,16 @@ def measure_console(control: Control, console: Console, seconds: float) -> None:
                 break
             time.sleep(SCREEN_POLL)
     t1 = time.monotonic()
-    polls = (received_bytes(console.pid) - bytes0) / REPLY_BYTES
-    console.cpu.append((proc_cpu(console.pid) - cpu0) / (t1 - t0) * 100)
+    polls = (received_bytes(console.poller) - bytes0) / REPLY_BYTES
+    cpu1 = sum(proc_cpu(pid) for pid in console.pids())
+    console.cpu.append((cpu1 - cpu0) / (t1 - t0) * 100)
     console.polls.append(polls / (t1 - t0))
     shown = [m.group(1) for line in lines if (m := STATUS_RATE.search(line))]
     if shown:
         console.shown_rates.append(float(shown[0].replace(",", "")))
     control.command(f"send-keys -t {console.name} C-u")
-    os.kill(console.pid, signal.SIGSTOP)
+    for pid in console.pids():
+        os.kill(pid, signal.SIGSTOP)
 
 
 class SimServer(Server):
@@ -298,6 +339,11 @@ def main() -> None:
     )
     parser.add_argument("--json", metavar="FILE")
     parser.add_argument(
+        "--agent",
+        action="store_true",
+        help="this checkout's console also through an agent of its own, beside it",
+    )
+    parser.add_argument(
         "--cell",
         type=int,
         default=1,
@@ -311,6 +357,8 @@ def main() -> None:
     consoles = [
         Console(label, package, f"console{n}") for n, (label, package) in enumerate(packages)
     ]
+    if args.agent:
+        consoles.append(Console("agent", HERE.parent, "console-agent", via_agent=True))
     load_before = loadavg()
     programs = CPrograms()
     server: Server | None = None
@@ -335,7 +383,8 @@ def main() -> None:
                 home = Path(tmp) / console.name
                 home.mkdir()
                 start_console(control, socket, console, port, home, cell)
-                os.kill(console.pid, signal.SIGSTOP)
+                for pid in console.pids():
+                    os.kill(pid, signal.SIGSTOP)
             sides: list[Console | None] = [None, *consoles]  # None: the session client
             for n in range(args.rounds):
                 order = sides if n % 2 == 0 else sides[::-1]
@@ -349,9 +398,9 @@ def main() -> None:
                 print(f"round {n + 1}/{args.rounds} done; load {loadavg()}", flush=True)
         finally:
             for console in consoles:
-                if console.pid:
+                for pid in console.pids() if console.pid else ():
                     with contextlib.suppress(ProcessLookupError):
-                        os.kill(console.pid, signal.SIGCONT)
+                        os.kill(pid, signal.SIGCONT)
             subprocess.run(["tmux", "-L", socket, "kill-server"], capture_output=True, check=False)
             if control is not None:
                 control.close()
@@ -359,6 +408,10 @@ def main() -> None:
                 if console.pid:
                     with contextlib.suppress(ProcessLookupError):
                         os.kill(console.pid, signal.SIGKILL)  # gone with its terminal, or now
+            for console in consoles:
+                if console.agent is not None:
+                    console.agent.terminate()
+                    console.agent.wait(10)
             if server is not None:
                 server.stop()
             for extra in more:
