@@ -31,23 +31,31 @@ class Turns:
     """A queue of turns: whoever asked first goes first (a lock is not fair)."""
 
     def __init__(self) -> None:
-        self._changed = threading.Condition()
+        self._changed = threading.Condition(threading.Lock())
         self._next = 0
         self._serving = 0
 
-    @contextmanager
-    def turn(self) -> Iterator[None]:
+    def take(self) -> None:
+        """Wait for this caller's turn (then :meth:`give_up` when done)."""
         with self._changed:
             ticket = self._next
             self._next += 1
             while self._serving != ticket:
                 self._changed.wait()
+
+    def give_up(self) -> None:
+        with self._changed:
+            self._serving += 1
+            if self._next != self._serving:  # someone waits
+                self._changed.notify_all()
+
+    @contextmanager
+    def turn(self) -> Iterator[None]:
+        self.take()
         try:
             yield
         finally:
-            with self._changed:
-                self._serving += 1
-                self._changed.notify_all()
+            self.give_up()
 
 
 class WriteOrder:
@@ -101,10 +109,10 @@ class SharedConnection:
         self.session = session
         self.turns = Turns()
         self.order = WriteOrder()
-        self._sessions: list[SharedSession] = []
+        #: The attached sessions, replaced whole on a change (read without a lock).
+        self._sessions: tuple[SharedSession, ...] = ()
         self._lock = threading.Lock()
         self._asking: SharedSession | None = None  # whose request is on the wire
-        self._asking_polls = False
         #: The last good answer to each GET (its bytes): when it came, and the reply.
         self._read: dict[bytes, tuple[float, Reply]] = {}
         self.requests = 0  # requests sent
@@ -126,18 +134,16 @@ class SharedConnection:
         of the other clients' requests."""
         shared = SharedSession(self, source, foreign, timeout)
         with self._lock:
-            self._sessions.append(shared)
+            self._sessions = (*self._sessions, shared)
         return shared
 
     def detach(self, shared: SharedSession) -> None:
         with self._lock:
-            if shared in self._sessions:
-                self._sessions.remove(shared)
+            self._sessions = tuple(s for s in self._sessions if s is not shared)
 
     @property
     def clients(self) -> int:
-        with self._lock:
-            return len(self._sessions)
+        return len(self._sessions)
 
     def close(self) -> None:
         """The agent stops: the connection closes; a request waiting its turn fails."""
@@ -160,7 +166,9 @@ class SharedConnection:
         elif request.write:
             self.order.wait_turn(asker.source)
         key = request.data
-        with self.turns.turn():
+        turns = self.turns
+        turns.take()
+        try:
             if cancelled is not None and cancelled():
                 raise NotSent("cancelled before it was sent")
             if poll:
@@ -169,10 +177,10 @@ class SharedConnection:
                     self.shared_polls += 1
                     asker.answered[key] = read[0]
                     return read[1]
-            with self._lock:
-                others = [s for s in self._sessions if s is not asker]
-            observed = observe or any(not poll or s.shows_polls for s in others)
-            self._asking, self._asking_polls = asker, poll
+            observed = observe or any(
+                s is not asker and (not poll or s.shows_polls) for s in self._sessions
+            )
+            self._asking = asker
             self.session.timeout = asker.timeout
             try:
                 self.requests += 1
@@ -181,13 +189,16 @@ class SharedConnection:
                 )
             finally:
                 self._asking = None
-            now = time.monotonic()
-            if request.read_only_safe:
+            if request.line.is_get:
+                now = time.monotonic()
                 self._read[key] = (now, reply)
                 asker.answered[key] = now
             asker.last_rtt = reply.rtt
-            self._tell_state(asker)
+            if asker.known_state != self.session.state:
+                self._tell_state(asker)
             return reply
+        finally:
+            turns.give_up()
 
     def check_idle(self, asker: SharedSession) -> str | None:
         with self.turns.turn():
@@ -237,9 +248,8 @@ class SharedConnection:
         if asker is not None:
             asker.resent(reason)
 
-    def _attached(self) -> list[SharedSession]:
-        with self._lock:
-            return list(self._sessions)
+    def _attached(self) -> tuple[SharedSession, ...]:
+        return self._sessions
 
 
 class SharedSession(Session):
