@@ -260,6 +260,7 @@ OPTIONS = {
     "--log": Option("--log", "FILE"),
     "--no-verify": Option("--no-verify", None),
     "--yes": Option("--yes", None),
+    "--direct": Option("--direct", None),
 }
 TOP_OPTIONS = OPTIONS | {
     "--version": Option("--version", None),
