@@ -49,6 +49,8 @@ SOCKET_OWNERS = {
     "sim/session.py",  # each connection,
     "sim/lane.py",  # and the epoll lane that serves connections on Linux
     "plant/metrics_server.py",  # /metrics: its listener and connections, on one thread
+    "agent/endpoint.py",  # the agent's listener, and a client's connection to it
+    "agent/wire.py",  # the messages on one such connection
 }
 SOCKET_CALLS = {
     "create_connection",

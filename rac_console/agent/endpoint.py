@@ -23,9 +23,15 @@ import sys
 import tempfile
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from .wire import Channel
 
 #: How long a client waits to reach an agent that is there (a local socket: at once).
 CONNECT_TIMEOUT = 2.0
+#: How often the agent's accept loop wakes to see whether it should stop.
+ACCEPT_WAKE = 0.2
 SOCKET_NAME = "agent.sock"
 PORT_FILE = "agent.json"  # Windows: the port and the token
 WINDOWS = sys.platform == "win32"
@@ -79,7 +85,36 @@ class Endpoint:
         return str(self.path) if self.path is not None else f"127.0.0.1:{self.port}"
 
 
-def listen() -> tuple[socket.socket, Endpoint]:
+class Listener:
+    """The agent's listening socket: each client as a :class:`~.wire.Channel`."""
+
+    def __init__(self, server: socket.socket) -> None:
+        self._server = server
+        server.settimeout(ACCEPT_WAKE)
+
+    def accept(self) -> Channel | None:
+        """The next client, or None after :data:`ACCEPT_WAKE` seconds without one;
+        OSError once closed."""
+        from .wire import Channel
+
+        try:
+            sock, _ = self._server.accept()
+        except TimeoutError:
+            return None
+        sock.settimeout(None)
+        return Channel(sock)
+
+    def close(self) -> None:
+        self._server.close()
+
+
+def listen() -> tuple[Listener, Endpoint]:
+    """The agent's listener (see :func:`listen_socket`)."""
+    server, endpoint = listen_socket()
+    return Listener(server), endpoint
+
+
+def listen_socket() -> tuple[socket.socket, Endpoint]:
     """The agent's listening socket; a socket left by a dead agent is replaced, a
     living agent's is not (EndpointError says it is running)."""
     base = folder()
@@ -191,15 +226,3 @@ def _reach_tcp(endpoint: Endpoint) -> socket.socket | None:
         return None
     sock.settimeout(None)
     return sock
-
-
-def peer_is_us(sock: socket.socket) -> bool:
-    """Whether the peer of an accepted Unix socket runs as this user (Linux: the
-    kernel's credentials of the peer; elsewhere the socket's mode is the guard)."""
-    if WINDOWS or not hasattr(socket, "SO_PEERCRED"):
-        return True
-    import struct
-
-    creds = sock.getsockopt(socket.SOL_SOCKET, socket.SO_PEERCRED, struct.calcsize("3i"))
-    _pid, uid, _gid = struct.unpack("3i", creds)
-    return bool(uid == os.getuid())

@@ -15,7 +15,6 @@ import contextlib
 import dataclasses
 import itertools
 import os
-import socket
 import threading
 import time
 from collections.abc import Callable, Iterator
@@ -119,7 +118,7 @@ class Agent:
         self._numbers = itertools.count(1)
         self._lock = threading.Lock()
         self._stopping = threading.Event()
-        self._server: socket.socket | None = None
+        self._server: endpoints.Listener | None = None
         self.endpoint: endpoints.Endpoint | None = None
         self.started = time.time()
 
@@ -143,16 +142,13 @@ class Agent:
         """Accept clients until :meth:`stop` (on the calling thread)."""
         server = self._server
         assert server is not None
-        server.settimeout(0.2)
         while not self._stopping.is_set():
             try:
-                sock, _ = server.accept()
-            except TimeoutError:
-                continue
+                channel = server.accept()
             except OSError:
                 break
-            sock.settimeout(None)
-            threading.Thread(target=self._serve_client, args=(sock,), daemon=True).start()
+            if channel is not None:
+                threading.Thread(target=self._serve_client, args=(channel,), daemon=True).start()
 
     def stop(self) -> None:
         self._stopping.set()
@@ -171,19 +167,18 @@ class Agent:
 
     # ------------------------------------------------------------ one client
 
-    def _serve_client(self, sock: socket.socket) -> None:
-        channel = Channel(sock)
+    def _serve_client(self, channel: Channel) -> None:
         unix = self.endpoint is not None and self.endpoint.path is not None
-        if unix and not endpoints.peer_is_us(sock):
+        if unix and not channel.peer_is_us():
             channel.close()
             return
-        sock.settimeout(HELLO_TIMEOUT)
+        channel.set_timeout(HELLO_TIMEOUT)
         try:
             hello = channel.receive()
         except (ChannelClosed, TimeoutError, OSError):
             channel.close()
             return
-        sock.settimeout(None)
+        channel.set_timeout(None)
         client = self._welcome(channel, hello)
         if client is None:
             channel.close()

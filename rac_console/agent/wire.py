@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import contextlib
 import socket
+import sys
 import threading
 from collections.abc import Iterator
 from typing import Any
@@ -75,6 +76,24 @@ class Channel:
         for message in self.messages():
             return message
         raise ChannelClosed("the other end closed the connection")
+
+    def set_timeout(self, seconds: float | None) -> None:
+        """How long a receive waits (None: as long as the other end lives)."""
+        self.sock.settimeout(seconds)
+
+    def peer_is_us(self) -> bool:
+        """Whether the other end of an accepted Unix socket runs as this user (Linux:
+        the kernel's credentials of the peer; elsewhere the socket's mode is the
+        guard)."""
+        if sys.platform == "win32" or not hasattr(socket, "SO_PEERCRED"):
+            return True
+        import os
+        import struct
+
+        size = struct.calcsize("3i")
+        creds = self.sock.getsockopt(socket.SOL_SOCKET, socket.SO_PEERCRED, size)
+        _pid, uid, _gid = struct.unpack("3i", creds)
+        return bool(uid == os.getuid())
 
     def close(self) -> None:
         self.closed = True
