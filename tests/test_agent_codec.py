@@ -111,9 +111,7 @@ def test_the_outcomes_of_an_unreachable_controller_come_back_equal() -> None:
 
 @pytest.mark.parametrize("name", ["Popen", "system", "RacConsoleApp", "Engine", "type", "object"])
 def test_a_class_that_does_not_travel_is_refused(name: str) -> None:
-    hostile = msgpack.packb(
-        msgpack.ExtType(1, msgpack.packb([name, "rm -rf /"])), use_bin_type=True
-    )
+    hostile = msgpack.packb([msgpack.ExtType(1, name.encode()), "rm -rf /"], use_bin_type=True)
     with pytest.raises(codec.DecodeError, match="no message of this release"):
         codec.unpack(hostile)
 
@@ -127,3 +125,9 @@ def test_bytes_that_are_no_message_are_refused(data: bytes) -> None:
 def test_an_object_that_does_not_travel_is_not_packed() -> None:
     with pytest.raises(TypeError, match="does not travel"):
         codec.pack([object()])
+
+
+def test_a_listed_class_with_fields_that_fit_it_not_is_refused() -> None:
+    wrong = msgpack.packb([msgpack.ExtType(1, b"VarRef"), 1, 2, 3, 4], use_bin_type=True)
+    with pytest.raises(codec.DecodeError, match="cannot be made"):
+        codec.unpack(wrong)
