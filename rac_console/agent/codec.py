@@ -20,6 +20,7 @@ from typing import Any
 
 import msgpack
 
+from ..commands.language import VarRef
 from ..protocol import RacError
 from ..protocol.request import ReplyCheck, Request, get_check, put_for_check
 from ..protocol.variables import KINDS, VarKind
@@ -45,6 +46,7 @@ MODULES = (
 _DATACLASS, _ENUM, _TUPLE, _FROZENSET, _SET, _DECIMAL, _KIND, _ERROR, _NAMED, _DATETIME = range(
     1, 11
 )
+_VAR = 11  # a watched variable (VarRef): its text, "I10", one leaf (on every row and sample)
 #: An exception of a class not listed: travels as a RacError with its text.
 _OTHER_ERROR = "Exception"
 
@@ -101,6 +103,8 @@ def _default(obj: Any) -> Any:
     or a list headed by a mark that says what it stands for (packed in the same pass:
     no packing within packing, which cost 17 µs a watched value in a cycle)."""
     cls = type(obj)
+    if cls is VarRef:
+        return msgpack.ExtType(_VAR, f"{obj.kind.code}:{obj.index}".encode())
     if cls is VarKind:
         return msgpack.ExtType(_KIND, obj.code.encode())
     if cls is tuple:
@@ -177,12 +181,16 @@ class _Mark:
         self.code, self.name = code, name
 
 
-_LEAF = {_KIND, _DECIMAL, _DATETIME}
 _HEADS = {_DATACLASS, _ENUM, _TUPLE, _FROZENSET, _SET, _ERROR, _NAMED}
 
 
 def _ext(code: int, data: bytes) -> Any:
     """Called by the unpacker for each extension: a leaf's object, or a mark."""
+    if code == _VAR:
+        return _var(data)
+    mark = _MARKS_READ.get((code, data))
+    if mark is not None:
+        return mark
     if code == _KIND:
         kind = KINDS.get(data.decode())
         if kind is None:
@@ -193,8 +201,30 @@ def _ext(code: int, data: bytes) -> Any:
     if code == _DATETIME:
         return datetime.datetime.fromisoformat(data.decode())
     if code in _HEADS:
-        return _Mark(code, data.decode())
+        mark = _Mark(code, data.decode())
+        if not data or mark.name in _classes():  # only marks that name what travels
+            _MARKS_READ[(code, data)] = mark
+        return mark
     raise DecodeError(f"no extension {code}")
+
+
+#: The marks read so far (a handful: one per class that travels).
+_MARKS_READ: dict[tuple[int, bytes], _Mark] = {}
+_VARS: dict[bytes, VarRef] = {}
+
+
+def _var(data: bytes) -> VarRef:
+    """A watched variable from its text (each made once)."""
+    var = _VARS.get(data)
+    if var is None:
+        code, _, index = data.decode().partition(":")
+        kind = KINDS.get(code)
+        if kind is None or not index.isdigit():
+            raise DecodeError(f"no variable {data!r}")
+        var = VarRef(kind, int(index))
+        if len(_VARS) < 100_000:
+            _VARS[data] = var
+    return var
 
 
 def _list(items: list[Any]) -> Any:
