@@ -222,3 +222,50 @@ def test_a_client_that_goes_away_leaves_no_watch_behind(
     finally:
         b.engine.stop()
     assert controller.lines.count(b"GET:RC8:20:I:") == left
+
+
+def test_connect_elsewhere_through_the_agent_never_writes_to_the_held_controller(
+    agent_dir: Path, recording
+) -> None:
+    held: RecordingServer = recording(Memory())
+    other: RecordingServer = recording(Memory())
+    running = Running(held, Target("127.0.0.1", held.port, read_only=True))
+    a = client(Target("127.0.0.1", held.port))
+    try:
+        a.run(f"connect 127.0.0.1:{other.port}")
+        a.outcome("put I 1 5")
+    finally:
+        a.engine.stop()
+        running.stop()
+    assert not any(line.startswith(b"PUT") for line in held.lines)
+    assert other.lines.count(b"PUT:RC8:1:I:3,5") == 1
+
+
+def test_a_message_of_no_use_ends_that_client_and_its_polling(
+    running: Running, controller: RecordingServer
+) -> None:
+    from rac_console.agent import endpoint
+    from rac_console.agent.wire import PROTOCOL, RELEASE, Channel
+
+    reached = endpoint.reach()
+    assert reached is not None
+    bad = Channel(reached[0])
+    bad.send(
+        {"op": "hello", "protocol": PROTOCOL, "release": RELEASE, "client": "bad",
+         "host": "127.0.0.1", "port": controller.port, "options": {"interval": 0.05}}
+    )  # fmt: skip
+    assert bad.receive()["op"] == "welcome"
+    bad.send({"op": "line", "seq": 1, "what": "watch I 30", "line": "watch I 30"})
+    b = client(running.target)
+    try:
+        b.until(lambda: controller.lines.count(b"GET:RC8:30:I:") >= 2, "its polls")
+        bad.send({"op": "line", "what": "get I 1"})  # no seq
+        b.until(lambda: len(running.agent.clients) == 1, "the bad client gone")
+        left = controller.lines.count(b"GET:RC8:30:I:")
+        b.run("watch I 31")
+        ours = controller.lines.count(b"GET:RC8:31:I:")
+        b.until(lambda: controller.lines.count(b"GET:RC8:31:I:") >= ours + 5, "polls go on")
+    finally:
+        b.engine.stop()
+        bad.close()
+    assert controller.lines.count(b"GET:RC8:30:I:") == left

@@ -127,6 +127,27 @@ def test_an_object_that_does_not_travel_is_not_packed() -> None:
         codec.pack([object()])
 
 
+@pytest.mark.parametrize(
+    "hostile",
+    [
+        msgpack.ExtType(6, b"not a number"),  # a Decimal
+        [msgpack.ExtType(2, b"VT")],  # an enum with no value
+        [msgpack.ExtType(2, b"VT"), 999],  # an enum value it has not
+        msgpack.ExtType(11, b"Q:1"),  # a variable of no type
+    ],
+    ids=["decimal", "enum-empty", "enum-value", "variable"],
+)
+def test_values_that_are_none_of_their_kind_close_the_channel(hostile: object) -> None:
+    """Read as a connection reads them: the channel closes, no other error escapes."""
+    from rac_console.agent.wire import Channel, ChannelClosed
+
+    ours, theirs = socket.socketpair()
+    with ours, theirs:
+        theirs.sendall(msgpack.packb({"op": "batch", "events": [hostile]}, use_bin_type=True))
+        with pytest.raises(ChannelClosed):
+            Channel(ours).receive()
+
+
 def test_a_listed_class_with_fields_that_fit_it_not_is_refused() -> None:
     wrong = msgpack.packb([msgpack.ExtType(1, b"VarRef"), 1, 2, 3, 4], use_bin_type=True)
     with pytest.raises(codec.DecodeError, match="cannot be made"):

@@ -68,3 +68,17 @@ def test_engines_share_one_connection_and_see_each_others_writes_tagged(recordin
         connection.close()
     assert server.accepted == 1
     assert server.lines.count(b"PUT:RC8:7:I:3,42") == 1
+
+
+def test_a_poll_after_a_write_is_read_again(recording) -> None:
+    """b's poll after b's PUT is not answered by a's read made before the PUT."""
+    server = recording(Memory())
+    connection = shared_to(server)
+    a = connection.attach("a", lambda frame: None, 5.0)
+    b = connection.attach("b", lambda frame: None, 5.0)
+    a.get(INTEGER, 7, poll=True)  # read: 7
+    b.send_raw("PUT:RC8:7:I:3,42")
+    after = b.get(INTEGER, 7, poll=True)
+    connection.close()
+    assert after.response.variant is not None and after.response.variant.value == 42
+    assert server.lines == [b"GET:RC8:7:I:", b"PUT:RC8:7:I:3,42", b"GET:RC8:7:I:"]

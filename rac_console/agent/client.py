@@ -77,7 +77,7 @@ def attach(
         "port": target.port,
         "read_only": target.read_only_flag,
         "where": where.value,
-        "options": {k: given[k] for k in CLIENT_OPTIONS},
+        "options": {k: _absolute(k, given[k]) for k in CLIENT_OPTIONS},
     }
     try:
         channel.send(hello)
@@ -95,6 +95,17 @@ def attach(
     if numbers is not None:
         engine.numbers = numbers
     return engine
+
+
+#: The options that name a file: the agent opens them, in its own working folder.
+_FILES = ("record", "transcript", "log_csv")
+
+
+def _absolute(name: str, value: object) -> object:
+    """A file named relative to the client's folder, as the agent must open it."""
+    if name in _FILES and isinstance(value, str):
+        return os.path.abspath(os.path.expanduser(value))
+    return value
 
 
 def agent_status() -> Message | None:
@@ -198,15 +209,16 @@ class RemoteEngine:
         then: Callable[[Result], None] | None,
         publish: bool,
     ) -> int:
-        local = self._local
-        if local is not None:
-            return local.submit_command(what, line, seq, then, publish)
-        number = next(self.numbers) if seq is None else seq
-        with self._lock:
-            self._then[number] = (then, publish)
-            self._pending[number] = (line, may_write(self.registry, what))
-        self._send({"op": "line", "seq": number, "what": what, "line": line})
-        return number
+        writes = may_write(self.registry, what)
+        with self._lock:  # the agent's, or (once it went) our own: never neither
+            local = self._local
+            if local is None:
+                number = next(self.numbers) if seq is None else seq
+                self._then[number] = (then, publish)
+                self._pending[number] = (line, writes)
+                self._send({"op": "line", "seq": number, "what": what, "line": line})
+                return number
+        return local.submit_command(what, line, seq, then, publish)
 
     def stop(self, timeout: float = 5.0) -> None:
         self._stopping = True
@@ -259,6 +271,8 @@ class RemoteEngine:
                     self._take(message)
         except ChannelClosed:
             pass
+        except Exception:  # a batch of no use: as if the agent went away
+            self._channel.close()
         if not self._stopping:
             self._go_alone()
 
@@ -304,9 +318,17 @@ class RemoteEngine:
         from ..engine import Alert, Result
 
         self.outbox.put(Alert(AGENT_GONE.format(target=self._target_text())))
-        with self._lock:
+        local = Engine(
+            target=self._rules, options=self.options, outbox=self.outbox, where=self.where,
+            numbers=self.numbers,
+        )  # fmt: skip
+        for observer in self._observers:
+            local.add_frame_observer(observer)
+        local.start()
+        with self._lock:  # from here every line goes to our own engine
             pending, self._pending = dict(self._pending), {}
             thens, self._then = dict(self._then), {}
+            self._local = local
         for seq, (line, writes) in pending.items():
             unknown = Outcome(
                 None, ExitStatus.TRANSPORT, error=UNANSWERED, input_line=line, write_unknown=writes
@@ -317,16 +339,8 @@ class RemoteEngine:
                 then(result)
             if publish:
                 self.outbox.put(result)
-        local = Engine(
-            target=self._rules, options=self.options, outbox=self.outbox, where=self.where,
-            numbers=self.numbers,
-        )  # fmt: skip
-        for observer in self._observers:
-            local.add_frame_observer(observer)
-        local.start()
         for row in self._rows.values():  # in the order they were added
             local.submit_command(Watch((row.var,), row.label, row.every), None, publish=False)
-        self._local = local
 
     def _target_text(self) -> str:
         host = self._rules.host

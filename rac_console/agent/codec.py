@@ -186,6 +186,15 @@ _HEADS = {_DATACLASS, _ENUM, _TUPLE, _FROZENSET, _SET, _ERROR, _NAMED}
 
 def _ext(code: int, data: bytes) -> Any:
     """Called by the unpacker for each extension: a leaf's object, or a mark."""
+    try:
+        return _leaf(code, data)
+    except DecodeError:
+        raise
+    except Exception as exc:  # a Decimal, a date or a name that is none
+        raise DecodeError(f"an extension {code} that cannot be read: {exc}") from None
+
+
+def _leaf(code: int, data: bytes) -> Any:
     if code == _VAR:
         return _var(data)
     mark = _MARKS_READ.get((code, data))
@@ -237,7 +246,7 @@ def _list(items: list[Any]) -> Any:
         return _made(mark.code, mark.name, rest)
     except DecodeError:
         raise
-    except (TypeError, ValueError, KeyError) as exc:  # fields that fit no such object
+    except Exception as exc:  # fields that fit no such object
         raise DecodeError(f"a {mark.name or 'value'} that cannot be made: {exc}") from None
 
 

@@ -46,9 +46,11 @@ def folder() -> Path:
     refused when it is another user's or others can write it."""
     override = os.environ.get("RAC_CONSOLE_AGENT_DIR")
     base = Path(override) if override else _runtime_base()
+    if base.is_symlink():  # planted in /tmp by another: never followed
+        raise EndpointError(f"{base} is a symbolic link: the agent will not use it")
     base.mkdir(mode=0o700, parents=True, exist_ok=True)
     if not WINDOWS:
-        info = base.stat()
+        info = os.lstat(base)
         if info.st_uid != os.getuid():
             raise EndpointError(f"{base} belongs to another user: the agent will not use it")
         if stat.S_IMODE(info.st_mode) & 0o077:
@@ -129,6 +131,9 @@ def listen_socket() -> tuple[socket.socket, Endpoint]:
     old = os.umask(0o177)  # made 0600: no moment when another user could connect
     try:
         server.bind(str(path))
+    except OSError as exc:  # a path too long for a socket, a folder that went
+        server.close()
+        raise EndpointError(f"cannot listen on {path}: {exc.strerror or exc}") from None
     finally:
         os.umask(old)
     path.chmod(0o600)

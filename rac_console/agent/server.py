@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import contextlib
 import dataclasses
+import hmac
 import itertools
 import os
 import threading
@@ -25,7 +26,7 @@ from ..commands.target import Target
 from ..engine import Engine, EngineOptions, Outbox, Result, RowView, Status
 from ..engine.setup.where import Where
 from ..session import Session
-from ..session.shared import SharedConnection, SharedSession
+from ..session.shared import SharedConnection
 from . import endpoint as endpoints
 from .lines import may_write
 from .wire import Channel, ChannelClosed, Message, hello_problem
@@ -182,22 +183,30 @@ class Agent:
             channel.close()
             return
         channel.set_timeout(None)
-        client = self._welcome(channel, hello)
+        try:
+            client = self._welcome(channel, hello)
+        except Exception:  # a hello with fields of the wrong kind
+            client = None
         if client is None:
             channel.close()
             return
+        why = "gone"
         try:
             for message in channel.messages():
                 if not self._take(client, message):
                     break
         except ChannelClosed:
             pass
-        self._end(client, "gone")
+        except Exception as exc:  # a message of no use: the client goes, its engine too
+            why = f"a message that cannot be taken: {type(exc).__name__}"
+        finally:
+            self._end(client, why)
 
     def _welcome(self, channel: Channel, hello: Message) -> Client | None:
         problem = hello_problem(hello)
         tcp = self.endpoint is not None and self.endpoint.port is not None
-        if problem is None and tcp and hello.get("token") != self.endpoint.token:  # type: ignore[union-attr]
+        token = self.endpoint.token if self.endpoint is not None else ""
+        if problem is None and tcp and not hmac.compare_digest(str(hello.get("token", "")), token):
             problem = "the agent's token was not given"
         if problem is not None:
             self._send_quietly(channel, {"op": "refused", "why": problem})
@@ -250,8 +259,12 @@ class Agent:
         held = client.held
         client_outbox = Outbox(notify=client.wake.set)
 
-        def session(host: str, port: int, timeout: float) -> SharedSession:
-            return held.connection.attach(client.name, client_outbox.put, timeout)
+        def session(host: str, port: int, timeout: float) -> Session:
+            """The held connection for the held address; any other (``connect``
+            elsewhere, the built-in simulator) a session of the engine's own."""
+            if (host, port) == (held.connection.host, held.connection.port):
+                return held.connection.attach(client.name, client_outbox.put, timeout)
+            return Session(host, port, timeout=timeout)
 
         target = dataclasses.replace(
             held.target,

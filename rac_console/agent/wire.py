@@ -59,7 +59,7 @@ class Channel:
                     yield message
             except codec.DecodeError as exc:
                 raise ChannelClosed(str(exc)) from None
-            except ValueError as exc:  # msgpack's: over MAX_MESSAGE, or malformed
+            except Exception as exc:  # msgpack's own: over MAX_MESSAGE, or malformed
                 raise ChannelClosed(f"a message that cannot be read: {exc}") from None
             try:
                 data = self.sock.recv(1 << 20)

@@ -121,7 +121,6 @@ def _say(text: str) -> None:
 
 
 def _run(args: argparse.Namespace) -> int:
-    from ..agent.endpoint import EndpointError
     from ..agent.server import Agent
     from ..engine.cell.cell import member_name
 
@@ -143,7 +142,7 @@ def _run(args: argparse.Namespace) -> int:
     agent = Agent(held, timeout=args.timeout, say=_say, simulators=stops)
     try:
         endpoint = agent.open()
-    except EndpointError as exc:
+    except OSError as exc:  # EndpointError, or a folder that cannot be made
         print(f"rac-console: {terminal_safe(str(exc))}", file=sys.stderr)
         for stop in stops.values():
             stop()

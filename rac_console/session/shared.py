@@ -182,6 +182,8 @@ class SharedConnection:
             )
             self._asking = asker
             self.session.timeout = asker.timeout
+            if not request.line.is_get:  # it may change any variable, answered or not:
+                self._read.clear()  # no poll is answered from a read made before it
             try:
                 self.requests += 1
                 reply = self.session.exchange(
@@ -193,6 +195,7 @@ class SharedConnection:
                 now = time.monotonic()
                 self._read[key] = (now, reply)
                 asker.answered[key] = now
+
             asker.last_rtt = reply.rtt
             if asker.known_state != self.session.state:
                 self._tell_state(asker)
