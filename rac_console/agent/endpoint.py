@@ -203,6 +203,11 @@ def reach() -> tuple[socket.socket, Endpoint] | None:
         sock.close()
         return None
     sock.settimeout(None)  # a client waits on the agent as long as it runs
+    from .wire import Channel
+
+    if not Channel(sock).peer_is_us():  # a socket another user put there: no agent
+        sock.close()
+        return None
     return sock, Endpoint(path=path)
 
 

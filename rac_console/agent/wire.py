@@ -82,10 +82,11 @@ class Channel:
         self.sock.settimeout(seconds)
 
     def peer_is_us(self) -> bool:
-        """Whether the other end of an accepted Unix socket runs as this user (Linux:
-        the kernel's credentials of the peer; elsewhere the socket's mode is the
-        guard)."""
+        """Whether the other end of a Unix socket runs as this user (Linux: the
+        kernel's credentials of the peer; elsewhere the folder's mode is the guard)."""
         if sys.platform == "win32" or not hasattr(socket, "SO_PEERCRED"):
+            return True
+        if self.sock.family != socket.AF_UNIX:
             return True
         import os
         import struct
