@@ -155,17 +155,27 @@ class Agent:
                 threading.Thread(target=self._serve_client, args=(channel,), daemon=True).start()
 
     def stop(self) -> None:
+        """No new client; a request on the wire cut short (its client says how it
+        went); every client ended at once, then the connections and the endpoint."""
         self._stopping.set()
+        if self._server is not None:
+            self._server.close()
+        for held in self.held:
+            held.connection.session.interrupt()
         with self._lock:
             clients = list(self.clients.values())
-        for client in clients:
-            self._end(client, "the agent stopped")
+        ending = [
+            threading.Thread(target=self._end, args=(client, "the agent stopped"))
+            for client in clients
+        ]
+        for thread in ending:
+            thread.start()
+        for thread in ending:
+            thread.join(10)
         for held in self.held:
             held.connection.close()
             if held.stop_simulator is not None:
                 held.stop_simulator()
-        if self._server is not None:
-            self._server.close()
         if self.endpoint is not None:
             endpoints.forget(self.endpoint)
 
