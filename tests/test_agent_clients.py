@@ -269,3 +269,36 @@ def test_a_message_of_no_use_ends_that_client_and_its_polling(
         b.engine.stop()
         bad.close()
     assert controller.lines.count(b"GET:RC8:30:I:") == left
+
+
+def test_a_write_waiting_for_an_earlier_clients_write_can_be_cancelled(
+    agent_dir: Path, controller: RecordingServer
+) -> None:
+    """a's put arrived first and waits on its question; b's put (said yes) waits its
+    turn behind it; Esc at b: b's PUT is never sent."""
+    policy = WritePolicy(Writes.CONFIRM, None, "profile cell3")
+    profile = TargetProfile("cell3", "127.0.0.1", controller.port, "Cell 3", "red", policy)
+    running = Running(controller, Target("127.0.0.1", controller.port, profile, policy))
+    a = client(running.target)  # never answers its question
+    engine = attach(
+        Target("127.0.0.1", controller.port), EngineOptions(timeout=5.0, interval=0.05),
+        client="test", where=Where.CONSOLE,
+    )  # fmt: skip
+    assert isinstance(engine, RemoteEngine)
+    engine.start()
+    b = Answering(engine, yes=True)
+    try:
+        a.engine.submit("put I 2 5")
+        a.until(lambda: _lines_received(running, "test 1") == 1, "a's put at the agent")
+        put_b = engine.submit("put I 3 6")
+        order = running.agent.held[0].connection.order
+        b.until(lambda: order.waiting == 1, "b's put waiting its turn")
+        engine.cancel()
+        b.until(lambda: put_b in b.results, "b's put answered")
+    finally:
+        a.engine.stop()
+        engine.stop()
+        running.stop()
+    assert not any(line.startswith(b"PUT") for line in controller.lines)
+    (outcome,) = b.results[put_b].feedback
+    assert "cancel" in str(getattr(outcome, "error", "")).lower(), outcome

@@ -395,6 +395,7 @@ class Agent:
                     "state": held.connection.session.state,
                     "requests": held.connection.requests,
                     "shared_polls": held.connection.shared_polls,
+                    "writes_waiting": held.connection.order.waiting,
                     "clients": sum(1 for c in clients if c.held is held),
                 }
                 for held in self.held

@@ -193,6 +193,11 @@ def _status(args: argparse.Namespace) -> int:
             f"  target {terminal_safe(target['name'])} {terminal_safe(target['address'])}: "
             f"{terminal_safe(str(target['state']))}, {target['clients']} client(s), "
             f"{target['requests']} requests, {target['shared_polls']} polls shared"
+            + (
+                f", {target['writes_waiting']} write(s) waiting for an earlier one"
+                if target.get("writes_waiting")
+                else ""
+            )
         )
     for client in status["clients"]:
         missed = f", {client['missed']} frames missed" if client["missed"] else ""

@@ -25,6 +25,8 @@ from .blocking import Session
 from .types import Frame, NotSent, Reply, State
 
 ForeignSink = Callable[[Frame], None]
+#: How often a write waiting for an earlier one looks whether its job was cancelled.
+CANCEL_CHECK = 0.1
 
 
 class Turns:
@@ -69,6 +71,7 @@ class WriteOrder:
         self._changed = threading.Condition()
         self._next = 0
         self._open: dict[int, str] = {}  # ticket -> the client that holds it
+        self.waiting = 0  # writes waiting now for an earlier one (agent status says it)
 
     def take(self, client: str) -> int:
         with self._changed:
@@ -89,16 +92,23 @@ class WriteOrder:
                 del self._open[ticket]
             self._changed.notify_all()
 
-    def wait_turn(self, client: str) -> None:
+    def wait_turn(self, client: str, cancelled: Callable[[], bool] | None = None) -> None:
         """Before a write of ``client``: until the lines that arrived before its own
-        (its oldest ticket) have finished."""
+        (its oldest ticket) have finished; NotSent if its job is cancelled meanwhile
+        (Esc, Ctrl-C: nothing was sent)."""
         with self._changed:
             mine = [t for t, c in self._open.items() if c == client]
             if not mine:
                 return
             first = min(mine)
-            while any(t < first for t in self._open):
-                self._changed.wait()
+            self.waiting += 1
+            try:
+                while any(t < first for t in self._open):
+                    if cancelled is not None and cancelled():
+                        raise NotSent("cancelled while an earlier write went first")
+                    self._changed.wait(CANCEL_CHECK)
+            finally:
+                self.waiting -= 1
 
 
 class SharedConnection:
@@ -164,7 +174,7 @@ class SharedConnection:
         if poll:
             asker.shows_polls = observe
         elif request.write:
-            self.order.wait_turn(asker.source)
+            self.order.wait_turn(asker.source, cancelled)
         key = request.data
         turns = self.turns
         turns.take()
