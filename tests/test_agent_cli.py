@@ -225,3 +225,17 @@ def test_the_agent_turns_away_another_user_even_through_an_open_socket(
     finally:
         agent.stop()
     assert result.stdout.startswith("CLOSED"), result.stdout + result.stderr
+
+
+def test_check_names_the_agent_that_holds_the_controller(env: dict[str, str], recording) -> None:
+    controller: RecordingServer = recording(Memory())
+    where = ["-H", "127.0.0.1", "-p", str(controller.port)]
+    before = cli(env, *where, "check")
+    agent = start_agent(env, *where)
+    try:
+        during = cli(env, *where, "check")
+    finally:
+        agent.stop()
+    assert "holds this controller" not in before.stderr
+    assert "the agent (pid " in during.stderr and "holds this controller" in during.stderr
+    assert during.returncode == before.returncode == 0  # the check itself as before

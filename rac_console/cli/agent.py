@@ -110,6 +110,27 @@ UNANSWERED_IN_TIME = (
 )
 
 
+def holder_said(host: str, port: int) -> str | None:
+    """What ``check`` says when a running agent holds ``host:port``, else None."""
+    from ..agent.endpoint import present
+
+    if not present():
+        return None
+    from ..agent.client import agent_status
+
+    status = agent_status()
+    if status is None or status.get("op") != "status":
+        return None
+    for target in status.get("targets", ()):
+        if target.get("address") == f"{host}:{port}":
+            return (
+                f"the agent (pid {status.get('pid')}) holds this controller: the console, "
+                "the REPL, get, put and send go through its one connection (--direct: "
+                "their own; rac-console agent status says who is attached)"
+            )
+    return None
+
+
 def agent_command(args: argparse.Namespace) -> int:
     if args.action == "status":
         return _status(args)

@@ -53,6 +53,12 @@ def check(args: argparse.Namespace) -> ExitStatus:
         report = diagnose(host, port, timeout=args.timeout, observers=observers)
     profile = target.profile.name if target.profile is not None else None
     _show(args, report, profile, simulator, target.unreachable_hint)
+    if not simulator:
+        from .agent import holder_said
+
+        said = holder_said(host, port)
+        if said is not None:
+            print(f"rac-console: {said}", file=sys.stderr)  # stdout and --json as before
     status = report.status
     return ExitStatus.LOCAL_IO if local_failed and status == ExitStatus.OK else status
 
