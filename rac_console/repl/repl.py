@@ -25,7 +25,7 @@ from ..engine import (
     Alert,
     Batch,
     ConfirmWrite,
-    Engine,
+    EngineLike,
     Message,
     Note,
     Result,
@@ -71,7 +71,7 @@ class Repl(BatchReader):
 
     def __init__(
         self,
-        cell: Cell | Engine,
+        cell: Cell | EngineLike,
         history: History,
         console: Console,
         *,
@@ -440,7 +440,7 @@ def _failed(result: Result) -> bool:
     return any(isinstance(f, Message) and f.level == "error" for f in result.feedback)
 
 
-def run_repl(cell: Cell | Engine, history: History) -> int:
+def run_repl(cell: Cell | EngineLike, history: History) -> int:
     """``rac-console repl`` on a terminal."""
     repl = Repl(cell, history, make_console())
     keep_full_collections_rare()  # the start-up's objects frozen: no line waits on a full pass

@@ -40,7 +40,7 @@ from .settings import SettingsKeeper
 from .watchdog import WATCH_EVERY, Watchdog
 
 if TYPE_CHECKING:
-    from ..engine import Engine
+    from ..engine import EngineLike
     from ..engine.cell.cell import Cell
     from ..engine.setup.settings import SettingsFile
     from ..present.history import History
@@ -70,7 +70,7 @@ class RacConsoleApp(App[int]):
 
     def __init__(
         self,
-        cell: Cell | Engine,
+        cell: Cell | EngineLike,
         history: History,
         watch_file: str | None = None,
         profile_names: Sequence[str] = (),
@@ -267,7 +267,7 @@ class RacConsoleApp(App[int]):
 
 
 def run_console(
-    cell: Cell | Engine,
+    cell: Cell | EngineLike,
     history: History,
     watch_file: str | None,
     profile_names: Sequence[str] = (),

@@ -199,7 +199,7 @@ class Cell:
         self._dropped: list[_Line] = []  # cancelled behind the line running: said after it
 
     @classmethod
-    def of(cls, engine: Engine, name: str | None = None) -> Cell:
+    def of(cls, engine: EngineLike, name: str | None = None) -> Cell:
         """A cell of one engine made already (a single target, exactly as before)."""
         cell = cls.__new__(cls)
         cell._registry, cell.where = None, engine.where
