@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import asyncio
 import threading
+import time
 
 import pytest
 
@@ -36,8 +37,12 @@ async def test_a_put_cancelled_before_its_turn_is_never_sent(recording) -> None:
     server = recording(Memory(hold=(b"GET:RC8:1:I:", release)))
     async with rac.aio.connect(HOST, port=server.port, timeout=30) as rc:
         first = asyncio.ensure_future(rc.get("I", 1))  # held at the controller
+        deadline = time.monotonic() + 10
+        while b"GET:RC8:1:I:" not in server.lines:  # the get is on the wire, held
+            assert time.monotonic() < deadline, "the first get never reached the controller"
+            await asyncio.sleep(0.01)
         put = asyncio.ensure_future(rc.put("I", 2, 5))
-        await asyncio.sleep(0)  # both asked; the put waits its turn
+        await asyncio.sleep(0)  # a yield, not a wait: the put is asked, behind the get
         put.cancel()
         await asyncio.wait([put])  # cancelled, while the get still waits for its answer
         release.set()
