@@ -206,6 +206,7 @@ def test_a_client_that_goes_away_leaves_no_watch_behind(
     gone = Channel(reached[0])  # a client killed: it says no goodbye
     gone.send(
         {"op": "hello", "protocol": PROTOCOL, "release": RELEASE, "client": "killed",
+         "token": reached[1].token,
          "host": "127.0.0.1", "port": controller.port, "options": {"interval": 0.05}}
     )  # fmt: skip
     assert gone.receive()["op"] == "welcome"
@@ -252,6 +253,7 @@ def test_a_message_of_no_use_ends_that_client_and_its_polling(
     bad = Channel(reached[0])
     bad.send(
         {"op": "hello", "protocol": PROTOCOL, "release": RELEASE, "client": "bad",
+         "token": reached[1].token,
          "host": "127.0.0.1", "port": controller.port, "options": {"interval": 0.05}}
     )  # fmt: skip
     assert bad.receive()["op"] == "welcome"

@@ -23,7 +23,7 @@ if TYPE_CHECKING:
 
 
 def attach_for(args: argparse.Namespace, kind: str, where: Where) -> Attach | None:
-    """How ``kind`` (the console, the REPL, …) attaches a target to a running agent;
+    """How ``kind`` (the console, the REPL, ``watch``, …) attaches a target to a running agent;
     None with ``--direct``. A front end that feeds the plant itself (``--mqtt``,
     ``--metrics``) goes direct: the agent's exporters are the agent's own."""
     if getattr(args, "direct", False):
@@ -37,14 +37,26 @@ def attach_for(args: argparse.Namespace, kind: str, where: Where) -> Attach | No
         if options.publish is not None or options.metrics is not None or not present():
             return None
         from ..agent.client import Refused, attach
+        from ..engine.setup.where import Where
 
         try:
-            return attach(target, options, client=kind, where=where, outbox=outbox, numbers=numbers)
+            engine = attach(
+                target, options, client=kind, where=where, outbox=outbox, numbers=numbers
+            )
         except Refused as exc:
             print(f"rac-console: {terminal_safe(str(exc))}; going direct", file=sys.stderr)
             return None
+        if engine is not None and where is Where.COMMAND_LINE:  # the others show it
+            say_via(engine.name)
+        return engine
 
     return attach
+
+
+def say_via(client: str) -> None:
+    """A command line's word that it went through the agent: on stderr, so that its
+    stdout is the same as without one."""
+    print(f"rac-console: via agent, as {terminal_safe(client)}", file=sys.stderr)
 
 
 #: The longest a one-shot command waits for the agent's answer beyond its own timeout
@@ -59,48 +71,79 @@ def one_line_via_agent(
     it said, as the command line shows it run here; None to run it here (no agent, not
     held, ``--direct``, or a ``--record``/``--log`` file of the command's own). Said on
     stderr only: stdout and ``--json`` are as without an agent."""
-    if getattr(args, "direct", False) or args.record or getattr(args, "transcript", None):
+    lines = AgentLines.attach(args, args.target, "command")
+    if lines is None:
         return None
-    from ..agent.endpoint import present
-
-    if not present():
-        return None
-    from ..agent.client import Refused, attach
-    from ..engine import ConfirmWrite, EngineOptions, Result
-    from ..engine.setup.where import Where
-
-    options = EngineOptions(timeout=args.timeout, verify=args.verify, frames=False)
     try:
-        engine = attach(args.target, options, client="command", where=Where.COMMAND_LINE)
-    except Refused as exc:
-        print(f"rac-console: {terminal_safe(str(exc))}; going direct", file=sys.stderr)
-        return None
-    if engine is None:
-        return None
-    print(f"rac-console: via agent, as {terminal_safe(engine.name)}", file=sys.stderr)
-    woken = threading.Event()
-    engine.outbox.notify = woken.set
-    engine.start()
-    answer: list[Result] = []
-    try:
+        return lines.run(command, line)
+    finally:
+        lines.close()
+
+
+class AgentLines:
+    """A command line's lines through the agent, one at a time, each answered before
+    :meth:`run` returns (``get``, ``put``, ``send``; each target of ``run``)."""
+
+    def __init__(self, engine: EngineLike, args: argparse.Namespace) -> None:
+        self.engine, self.yes, self.timeout = engine, bool(args.yes), float(args.timeout)
+        self._woken = threading.Event()
+        engine.outbox.notify = self._woken.set
+        engine.start()
+
+    @classmethod
+    def attach(
+        cls, args: argparse.Namespace, target: Target, kind: str, where: Where | None = None
+    ) -> AgentLines | None:
+        """Attached to the agent that holds ``target``, said on stderr; None to go
+        direct (no agent, not held, ``--direct``, or a ``--record``/``--log`` file of
+        the command's own)."""
+        if getattr(args, "direct", False) or args.record or getattr(args, "transcript", None):
+            return None
+        from ..agent.endpoint import present
+
+        if not present():
+            return None
+        from ..agent.client import Refused, attach
+        from ..engine import EngineOptions
+        from ..engine.setup.where import Where
+
+        options = EngineOptions(timeout=args.timeout, verify=args.verify, frames=False)
+        try:
+            engine = attach(target, options, client=kind, where=where or Where.COMMAND_LINE)
+        except Refused as exc:
+            print(f"rac-console: {terminal_safe(str(exc))}; going direct", file=sys.stderr)
+            return None
+        if engine is None:
+            return None
+        say_via(engine.name)
+        return cls(engine, args)
+
+    def run(self, command: Command, line: str) -> list[Feedback]:
+        """What the line came to; an answer that does not come in time is an outcome
+        unknown (a write may have gone out)."""
+        from ..engine import ConfirmWrite, Result
+
+        engine, woken = self.engine, self._woken
+        answer: list[Result] = []
         seq = engine.submit_command(command, line, then=answer.append)
-        deadline = time.monotonic() + args.timeout * 4 + ANSWER_MARGIN
+        deadline = time.monotonic() + self.timeout * 4 + ANSWER_MARGIN
         while not answer and time.monotonic() < deadline:
             woken.wait(0.1)
             woken.clear()
             for event in engine.outbox.drain().events:
                 if isinstance(event, ConfirmWrite) and event.seq == seq:
-                    engine.answer_confirm(seq, bool(args.yes))  # --yes: said yes ahead
-    finally:
-        engine.stop()
-    if not answer:
+                    engine.answer_confirm(seq, self.yes)  # --yes: said yes ahead
+        if answer:
+            return list(answer[0].feedback)
         from ..agent.lines import may_write
         from ..commands.outcome import ExitStatus, Outcome
 
         writes = may_write(engine.registry, command)
         return [Outcome(None, ExitStatus.TRANSPORT, error=UNANSWERED_IN_TIME, input_line=line,
                         write_unknown=writes)]  # fmt: skip
-    return list(answer[0].feedback)
+
+    def close(self) -> None:
+        self.engine.stop()
 
 
 #: Said when the agent took a line and gave no answer in time.

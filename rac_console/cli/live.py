@@ -48,6 +48,7 @@ from ..present.batches import BatchReader
 from ..present.render import error_text, outcome_text, print_error
 from ..protocol import InputError, hresult_name
 from ..session import BadReply, ConnectFailed, RequestTimeout
+from .agent import attach_for
 from .cell import pick_member, words_by_member
 from .oneshot import Output, pointed_to_check
 from .pipes import reader_gone, stderr_may_close, write_line
@@ -106,7 +107,10 @@ def run_live(
         **getattr(args, "plant", {}),
     )
     try:
-        cell = Cell(members, options=options, notify=woke.set, where=Where.COMMAND_LINE)
+        cell = Cell(
+            members, options=options, notify=woke.set, where=Where.COMMAND_LINE,
+            attach=attach_for(args, "watch", Where.COMMAND_LINE),
+        )  # fmt: skip
     except InputError as exc:  # --record cannot open its file
         print_error(output.err, str(exc))
         return ExitStatus.REFUSED

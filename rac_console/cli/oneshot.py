@@ -33,6 +33,7 @@ from ..present.render import (
 )
 from ..protocol import InputError
 from ..session import ConnectFailed, Session
+from .agent import AgentLines
 from .cell import pick_member
 from .target import open_session
 
@@ -280,9 +281,21 @@ class _Sessions:
             )
             stack.callback(self.files.close)
         self.sessions: dict[str, Session] = {}
+        self.via_agent: dict[str, AgentLines | None] = {}  # looked for once a target
 
     def run(self, name: str, command: Command, line: Line, done: Done, whole: bool) -> None:
-        """Run ``command`` on ``name``'s session now; ``done`` before this returns."""
+        """Run ``command`` on ``name``'s session now (or through the agent that holds
+        it); ``done`` before this returns."""
+        if name not in self.via_agent:
+            self.via_agent[name] = agent = AgentLines.attach(
+                self.plain, self.targets[name], "run", Where.RUN
+            )
+            if agent is not None:
+                self.stack.callback(agent.close)
+        agent = self.via_agent[name]
+        if agent is not None:
+            done(tuple(agent.run(command, line.text or "")))
+            return
         if name not in self.sessions:
             session = self.stack.enter_context(
                 open_session(self.plain, self.output.local_failure, self.targets[name])

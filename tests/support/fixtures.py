@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import os
 import shutil
+import sys
 import time
 from collections.abc import Callable, Iterator
 from pathlib import Path
@@ -55,7 +56,10 @@ def env(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> dict[str, str]:
     runtime = home / "run"
     runtime.mkdir(mode=0o700)
     monkeypatch.setenv("XDG_RUNTIME_DIR", str(runtime))
-    monkeypatch.delenv("RAC_CONSOLE_AGENT_DIR", raising=False)
+    if sys.platform == "win32":  # the user's runtime folder is Windows' own: told
+        monkeypatch.setenv("RAC_CONSOLE_AGENT_DIR", str(runtime / "rac-console"))
+    else:
+        monkeypatch.delenv("RAC_CONSOLE_AGENT_DIR", raising=False)
     return dict(os.environ) | {"PYTHONIOENCODING": "utf-8", "COLUMNS": "200"}
 
 
