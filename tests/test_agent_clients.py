@@ -304,3 +304,26 @@ def test_a_write_waiting_for_an_earlier_clients_write_can_be_cancelled(
     assert not any(line.startswith(b"PUT") for line in controller.lines)
     (outcome,) = b.results[put_b].feedback
     assert "cancel" in str(getattr(outcome, "error", "")).lower(), outcome
+
+
+def test_a_served_console_keeps_the_poll_bounds_serve_gave_it(
+    running: Running, controller: RecordingServer
+) -> None:
+    from rac_console.engine.setup.poll_bounds import PollBounds
+
+    options = EngineOptions(timeout=5.0, interval=1.0, bounds=PollBounds(0.7, 2))
+    target = Target("127.0.0.1", controller.port, read_only=True, read_only_flag=True)
+    engine = attach(target, options, client="served", where=Where.SERVED)
+    assert isinstance(engine, RemoteEngine)
+    engine.start()
+    served = Front(engine)  # type: ignore[arg-type]
+    try:
+        too_many = served.errors("watch I 1-3")
+        too_often = served.errors("interval 0.1")
+        served.run("watch I 1")
+    finally:
+        engine.stop()
+    assert too_many and "2" in too_many[0], too_many
+    assert too_often and "0.7" in too_often[0], too_often
+    polled = {line for line in controller.lines if line.startswith(b"GET")}
+    assert polled <= {b"GET:RC8:1:I:"}  # nothing of the refused watch reached it

@@ -93,3 +93,18 @@ def test_watch_and_run_go_through_the_agent_and_write_what_they_would_alone(
         b"PUT:RC8:7:I:3,41",
         b"PUT:RC8:7:I:3,42",
     ]
+
+
+def test_latency_is_measured_on_the_agents_connection(env: dict[str, str], recording) -> None:
+    controller: RecordingServer = recording(Memory())
+    where = ["-H", "127.0.0.1", "-p", str(controller.port)]
+    agent = start_agent(env, *where)
+    try:
+        measured = cli(env, *where, "latency", "5", "I", "3", "--json")
+    finally:
+        killed(agent)
+    assert measured.returncode == 0, measured.stderr
+    assert "via agent, as latency" in measured.stderr
+    assert json.loads(measured.stdout)["count"] == 5
+    assert controller.accepted == 1
+    assert controller.lines.count(b"GET:RC8:3:I:") == 5

@@ -78,6 +78,7 @@ def attach(
         "read_only": target.read_only_flag,
         "where": where.value,
         "options": {k: _absolute(k, given[k]) for k in CLIENT_OPTIONS},
+        "bounds": given["bounds"],  # a served console's, from serve: kept at the agent
     }
     try:
         channel.send(hello)

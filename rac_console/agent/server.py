@@ -24,6 +24,7 @@ from dataclasses import dataclass, field
 from ..commands.language import VarRef
 from ..commands.target import Target
 from ..engine import Engine, EngineOptions, Outbox, Result, RowView, Status
+from ..engine.setup.poll_bounds import UNBOUNDED, PollBounds, bounds_for
 from ..engine.setup.where import Where
 from ..session import Session
 from ..session.shared import SharedConnection
@@ -281,8 +282,10 @@ class Agent:
             read_only=held.target.read_only or bool(hello.get("read_only")),
             read_only_flag=bool(hello.get("read_only")),
         )
-        engine_options = EngineOptions(**options, sessions=session)
         where = Where(hello.get("where", Where.CONSOLE.value))
+        engine_options = EngineOptions(
+            **options, sessions=session, bounds=_bounds(where, hello.get("bounds"))
+        )
         engine = Engine(
             target=target, options=engine_options, outbox=client_outbox, where=where,
             numbers=Given(),
@@ -412,3 +415,15 @@ class Agent:
                 for c in clients
             ],
         }
+
+
+def _bounds(where: Where, given: object) -> PollBounds:
+    """A served console's poll bounds as ``serve`` gave them to it (in its environment,
+    which is not the agent's); serve's defaults when it sent none; none for any other
+    client."""
+    if where is not Where.SERVED:
+        return UNBOUNDED
+    if isinstance(given, dict):
+        rows = given.get("max_rows")
+        return PollBounds(float(given["min_interval"]), None if rows is None else int(rows))
+    return bounds_for(Where.SERVED, {})

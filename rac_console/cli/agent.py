@@ -118,15 +118,16 @@ class AgentLines:
         say_via(engine.name)
         return cls(engine, args)
 
-    def run(self, command: Command, line: str) -> list[Feedback]:
-        """What the line came to; an answer that does not come in time is an outcome
-        unknown (a write may have gone out)."""
+    def run(self, command: Command, line: str, longest: float = 0.0) -> list[Feedback]:
+        """What the line came to; an answer that does not come in time (``longest``
+        for a line that may take long, such as ``latency``, plus the usual wait) is an
+        outcome unknown (a write may have gone out)."""
         from ..engine import ConfirmWrite, Result
 
         engine, woken = self.engine, self._woken
         answer: list[Result] = []
         seq = engine.submit_command(command, line, then=answer.append)
-        deadline = time.monotonic() + self.timeout * 4 + ANSWER_MARGIN
+        deadline = time.monotonic() + longest + self.timeout * 4 + ANSWER_MARGIN
         while not answer and time.monotonic() < deadline:
             woken.wait(0.1)
             woken.clear()
@@ -168,8 +169,9 @@ def holder_said(host: str, port: int) -> str | None:
         if target.get("address") == f"{host}:{port}":
             return (
                 f"the agent (pid {status.get('pid')}) holds this controller: the console, "
-                "the REPL, get, put and send go through its one connection (--direct: "
-                "their own; rac-console agent status says who is attached)"
+                "the REPL and the commands (get, put, send, watch, run, latency) go "
+                "through its one connection (--direct: their own; rac-console agent "
+                "status says who is attached)"
             )
     return None
 

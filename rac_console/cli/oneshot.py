@@ -377,8 +377,16 @@ def latency(args: argparse.Namespace) -> ExitStatus:
     output = Output(args.json)
     try:
         command = replace(_latency_command(args), interval=args.latency_interval or 0.0)
-        with open_session(args, output.local_failure) as session:
-            _, feedback = run_job(BUILTIN, _context(session, args), command, Where.COMMAND_LINE)
+        agent = AgentLines.attach(args, args.target, "latency")
+        if agent is not None:  # measured at the agent's end of its one connection
+            try:
+                longest = command.count * (args.timeout + command.interval)
+                feedback = tuple(agent.run(command, "latency", longest=longest))
+            finally:
+                agent.close()
+        else:
+            with open_session(args, output.local_failure) as session:
+                _, feedback = run_job(BUILTIN, _context(session, args), command, Where.COMMAND_LINE)
     except InputError as exc:
         print_error(output.err, str(exc))
         return ExitStatus.REFUSED
