@@ -386,7 +386,8 @@ def latency(args: argparse.Namespace) -> ExitStatus:
                 agent.close()
         else:
             with open_session(args, output.local_failure) as session:
-                _, feedback = run_job(BUILTIN, _context(session, args), command, Where.COMMAND_LINE)
+                _, done = run_job(BUILTIN, _context(session, args), command, Where.COMMAND_LINE)
+                feedback = tuple(done)
     except InputError as exc:
         print_error(output.err, str(exc))
         return ExitStatus.REFUSED
