@@ -186,11 +186,14 @@ def test_a_watched_row_is_polled_with_a_get_and_nothing_else(
 #: The session's methods that send a request (``get`` aside: a GET by construction).
 SENDS = {"exchange", "put", "send_raw", "_exchange_once"}
 #: Where the session is handed a request, and in which functions: the gate's one send
-#: of a write, the read path's (a GET, checked so), the poller's rows' GETs.
+#: of a write, the read path's (a GET, checked so), the poller's rows' GETs, and the
+#: agent's relay of a script's request (let out by the gate in the script, and held to
+#: the agent's rules again there: ``test_agent_library.py``).
 SENDERS = {
     "engine/exchange/gate.py": {"_send"},
     "engine/exchange/execute.py": {"execute", "measure_latency"},
     "engine/polling/poller.py": {"_poll_row"},
+    "agent/server.py": {"_request"},
 }
 
 

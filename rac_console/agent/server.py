@@ -21,13 +21,16 @@ import time
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 
-from ..commands.language import VarRef
+from ..commands.language import Raw, VarRef
 from ..commands.target import Target
 from ..engine import Engine, EngineOptions, Outbox, Result, RowView, Status
+from ..engine.exchange.gate import rules_refusal
 from ..engine.setup.poll_bounds import UNBOUNDED, PollBounds, bounds_for
 from ..engine.setup.where import Where
+from ..protocol.request import Request
 from ..session import Session
-from ..session.shared import SharedConnection
+from ..session.shared import SharedConnection, SharedSession
+from ..session.types import NotSent, TransportError
 from . import endpoint as endpoints
 from .lines import may_write
 from .wire import Channel, ChannelClosed, Message, hello_problem
@@ -76,10 +79,13 @@ class Client:
     held: Held
     channel: Channel
     engine: Engine | None = None
+    #: A script's connection (``rac.connect``): its requests on the shared connection.
+    requests: SharedSession | None = None
     wake: threading.Event = field(default_factory=threading.Event)  # its engine published
     since: float = field(default_factory=time.time)
     missed: int = 0
     lines: int = 0  # lines received
+    read_only: bool = False  # a script's connection started read_only=True
     ending: bool = False
 
     @property
@@ -233,11 +239,16 @@ class Agent:
             next(self._numbers), str(hello.get("client", "client")), int(hello.get("pid", 0)),
             held, channel,
         )  # fmt: skip
-        try:
-            client.engine = self._engine_for(client, hello)
-        except Exception as exc:  # InputError: a file the client named cannot be opened
-            self._send_quietly(channel, {"op": "refused", "why": str(exc)})
-            return None
+        if hello.get("want") == "requests":  # a script's connection: no engine of its own
+            timeout = float(hello.get("timeout") or self.timeout)
+            client.requests = held.connection.attach(client.name, _unseen, timeout)
+            client.read_only = bool(hello.get("read_only"))
+        else:
+            try:
+                client.engine = self._engine_for(client, hello)
+            except Exception as exc:  # InputError: a file the client named cannot be opened
+                self._send_quietly(channel, {"op": "refused", "why": str(exc)})
+                return None
         with self._lock:
             self.clients[client.number] = client
         self._send_quietly(
@@ -250,8 +261,9 @@ class Agent:
                 "address": held.address,
             },
         )
-        threading.Thread(target=self._write_to, args=(client,), daemon=True).start()
-        client.engine.start(connect=True)
+        if client.engine is not None:
+            threading.Thread(target=self._write_to, args=(client,), daemon=True).start()
+            client.engine.start(connect=True)
         self.say(f"{client.name} (pid {client.pid}) attached to {held.name}")
         return client
 
@@ -294,9 +306,15 @@ class Agent:
 
     def _take(self, client: Client, message: Message) -> bool:
         """One message from a client; False when it said goodbye."""
+        op = message["op"]
+        if op == "bye":
+            return False
+        if client.requests is not None:
+            if op == "request":
+                self._request(client, client.requests, message["request"])
+            return True
         engine = client.engine
         assert engine is not None
-        op = message["op"]
         if op == "line":
             numbers = engine.numbers
             assert isinstance(numbers, Given)
@@ -317,9 +335,34 @@ class Agent:
             engine.cancel(bool(message.get("queued")))
         elif op == "poll_frames":
             engine.set_poll_frames(bool(message["shown"]))
-        elif op == "bye":
-            return False
         return True
+
+    def _request(self, client: Client, session: SharedSession, request: object) -> None:
+        """One request of a script's connection, answered before the next is read: sent
+        in its turn (a write after every write received before it) unless the agent's
+        rules for the target refuse it."""
+        if not isinstance(request, Request):
+            raise TypeError("a request that is no request")
+        client.lines += 1
+        held = client.held
+        order = held.connection.order
+        answer: Message
+        refusal = None
+        if not request.read_only_safe:
+            read_only = held.target.read_only or client.read_only
+            refusal = rules_refusal(held.target.policy, read_only, Raw.of(request.text))
+        if refusal is not None:
+            answer = {"op": "failed", "error": NotSent(f"at the agent: {refusal}")}
+        else:
+            ticket = None if request.read_only_safe else order.take(client.name)
+            try:
+                answer = {"op": "reply", "reply": session.exchange(request)}
+            except TransportError as exc:
+                answer = {"op": "failed", "error": exc}
+            finally:
+                if ticket is not None:
+                    order.done(ticket)
+        client.channel.send(answer)
 
     def _write_to(self, client: Client) -> None:
         """Send the client what its engine publishes, as it comes but at most once every
@@ -370,6 +413,9 @@ class Agent:
             client.ending = True
         if client.engine is not None:
             client.engine.stop()
+        if client.requests is not None:
+            client.requests.interrupt()
+            client.requests.close()
         client.held.connection.order.done_all(client.name)
         client.channel.close()
         with self._lock:
@@ -427,3 +473,7 @@ def _bounds(where: Where, given: object) -> PollBounds:
         rows = given.get("max_rows")
         return PollBounds(float(given["min_interval"]), None if rows is None else int(rows))
     return bounds_for(Where.SERVED, {})
+
+
+def _unseen(frame: object) -> None:
+    """A script's connection shows no frames: the other clients' are not sent to it."""

@@ -46,11 +46,13 @@ def cell(
     confirm: Confirm | None = None,
     yes: bool = False,
     config: ConfigPath = None,
+    direct: bool = False,
 ) -> Cell:
     """The cell ``targets`` names: a ``[cell.NAME]`` of the config file (``"demo"``: the
     demo simulators when the file names none), or a list of targets (profiles' names or
     addresses, as ``-H a,b``). Every target is connected before this returns; the
-    options apply to each as :func:`~rac_console.connect` applies them."""
+    options apply to each as :func:`~rac_console.connect` applies them (``direct``
+    too)."""
     seconds = check_timeout(timeout)
     hosts = None
     if not isinstance(targets, str):
@@ -75,7 +77,7 @@ def cell(
     connections: dict[str, Connection] = {}
     try:
         for name, target in members:
-            session, _ = open_session(target, seconds)
+            session, _ = open_session(target, seconds, bool(direct))
             connections[name] = Connection(target, session, confirm=confirm, yes=yes)
     except BaseException:
         for opened in connections.values():

@@ -55,18 +55,21 @@ def connect(
     confirm: Confirm | None = None,
     yes: bool = False,
     config: ConfigPath = None,
+    direct: bool = False,
 ) -> Connection:
     """A connection to ``target``: a host, ``host:port``, a profile's name (in any case)
     or ``"sim"`` (the built-in simulator, started in this process). The config file's
     profiles apply as in the console: the strictest at the endpoint reached, whichever
-    name or address was given. ``config``: another config file than the user's.
+    name or address was given. ``config``: another config file than the user's. When
+    a running agent of this user holds the controller, the requests go through its one
+    connection (:attr:`Connection.via_agent`); ``direct``: a session of its own.
 
     Raises :class:`~rac_console.Refused` for a target, a port or a config file that
     cannot be used, :class:`~rac_console.ConnectionFailed` when the controller cannot be
     reached."""
     seconds = check_timeout(timeout)
     resolved = resolve(target, port, bool(read_only), loaded(config))
-    session, simulator = open_session(resolved, seconds)
+    session, simulator = open_session(resolved, seconds, bool(direct))
     return Connection(resolved, session, simulator, confirm=confirm, yes=yes)
 
 
@@ -109,6 +112,12 @@ class Connection:
         return self._target.profile.name if self._target.profile is not None else None
 
     @property
+    def via_agent(self) -> bool:
+        """Whether the requests go through a running agent's connection (it holds the
+        controller; it went away: False from then on)."""
+        return bool(getattr(self._session, "via_agent", False))
+
+    @property
     def writes(self) -> Literal["open", "confirm", "read-only"]:
         """What the controller's rules let be written, as the console's status line says."""
         return self._target.writes
@@ -116,7 +125,8 @@ class Connection:
     def __repr__(self) -> str:
         name = f" profile {self.profile}" if self.profile else ""
         state = "closed" if self._closed else self.writes
-        return f"<rac.Connection {self.host}:{self.port}{name} ({state})>"
+        via = ", via agent" if self.via_agent and not self._closed else ""
+        return f"<rac.Connection {self.host}:{self.port}{name} ({state}{via})>"
 
     # ------------------------------------------------------------ requests
 

@@ -92,9 +92,18 @@ def check_timeout(timeout: float) -> float:
     return float(timeout)
 
 
-def open_session(target: Target, timeout: float) -> tuple[Session, SimulatorThread | None]:
+def open_session(
+    target: Target, timeout: float, direct: bool = False
+) -> tuple[Session, SimulatorThread | None]:
     """A session to ``target``, connected (ConnectionFailed with ``check``'s words when
-    it cannot be), or to the built-in simulator started here when it names no host."""
+    it cannot be), or to the built-in simulator started here when it names no host.
+    Through the running agent that holds ``target``, unless ``direct``."""
+    if target.host is not None and not direct:
+        from ..agent.requests import attach_requests
+
+        via = attach_requests(target, timeout)
+        if via is not None:
+            return via, None
     session, simulator = session_to(target, timeout)
     try:
         session.connect()

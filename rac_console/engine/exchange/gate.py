@@ -101,12 +101,7 @@ class WriteGate:
         sent, and read back."""
         policy, verify, confirm, cancelled = self.policy, self.verify, self.confirm, self.cancelled
         wire = command.request.text
-        if self.read_only:
-            profile_rule = policy.writes is Writes.READ_ONLY and policy.source
-            why = f"{policy.source} is read-only" if profile_rule else "read-only mode is on"
-            if (refusal := read_only_refusal(command, why)) is not None:
-                return refused(line, refusal, wire)
-        if (refusal := policy.refusal(command)) is not None:
+        if (refusal := rules_refusal(policy, self.read_only, command)) is not None:
             return refused(line, refusal, wire)
         var = written_var(command)
         if var is None:  # a raw line we cannot read: sent as typed, nothing to read back
@@ -164,3 +159,15 @@ class WriteGate:
         except TransportError as exc:
             reply = exc
         return outcome_of(command, reply, line, request)
+
+
+def rules_refusal(policy: WritePolicy, read_only: bool, command: Put | Raw) -> str | None:
+    """Why the rules keep ``command`` off the wire before anything is read or asked
+    (read-only, a profile's ``allow``), or None: the gate's first step, and the agent's
+    for each request a script's connection sends through it."""
+    if read_only:
+        profile_rule = policy.writes is Writes.READ_ONLY and policy.source
+        why = f"{policy.source} is read-only" if profile_rule else "read-only mode is on"
+        if (refusal := read_only_refusal(command, why)) is not None:
+            return refusal
+    return policy.refusal(command)
