@@ -239,3 +239,58 @@ def test_check_names_the_agent_that_holds_the_controller(env: dict[str, str], re
     assert "holds this controller" not in before.stderr
     assert "the agent (pid " in during.stderr and "holds this controller" in during.stderr
     assert during.returncode == before.returncode == 0  # the check itself as before
+
+
+def test_the_agents_own_feed_serves_its_watch_list_whoever_is_attached(
+    env: dict[str, str], recording, tmp_path: Path
+) -> None:
+    import re
+    import time
+    import urllib.request
+
+    controller: RecordingServer = recording(Memory())
+    rows = tmp_path / "plant.toml"
+    rows.write_text('[[watch]]\ntype = "I"\nindex = 3\nlabel = "parts"\n', encoding="utf-8")
+    where = ["-H", "127.0.0.1", "-p", str(controller.port)]
+    agent = Running(env, *where, "agent", "--watch", str(rows), "--metrics", "127.0.0.1:0")
+    try:
+        agent.wait_for("the agent listening", lambda: any("listening on" in s for s in agent.out))
+        served = next(m for line in agent.out if (m := re.search(r"http://\S+/metrics", line)))
+        deadline = time.monotonic() + 20
+        page = ""
+        while 'variable="I3"' not in page or "rac_value" not in page:
+            assert time.monotonic() < deadline, page
+            with urllib.request.urlopen(served.group(0), timeout=5) as reply:
+                page = reply.read().decode()
+            time.sleep(0.1)
+        put = cli(env, *where, "put", "I", "3", "77")
+        while not re.search(r'rac_value\{[^}]*variable="I3"[^}]*\} 77', page):
+            assert time.monotonic() < deadline + 20, page
+            with urllib.request.urlopen(served.group(0), timeout=5) as reply:
+                page = reply.read().decode()
+            time.sleep(0.1)
+        status = json.loads(cli(env, "agent", "status", "--json").stdout)
+    finally:
+        agent.stop()
+    assert "via agent" in put.stderr
+    assert status["exporters"] == [{"target": f"127.0.0.1:{controller.port}", "rows": 1}]
+    assert controller.accepted == 1  # the feed's polls and the put: the agent's connection
+
+
+@pytest.mark.parametrize(
+    ("args", "says"),
+    [
+        (("--mqtt", "mqtt://127.0.0.1/cell"), "give it with --watch FILE"),
+        (("--watch", "WATCH"), "give --mqtt, --metrics or --log-csv with it"),
+    ],
+)
+def test_an_agent_feed_with_nothing_to_feed_is_refused_in_one_line(
+    env: dict[str, str], tmp_path: Path, args: tuple[str, ...], says: str
+) -> None:
+    rows = tmp_path / "rows.toml"
+    rows.write_text('[[watch]]\ntype = "I"\nindex = 3\n', encoding="utf-8")
+    given = [str(rows) if arg == "WATCH" else arg for arg in args]
+    refused = cli(env, "agent", *given)
+    assert refused.returncode == 2
+    assert says in one_error_line(refused)
+    assert not agent_socket(env).exists()

@@ -18,7 +18,7 @@ import itertools
 import os
 import threading
 import time
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field
 
 from ..commands.language import Raw, VarRef
@@ -30,8 +30,9 @@ from ..engine.setup.where import Where
 from ..protocol.request import Request
 from ..session import Session
 from ..session.shared import SharedConnection, SharedSession
-from ..session.types import NotSent, TransportError
+from ..session.types import Frame, NotSent, TransportError
 from . import endpoint as endpoints
+from .exporters import EXPORTER, Export, Exporters
 from .lines import may_write
 from .wire import Channel, ChannelClosed, Message, hello_problem
 
@@ -132,6 +133,7 @@ class Agent:
         self._server: endpoints.Listener | None = None
         self.endpoint: endpoints.Endpoint | None = None
         self.started = time.time()
+        self.exporters = Exporters(say)
 
     # ------------------------------------------------------------ its life
 
@@ -167,6 +169,7 @@ class Agent:
         self._stopping.set()
         if self._server is not None:
             self._server.close()
+        self.exporters.stop()
         for held in self.held:
             held.connection.session.interrupt()
         with self._lock:
@@ -185,6 +188,17 @@ class Agent:
                 held.stop_simulator()
         if self.endpoint is not None:
             endpoints.forget(self.endpoint)
+
+    def export(self, exports: Sequence[Export], options: EngineOptions) -> None:
+        """Feed the plant (``--mqtt``, ``--metrics``, ``--log-csv``) from the targets
+        held, whoever is attached: an engine of the agent's on each one's connection."""
+        by_name = {held.name: held for held in self.held}
+        self.exporters.start(
+            exports,
+            options,
+            lambda name: _sessions_on(by_name[name], EXPORTER, _unseen),
+            lambda name: by_name[name].target,
+        )
 
     # ------------------------------------------------------------ one client
 
@@ -281,13 +295,7 @@ class Agent:
         options = {k: given[k] for k in CLIENT_OPTIONS if k in given}
         held = client.held
         client_outbox = Outbox(notify=client.wake.set)
-
-        def session(host: str, port: int, timeout: float) -> Session:
-            """The held connection for the held address; any other (``connect``
-            elsewhere, the built-in simulator) a session of the engine's own."""
-            if (host, port) == (held.connection.host, held.connection.port):
-                return held.connection.attach(client.name, client_outbox.put, timeout)
-            return Session(host, port, timeout=timeout)
+        session = _sessions_on(held, client.name, client_outbox.put)
 
         target = dataclasses.replace(
             held.target,
@@ -449,6 +457,7 @@ class Agent:
                 }
                 for held in self.held
             ],
+            "exporters": self.exporters.status(),
             "clients": [
                 {
                     "name": c.name,
@@ -475,5 +484,20 @@ def _bounds(where: Where, given: object) -> PollBounds:
     return bounds_for(Where.SERVED, {})
 
 
-def _unseen(frame: object) -> None:
+def _unseen(frame: Frame) -> None:
     """A script's connection shows no frames: the other clients' are not sent to it."""
+
+
+def _sessions_on(
+    held: Held, name: str, foreign: Callable[[Frame], None]
+) -> Callable[[str, int, float], Session]:
+    """How the engine of ``name`` opens sessions: the held connection for the held
+    address (``foreign`` takes the other clients' frames); any other (``connect``
+    elsewhere, the built-in simulator) a session of the engine's own."""
+
+    def session(host: str, port: int, timeout: float) -> Session:
+        if (host, port) == (held.connection.host, held.connection.port):
+            return held.connection.attach(name, foreign, timeout)
+        return Session(host, port, timeout=timeout)
+
+    return session

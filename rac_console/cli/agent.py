@@ -10,11 +10,14 @@ import sys
 import threading
 import time
 from collections.abc import Iterator
+from pathlib import Path
 from typing import TYPE_CHECKING
 
+from ..protocol import InputError
 from ..protocol.text import terminal_safe
 
 if TYPE_CHECKING:
+    from ..agent.exporters import Export
     from ..commands.language import Command
     from ..commands.target import Target
     from ..engine import EngineLike, EngineOptions, Feedback, Outbox
@@ -193,6 +196,11 @@ def _run(args: argparse.Namespace) -> int:
     members: list[tuple[str, Target]] = getattr(args, "cell_targets", None) or [
         (member_name(args.target), args.target)
     ]
+    try:
+        exports = _exports(args, [name for name, _ in members])
+    except InputError as exc:
+        print(f"rac-console: {terminal_safe(str(exc))}", file=sys.stderr)
+        return 2
     held: list[tuple[str, Target]] = []
     stops = {}
     for name, target in members:
@@ -213,6 +221,12 @@ def _run(args: argparse.Namespace) -> int:
         for stop in stops.values():
             stop()
         return 2
+    for notice in getattr(args, "plant_notices", ()):
+        _say(notice)
+    if exports:
+        agent.export(exports, _export_options(args))
+        rows = " and ".join(f"{e.name}'s" for e in exports)
+        _say(f"feeding the plant {rows} watch list, whoever is attached")
     _say(f"listening on {endpoint} for this user's front ends; Ctrl-C stops")
     serving = threading.Thread(target=agent.serve, name="rac-agent-accept", daemon=True)
     serving.start()
@@ -225,6 +239,66 @@ def _run(args: argparse.Namespace) -> int:
     agent.stop()
     _say("stopped")
     return 0
+
+
+def _exports(args: argparse.Namespace, names: list[str]) -> list[Export]:
+    """What the agent's own feeds watch: the ``--watch`` list (on the first target, as
+    the console loads it) and a cell's watch lines, each on its target. InputError when
+    a feed has nothing to feed, or a list is given for no feed."""
+    from ..agent.exporters import Export
+    from ..engine.watch.watchlist import load
+
+    plant = getattr(args, "plant", {})
+    feeds = plant.get("publish") is not None or plant.get("metrics") is not None
+    feeds = feeds or getattr(args, "log_csv", None) is not None
+    feeds = feeds or any(getattr(t.profile, "publish", None) for t in _targets(args))
+    watch_file = getattr(args, "watch", None)
+    lines: dict[str, list[str]] = {}
+    for line in getattr(args, "cell_watch", ()):
+        name, _, rest = line.partition(" ")
+        lines.setdefault(name, []).append(rest)
+    if not feeds:
+        if watch_file is not None:
+            raise InputError(
+                "agent --watch FILE gives the agent's own feeds their rows: give --mqtt, "
+                "--metrics or --log-csv with it (the clients watch what they like)"
+            )
+        return []
+    if watch_file is None and not lines:
+        raise InputError(
+            "the agent's --mqtt, --metrics and --log-csv feed the rows of a watch list: "
+            "give it with --watch FILE (or a cell's watch lines)"
+        )
+    if watch_file is not None:
+        load(watch_file)  # a broken list is one line now, not a feed that starts half-set
+        watch_file = str(Path(watch_file).expanduser().absolute())
+    single = len(names) == 1
+    return [
+        Export(
+            name,
+            watch_file if n == 0 else None,
+            tuple(lines.get(name, ())),
+            None if single else name,
+        )
+        for n, name in enumerate(names)
+        if (watch_file is not None and n == 0) or lines.get(name)
+    ]
+
+
+def _targets(args: argparse.Namespace) -> list[Target]:
+    return [t for _, t in getattr(args, "cell_targets", None) or [("", args.target)]]
+
+
+def _export_options(args: argparse.Namespace) -> EngineOptions:
+    from ..engine import DEFAULT_INTERVAL, EngineOptions
+
+    return EngineOptions(
+        timeout=args.timeout,
+        interval=DEFAULT_INTERVAL if args.interval is None else args.interval,
+        frames=False,
+        log_csv=getattr(args, "log_csv", None),
+        **getattr(args, "plant", {}),
+    )
 
 
 def _stop_on_terminate() -> None:
@@ -264,6 +338,10 @@ def _status(args: argparse.Namespace) -> int:
                 if target.get("writes_waiting")
                 else ""
             )
+        )
+    for feed in status.get("exporters", ()):
+        print(
+            f"  exporter on {terminal_safe(feed['target'])}: {feed['rows']} row(s) fed to the plant"
         )
     for client in status["clients"]:
         missed = f", {client['missed']} frames missed" if client["missed"] else ""

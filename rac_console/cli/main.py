@@ -47,7 +47,7 @@ def _dispatch(args: argparse.Namespace) -> int:
     if getattr(args, "log_csv", None) is not None and args.command not in POLLING_COMMANDS:
         print(
             "rac-console: --log-csv logs watched values: use it with the console, "
-            "the REPL or rac-console watch",
+            "the REPL, rac-console watch or the agent",
             file=sys.stderr,
         )
         return 2

@@ -25,10 +25,10 @@ def refusal(args: argparse.Namespace) -> str | None:
     command: str | None = args.command
     if command in ("sim", "paths"):
         return _before_own(args, command)
-    if getattr(args, "watch", None) is not None and command not in (None, "repl"):
+    if getattr(args, "watch", None) is not None and command not in (None, "repl", "agent"):
         return (
-            f"--watch loads a watch list at start: the console and the REPL take it, not "
-            f"{_name(command)} (rac-console watch takes variables: watch I 0-7)"
+            f"--watch loads a watch list at start: the console, the REPL and the agent take "
+            f"it, not {_name(command)} (rac-console watch takes variables: watch I 0-7)"
         )
     if getattr(args, "history", None) is not None and command not in (None, "repl"):
         return (
@@ -38,8 +38,8 @@ def refusal(args: argparse.Namespace) -> str | None:
     for option in ("mqtt", "metrics"):
         if getattr(args, option, None) is not None and command not in POLLING_COMMANDS:
             return (
-                f"--{option} feeds the plant the watched values: the console, the REPL and "
-                f"watch take it, not {_name(command)}"
+                f"--{option} feeds the plant the watched values: the console, the REPL, "
+                f"watch and the agent take it, not {_name(command)}"
             )
     interval = getattr(args, "interval", None)
     if interval is not None and command not in (None, "repl"):

@@ -43,9 +43,9 @@ the check stops at the first that fails. Only GETs of I0 are sent.
 Exit status: 0 all ok, 1 the controller answered the GET with an error,
 3 a connection step failed."""
 
-POLLING_COMMANDS = (None, "repl", "watch")
-"""The commands that poll watched values (the console, the REPL and ``watch``): where
-``--log-csv``, ``--mqtt`` and ``--metrics`` mean something."""
+POLLING_COMMANDS = (None, "repl", "watch", "agent")
+"""The commands that poll watched values (the console, the REPL, ``watch``, and the
+agent's exporters): where ``--log-csv``, ``--mqtt`` and ``--metrics`` mean something."""
 
 
 AGENT_HELP = (
@@ -230,6 +230,20 @@ def build_cli(commands: bool = True) -> CliParser:
         help="run (the default): hold the targets until Ctrl-C; status: what a running "
         "agent holds and who is attached",
     )
+    agent.add_argument(
+        "--watch",
+        metavar="FILE",
+        default=argparse.SUPPRESS,
+        help="the TOML watch list the agent's own --mqtt, --metrics and --log-csv feed "
+        "(a cell's watch lines too), whoever is attached",
+    )
+    agent.add_argument(
+        "--log-csv",
+        metavar="FILE",
+        default=argparse.SUPPRESS,
+        help="log the exported values to FILE, one CSV row per poll cycle",
+    )
+    plant_options(agent, suppress=True)
     serve = subparsers.add_parser(
         "serve",
         help=SERVE_HELP,
