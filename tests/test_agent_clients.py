@@ -327,3 +327,28 @@ def test_a_served_console_keeps_the_poll_bounds_serve_gave_it(
     assert too_often and "0.7" in too_often[0], too_often
     polled = {line for line in controller.lines if line.startswith(b"GET")}
     assert polled <= {b"GET:RC8:1:I:"}  # nothing of the refused watch reached it
+
+
+def test_poll_frames_beyond_the_budget_are_left_out_and_said_while_writes_come_whole(
+    agent_dir: Path, controller: RecordingServer, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    from rac_console.agent import server
+
+    monkeypatch.setattr(server, "POLL_FRAMES_PER_SECOND", 20)
+    started = Running(controller)
+    a = client(started.target)
+    try:
+        a.run("watch I 0-9")
+        a.run("interval 0")
+        a.until(lambda: any("poll frames left out in" in note for note in a.notes), "the note")
+        assert a.outcome("put I 3 8").verified
+        a.until(lambda: b"PUT:RC8:3:I:3,8\r" in a.sent(), "the PUT's frame")
+    finally:
+        a.engine.stop()
+        started.stop()
+    (said, *_) = [note for note in a.notes if "poll frames left out in" in note]
+    assert "the agent sends a client at most 20 a second" in said
+    put = [f for f in a.frames if f.data.startswith(b"PUT")]
+    replies = [f for f in a.frames if f.direction == "rx" and f.request is not None
+               and f.request.command == "PUT"]  # fmt: skip
+    assert len(put) == len(replies) == 1  # the write and its answer, whatever was left out

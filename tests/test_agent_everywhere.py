@@ -18,6 +18,14 @@ def start_agent(env: dict[str, str], *args: str) -> Running:
     return agent
 
 
+def lines_of(stdout: str) -> list[str]:
+    """``run``'s lines without their timings (the arrow as a Windows code page writes it)."""
+    return [
+        line.split("  S_OK")[0].split("   VT_")[0].replace("\u2192", "->")
+        for line in stdout.splitlines()
+    ]
+
+
 def killed(agent: Running) -> None:
     """As a crash or Task Manager ends it: nothing of its own runs (no goodbye, its
     socket or port file left behind)."""
@@ -78,10 +86,9 @@ def test_watch_and_run_go_through_the_agent_and_write_what_they_would_alone(
         killed(agent)
     assert run.returncode == alone_run.returncode == 0, run.stderr
     assert "via agent, as run" in run.stderr and "via agent" not in alone_run.stderr
-    shown = [line.split("  S_OK")[0].split("   VT_")[0] for line in run.stdout.splitlines()]
-    before = [line.split("  S_OK")[0].split("   VT_")[0] for line in alone_run.stdout.splitlines()]
-    assert before == ["I7: 7 → 41", "I7 = 41"]  # the lines as run alone shows them
-    assert shown == ["I7: 41 → 42", "I7 = 42"]
+    shown, before = lines_of(run.stdout), lines_of(alone_run.stdout)
+    assert before == ["I7: 7 -> 41", "I7 = 41"]  # the lines as run alone shows them
+    assert shown == ["I7: 41 -> 42", "I7 = 42"]
     assert watched.returncode == 0, watched.stderr
     assert "via agent, as watch" in watched.stderr
     rows = [json.loads(line) for line in watched.stdout.splitlines()]

@@ -13,6 +13,7 @@ import contextlib
 import itertools
 import os
 import threading
+import time
 from collections.abc import Callable, Iterator, Mapping
 from dataclasses import asdict, replace
 from typing import TYPE_CHECKING, Any
@@ -42,6 +43,14 @@ AGENT_GONE = "the agent stopped: going on with a session of our own to {target}"
 UNANSWERED = (
     "the agent stopped before this line was answered: its outcome is unknown "
     "(a write may have reached the controller; it is not sent again)"
+)
+
+
+#: Said in the frame log when the agent left poll frames out (at most this often, s).
+LEFT_OUT_EVERY = 5.0
+LEFT_OUT = (
+    "{count:,} poll frames left out in {seconds:.1f} s: the agent sends a client at most "
+    "{rate:,} a second (requests, writes and their replies come whole)"
 )
 
 
@@ -162,6 +171,10 @@ class RemoteEngine:
         self._local: Engine | None = None  # after the agent went away
         self._stopping = False
         self.died: str | None = None
+        self._left_out = 0  # poll frames the agent left out, not said yet
+        self._left_out_since: float | None = None  # since when
+        self._left_out_said = -LEFT_OUT_EVERY  # when they were last said
+        self._poll_frame_rate = int(welcome.get("poll_frames_per_second") or 0)
         self._reader = threading.Thread(target=self._read, name="rac-agent-client", daemon=True)
 
     # ------------------------------------------------------------ as an Engine
@@ -307,9 +320,28 @@ class RemoteEngine:
             if self._rules.host is None:  # the agent's built-in simulator
                 status = replace(status, target=AGENT_SIMULATOR, is_simulator=True)
             outbox.put_status(replace(status, via=VIA))
+        self._say_left_out(int(message.get("polls_left_out") or 0))
         dropped = message["frames_dropped"], message["cycles_dropped"]
         if any(dropped):
             outbox.put_dropped(*dropped)
+
+    def _say_left_out(self, count: int) -> None:
+        """Poll frames the agent left out (see ``PollFrameBudget``): counted, and said in
+        the frame log at most once every :data:`LEFT_OUT_EVERY` seconds."""
+        from ..engine import Note
+
+        now = time.monotonic()
+        if count:
+            if self._left_out_since is None:
+                self._left_out_since = now
+            self._left_out += count
+        since = self._left_out_since
+        if since is not None and now - self._left_out_said >= LEFT_OUT_EVERY:
+            text = LEFT_OUT.format(
+                count=self._left_out, seconds=max(now - since, 0.1), rate=self._poll_frame_rate
+            )
+            self.outbox.put(Note(text, time.time()))
+            self._left_out, self._left_out_since, self._left_out_said = 0, None, now
 
     def _go_alone(self) -> None:
         """The agent went away: one line, then an engine of our own on the same

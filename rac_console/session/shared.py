@@ -244,11 +244,13 @@ class SharedConnection:
         for_all = frame.unsolicited or not frame.poll  # a poll's only where polls show
         if asker is not None and (for_all or asker.shows_polls):
             asker.frame(frame)
-        tagged = frame
-        if asker is not None and not frame.unsolicited:
-            tagged = dataclasses.replace(frame, source=asker.source)
+        tagged: Frame | None = None  # made once, and only when another engine takes it
         for shared in self._attached():
             if shared is not asker and (for_all or shared.shows_polls):
+                if tagged is None:
+                    tagged = frame
+                    if asker is not None and not frame.unsolicited:
+                        tagged = dataclasses.replace(frame, source=asker.source)
                 shared.foreign(tagged)
 
     def _state(self, state: State) -> None:
