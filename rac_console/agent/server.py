@@ -21,11 +21,10 @@ import time
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field
 
-from ..commands.language import Raw, VarRef
+from ..commands.language import Raw
 from ..commands.target import Target
-from ..engine import Engine, EngineOptions, Outbox, Result, RowView, Status
+from ..engine import Engine, EngineOptions, Outbox, Result
 from ..engine.exchange.gate import rules_refusal
-from ..engine.published.events import Event
 from ..engine.setup.poll_bounds import UNBOUNDED, PollBounds, bounds_for
 from ..engine.setup.where import Where
 from ..protocol.request import Request
@@ -33,14 +32,11 @@ from ..session import Session
 from ..session.shared import SharedConnection, SharedSession
 from ..session.types import Frame, NotSent, TransportError
 from . import endpoint as endpoints
+from .batches import POLL_FRAMES_PER_SECOND, send_batches
 from .exporters import EXPORTER, Export, Exporters
 from .lines import may_write
 from .wire import Channel, ChannelClosed, Message, hello_problem
 
-#: The least time between two batches to one client (about a screen's refresh).
-SEND_EVERY = 0.03
-#: The most poll frames a second one client is sent (see :class:`PollFrameBudget`).
-POLL_FRAMES_PER_SECOND = 2_000
 #: A client has this long to say hello.
 HELLO_TIMEOUT = 5.0
 #: The options a client may set on its engine, by name (anything else is the agent's).
@@ -95,43 +91,6 @@ class Client:
     @property
     def name(self) -> str:
         return f"{self.kind} {self.number}"
-
-
-class PollFrameBudget:
-    """At most :data:`POLL_FRAMES_PER_SECOND` poll frames a second to one client (a
-    console showing its poll frames): the newest of each batch are sent, the older ones
-    counted, and the client's log says how many were left out. A console polling 200
-    rows flat out gets some 40,000 poll frames a second; decoding them all kept its keys
-    waiting (p95 170 ms), and no one reads a log that scrolls that fast. Every other
-    frame (a request, a write, a reply to one, a line nobody asked for) is always sent."""
-
-    def __init__(self, per_second: int) -> None:
-        self.rate = per_second
-        self.allowance = float(self.rate)
-        self.at = time.monotonic()
-
-    def thin(self, events: list[Event]) -> tuple[list[Event], int]:
-        """``events`` within the budget, and how many poll frames were left out."""
-        now = time.monotonic()
-        self.allowance = min(float(self.rate), self.allowance + (now - self.at) * self.rate)
-        self.at = now
-        polls = sum(1 for event in events if _is_poll_frame(event))
-        keep = min(polls, int(self.allowance))
-        self.allowance -= keep
-        if keep == polls:
-            return events, 0
-        kept: list[Event] = []
-        skip = polls - keep  # the oldest poll frames go
-        for event in events:
-            if skip and _is_poll_frame(event):
-                skip -= 1
-                continue
-            kept.append(event)
-        return kept, polls - keep
-
-
-def _is_poll_frame(event: object) -> bool:
-    return type(event) is Frame and event.poll and not event.unsolicited
 
 
 class Given:
@@ -414,47 +373,14 @@ class Agent:
         client.channel.send(answer)
 
     def _write_to(self, client: Client) -> None:
-        """Send the client what its engine publishes, as it comes but at most once every
-        :data:`SEND_EVERY` (its own thread: a client that reads slowly holds only this).
-        Rows and the status replace the ones not yet sent, so a batch carries the latest
-        of each: a console polling 200 rows flat out gets about 30 batches a second to
-        read, not one per poll, and its keys stay quick."""
-        engine, wake = client.engine, client.wake
+        """The client's batches, on a thread of its own (see :func:`.batches.send`)."""
+        engine = client.engine
         assert engine is not None
-        sent_rows: dict[VarRef, RowView] = {}  # as the client has them
-        sent_status: Status | None = None
-        polls = PollFrameBudget(POLL_FRAMES_PER_SECOND)
-        while not client.channel.closed:
-            wake.wait(0.5)
-            wake.clear()
-            batch = engine.outbox.drain()
-            events, left_out = polls.thin(batch.events)
-            # A row or the status as the client already has it is not sent again.
-            rows = {var: row for var, row in batch.rows.items() if sent_rows.get(var) != row}
-            sent_rows.update(rows)
-            for var in batch.removed:
-                sent_rows.pop(var, None)
-            status = batch.status if batch.status != sent_status else None
-            sent_status = status or sent_status
-            if not (events or rows or batch.removed or status or batch.frames_dropped):
-                continue
-            client.missed += batch.frames_dropped
-            try:
-                client.channel.send(
-                    {
-                        "op": "batch",
-                        "events": events,
-                        "polls_left_out": left_out,
-                        "rows": rows,
-                        "removed": batch.removed,
-                        "status": status,
-                        "frames_dropped": batch.frames_dropped,
-                        "cycles_dropped": batch.cycles_dropped,
-                    }
-                )
-            except ChannelClosed:
-                return
-            time.sleep(SEND_EVERY)  # what comes meanwhile goes in the next batch
+
+        def missed(frames: int) -> None:
+            client.missed += frames
+
+        send_batches(engine.outbox, client.wake, client.channel, missed, POLL_FRAMES_PER_SECOND)
 
     def _end(self, client: Client, why: str) -> None:
         """The client is gone: its engine stops (its watches with it) before it leaves
