@@ -352,3 +352,45 @@ def test_poll_frames_beyond_the_budget_are_left_out_and_said_while_writes_come_w
     replies = [f for f in a.frames if f.direction == "rx" and f.request is not None
                and f.request.command == "PUT"]  # fmt: skip
     assert len(put) == len(replies) == 1  # the write and its answer, whatever was left out
+
+
+def test_a_stopped_client_never_stops_the_polling_and_is_told_what_it_missed(
+    running: Running, controller: RecordingServer, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    import socket
+
+    from rac_console.agent import endpoint
+    from rac_console.agent.wire import PROTOCOL, RELEASE, Channel
+    from rac_console.engine.published import outbox
+
+    monkeypatch.setattr(outbox, "MAX_EVENTS", 2_000)  # its queue's bound, reached sooner
+    reached = endpoint.reach()
+    assert reached is not None
+    reached[0].setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 4096)
+    stopped = Channel(reached[0])  # a client that stops reading (a frozen terminal)
+    stopped.send(
+        {"op": "hello", "protocol": PROTOCOL, "release": RELEASE, "client": "stopped",
+         "token": reached[1].token,
+         "host": "127.0.0.1", "port": controller.port, "options": {"interval": 0}}
+    )  # fmt: skip
+    assert stopped.receive()["op"] == "welcome"
+    stopped.send({"op": "line", "seq": 1, "what": "watch I 0-19", "line": "watch I 0-19"})
+    (held,) = running.agent.clients.values()
+    queue = held.engine.outbox if held.engine is not None else None
+    assert queue is not None
+    b = client(running.target)
+    try:
+        b.run("watch I 40")
+        b.until(
+            lambda: held.engine.outbox._batch.frames_dropped > 0, "the stopped one's queue full"
+        )
+        polls = controller.lines.count(b"GET:RC8:40:I:")
+        b.until(lambda: controller.lines.count(b"GET:RC8:40:I:") >= polls + 10, "b polled on")
+        stopped.set_timeout(30)
+        told = next(m for m in stopped.messages() if m.get("frames_dropped"))
+        listed = {c["name"]: c["missed"] for c in running.agent.status()["clients"]}
+    finally:
+        b.engine.stop()
+        stopped.close()
+    assert told["frames_dropped"] > 0  # said to it, and in agent status
+    assert listed[held.name] >= told["frames_dropped"]
