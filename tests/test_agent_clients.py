@@ -381,9 +381,7 @@ def test_a_stopped_client_never_stops_the_polling_and_is_told_what_it_missed(
     b = client(running.target)
     try:
         b.run("watch I 40")
-        b.until(
-            lambda: held.engine.outbox._batch.frames_dropped > 0, "the stopped one's queue full"
-        )
+        b.until(lambda: queue._batch.frames_dropped > 0, "the stopped one's queue full")
         polls = controller.lines.count(b"GET:RC8:40:I:")
         b.until(lambda: controller.lines.count(b"GET:RC8:40:I:") >= polls + 10, "b polled on")
         stopped.set_timeout(30)
