@@ -138,6 +138,10 @@ def test_writes_reach_the_controller_in_the_order_the_agent_received_them(
         a.until(lambda: _lines_received(running, "test 1") == 2, "a's two lines at the agent")
         put_b = b.engine.submit("put I 3 6")
         b.until(lambda: _lines_received(running, "test 2") == 1, "b's line at the agent")
+        b.until(
+            lambda: any("waits for test 1's earlier write" in said for said in b.alerts),
+            "b told why its write waits",
+        )
         release.set()
         a.until(lambda: put_a in a.results, "a's put answered")
         b.until(lambda: put_b in b.results, "b's put answered")

@@ -23,7 +23,7 @@ from dataclasses import dataclass, field
 
 from ..commands.language import Raw
 from ..commands.target import Target
-from ..engine import Engine, EngineOptions, Outbox, Result
+from ..engine import Alert, Engine, EngineOptions, Outbox, Result
 from ..engine.exchange.gate import rules_refusal
 from ..engine.setup.poll_bounds import UNBOUNDED, PollBounds, bounds_for
 from ..engine.setup.where import Where
@@ -195,7 +195,7 @@ class Agent:
         self.exporters.start(
             exports,
             options,
-            lambda name: _sessions_on(by_name[name], EXPORTER, _unseen),
+            lambda name: _sessions_on(by_name[name], EXPORTER, _unseen, None),
             lambda name: by_name[name].target,
         )
 
@@ -295,7 +295,9 @@ class Agent:
         options = {k: given[k] for k in CLIENT_OPTIONS if k in given}
         held = client.held
         client_outbox = Outbox(notify=client.wake.set)
-        session = _sessions_on(held, client.name, client_outbox.put)
+        session = _sessions_on(
+            held, client.name, client_outbox.put, lambda text: client_outbox.put(Alert(text))
+        )
 
         target = dataclasses.replace(
             held.target,
@@ -459,15 +461,16 @@ def _unseen(frame: Frame) -> None:
 
 
 def _sessions_on(
-    held: Held, name: str, foreign: Callable[[Frame], None]
+    held: Held, name: str, foreign: Callable[[Frame], None], told: Callable[[str], None] | None
 ) -> Callable[[str, int, float], Session]:
     """How the engine of ``name`` opens sessions: the held connection for the held
-    address (``foreign`` takes the other clients' frames); any other (``connect``
-    elsewhere, the built-in simulator) a session of the engine's own."""
+    address (``foreign`` takes the other clients' frames, ``told`` what the client is
+    told at once); any other (``connect`` elsewhere, the built-in simulator) a session
+    of the engine's own."""
 
     def session(host: str, port: int, timeout: float) -> Session:
         if (host, port) == (held.connection.host, held.connection.port):
-            return held.connection.attach(name, foreign, timeout)
+            return held.connection.attach(name, foreign, timeout, told)
         return Session(host, port, timeout=timeout)
 
     return session

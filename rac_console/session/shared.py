@@ -60,6 +60,13 @@ class Turns:
             self.give_up()
 
 
+#: Said to a client whose write waits for another client's earlier one.
+WAITING = (
+    "this write waits for {client}'s earlier write to finish: the agent sends writes in "
+    "the order it received them (Esc cancels this one; nothing was sent)"
+)
+
+
 class WriteOrder:
     """Writes in the order the agent received them, whichever client sent them: a line
     that may write takes a ticket as it arrives (:meth:`take`), and its request that
@@ -92,15 +99,23 @@ class WriteOrder:
                 del self._open[ticket]
             self._changed.notify_all()
 
-    def wait_turn(self, client: str, cancelled: Callable[[], bool] | None = None) -> None:
+    def wait_turn(
+        self,
+        client: str,
+        cancelled: Callable[[], bool] | None = None,
+        told: Callable[[str], None] | None = None,
+    ) -> None:
         """Before a write of ``client``: until the lines that arrived before its own
         (its oldest ticket) have finished; NotSent if its job is cancelled meanwhile
-        (Esc, Ctrl-C: nothing was sent)."""
+        (Esc, Ctrl-C: nothing was sent). ``told`` hears, once, whose write it waits for."""
         with self._changed:
             mine = [t for t, c in self._open.items() if c == client]
             if not mine:
                 return
             first = min(mine)
+            ahead = [self._open[t] for t in sorted(self._open) if t < first]
+            if ahead and told is not None:
+                told(WAITING.format(client=ahead[0]))
             self.waiting += 1
             try:
                 while any(t < first for t in self._open):
@@ -139,10 +154,17 @@ class SharedConnection:
     def port(self) -> int:
         return self.session.port
 
-    def attach(self, source: str, foreign: ForeignSink, timeout: float) -> SharedSession:
+    def attach(
+        self,
+        source: str,
+        foreign: ForeignSink,
+        timeout: float,
+        told: Callable[[str], None] | None = None,
+    ) -> SharedSession:
         """A session for the engine of client ``source``; ``foreign`` takes the frames
-        of the other clients' requests."""
-        shared = SharedSession(self, source, foreign, timeout)
+        of the other clients' requests, ``told`` what the client is to be told at once
+        (a write that waits for another client's)."""
+        shared = SharedSession(self, source, foreign, timeout, told)
         with self._lock:
             self._sessions = (*self._sessions, shared)
         return shared
@@ -174,7 +196,7 @@ class SharedConnection:
         if poll:
             asker.shows_polls = observe
         elif request.write:
-            self.order.wait_turn(asker.source, cancelled)
+            self.order.wait_turn(asker.source, cancelled, asker.told)
         key = request.data
         turns = self.turns
         turns.take()
@@ -273,13 +295,19 @@ class SharedSession(Session):
     state changes they make; the state read is the connection's own."""
 
     def __init__(
-        self, connection: SharedConnection, source: str, foreign: ForeignSink, timeout: float
+        self,
+        connection: SharedConnection,
+        source: str,
+        foreign: ForeignSink,
+        timeout: float,
+        told: Callable[[str], None] | None = None,
     ) -> None:
         real = connection.session
         super().__init__(real.host, real.port, timeout=timeout)
         self.connection = connection
         self.source = source
         self.foreign = foreign
+        self.told = told
         self.shows_polls = True
         #: When this engine last had an answer to each GET it polls.
         self.answered: dict[bytes, float] = {}
