@@ -396,3 +396,22 @@ def test_a_stopped_client_never_stops_the_polling_and_is_told_what_it_missed(
         stopped.close()
     assert told["frames_dropped"] > 0  # said to it, and in agent status
     assert listed[held.name] >= told["frames_dropped"]
+
+
+def test_of_two_agents_started_at_once_the_second_is_told_one_runs(
+    agent_dir: Path, controller: RecordingServer
+) -> None:
+    """The first holds the folder's lock and has not listened yet (a socket or port file
+    left by an agent killed is still there): the second must not take its place."""
+    from rac_console.agent import endpoint
+
+    left, _ = endpoint.listen_socket()
+    left.close()  # what an agent killed leaves behind
+    starting = endpoint._lock(endpoint.folder())
+    try:
+        with pytest.raises(endpoint.EndpointError, match="an agent is already running"):
+            endpoint.listen()
+    finally:
+        starting.close()
+    again, _ = endpoint.listen()  # the lock went with the first: the next one starts
+    again.close()

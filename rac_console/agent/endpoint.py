@@ -23,7 +23,7 @@ import sys
 import tempfile
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import IO, TYPE_CHECKING
 
 if TYPE_CHECKING:
     from .wire import Channel
@@ -34,6 +34,7 @@ CONNECT_TIMEOUT = 2.0
 ACCEPT_WAKE = 0.2
 SOCKET_NAME = "agent.sock"
 PORT_FILE = "agent.json"  # Windows: the port and the token
+LOCK_NAME = "agent.lock"  # held by the running agent
 WINDOWS = sys.platform == "win32"
 
 
@@ -88,10 +89,12 @@ class Endpoint:
 
 
 class Listener:
-    """The agent's listening socket: each client as a :class:`~.wire.Channel`."""
+    """The agent's listening socket: each client as a :class:`~.wire.Channel`; and the
+    lock that makes it the only agent of its folder (held until :meth:`close`)."""
 
-    def __init__(self, server: socket.socket) -> None:
+    def __init__(self, server: socket.socket, lock: IO[bytes] | None = None) -> None:
         self._server = server
+        self._lock = lock
         server.settimeout(ACCEPT_WAKE)
 
     def accept(self) -> Channel | None:
@@ -108,12 +111,40 @@ class Listener:
 
     def close(self) -> None:
         self._server.close()
+        if self._lock is not None:
+            self._lock.close()  # the lock goes with it
 
 
 def listen() -> tuple[Listener, Endpoint]:
-    """The agent's listener (see :func:`listen_socket`)."""
-    server, endpoint = listen_socket()
-    return Listener(server), endpoint
+    """The agent's listener (see :func:`listen_socket`), once it holds the folder's
+    lock: of two agents started at once, the second is told one is running (it would
+    otherwise take the first one's socket or port file while the first still starts)."""
+    lock = _lock(folder())
+    try:
+        server, endpoint = listen_socket()
+    except BaseException:
+        lock.close()
+        raise
+    return Listener(server, lock), endpoint
+
+
+def _lock(base: Path) -> IO[bytes]:
+    """The folder's lock file, held (EndpointError when another agent holds it)."""
+    held = open(base / LOCK_NAME, "ab")  # noqa: SIM115 - held for the agent's life
+    try:
+        if sys.platform == "win32":
+            import msvcrt
+
+            held.seek(0)
+            msvcrt.locking(held.fileno(), msvcrt.LK_NBLCK, 1)
+        else:
+            import fcntl
+
+            fcntl.flock(held.fileno(), fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except OSError:
+        held.close()
+        raise EndpointError(f"an agent is already running (it holds {base / LOCK_NAME})") from None
+    return held
 
 
 def listen_socket() -> tuple[socket.socket, Endpoint]:
