@@ -380,6 +380,7 @@ def test_a_stopped_client_never_stops_the_polling_and_is_told_what_it_missed(
     assert stopped.receive()["op"] == "welcome"
     stopped.send({"op": "line", "seq": 1, "what": "watch I 0-19", "line": "watch I 0-19"})
     (held,) = running.agent.clients.values()
+    held.channel.sock.setsockopt(socket.SOL_SOCKET, socket.SO_SNDBUF, 4096)  # full sooner
     queue = held.engine.outbox if held.engine is not None else None
     assert queue is not None
     b = client(running.target)
@@ -415,3 +416,48 @@ def test_of_two_agents_started_at_once_the_second_is_told_one_runs(
         starting.close()
     again, _ = endpoint.listen()  # the lock went with the first: the next one starts
     again.close()
+
+
+def test_a_port_left_by_a_dead_agent_and_taken_by_another_program_is_no_agent(
+    agent_dir: Path, controller: RecordingServer, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Windows' endpoint (a loopback port and a token in a file), on any platform: a
+    program that took the port an agent left answers without the token's proof, and
+    the client goes direct; the agent's own answers carry it."""
+    import json
+    import socket
+
+    from rac_console.agent import endpoint
+    from rac_console.agent.wire import Channel
+
+    monkeypatch.setattr(endpoint, "WINDOWS", True)
+    taken = socket.create_server(("127.0.0.1", 0))
+    heard: list[dict[str, object]] = []
+
+    def impostor() -> None:
+        sock, _ = taken.accept()
+        channel = Channel(sock)
+        heard.append(channel.receive())
+        channel.send({"op": "welcome", "client": "impostor 1"})
+
+    threading.Thread(target=impostor, daemon=True).start()
+    agent_dir.mkdir(parents=True, exist_ok=True)
+    left = {"port": taken.getsockname()[1], "token": "ab" * 16, "pid": 1}
+    (agent_dir / endpoint.PORT_FILE).write_text(json.dumps(left), encoding="utf-8")
+    target = Target("127.0.0.1", controller.port)
+    options = EngineOptions(timeout=5.0)
+    try:
+        assert attach(target, options, client="test", where=Where.CONSOLE) is None
+    finally:
+        taken.close()
+    assert heard and heard[0]["op"] == "hello"  # it was asked, and not believed
+    running = Running(controller)  # a real agent (the port file is its own now)
+    try:
+        engine = attach(target, options, client="test", where=Where.CONSOLE)
+        assert isinstance(engine, RemoteEngine)
+        engine.start()
+        assert Front(engine).outcome("put I 6 3").verified  # type: ignore[arg-type]
+        engine.stop()
+    finally:
+        running.stop()
+    assert controller.lines.count(b"PUT:RC8:6:I:3,3") == 1

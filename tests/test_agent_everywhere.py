@@ -65,7 +65,8 @@ def test_commands_share_the_agents_connection_and_go_direct_once_it_is_killed(
         found = cli(env, *where, "get", "I", "5")
     finally:
         killed(again) if sys.platform == "win32" else again.stop()  # no Ctrl-C to send there
-    assert "via agent" in found.stderr and found.stdout.startswith("I5 = 18")
+    assert "via agent" in found.stderr, (found.stderr, again.out, again.err)
+    assert found.stdout.startswith("I5 = 18")
     assert controller.accepted == 3
 
 

@@ -24,7 +24,7 @@ from ..engine.setup.where import Where
 from . import endpoint as endpoints
 from .lines import may_write
 from .server import CLIENT_OPTIONS
-from .wire import PROTOCOL, RELEASE, Channel, ChannelClosed, Message
+from .wire import Channel, ChannelClosed, Message, hello, proven
 
 if TYPE_CHECKING:
     from ..commands.language import Command, VarRef
@@ -75,24 +75,24 @@ def attach(
     sock, endpoint = reached
     channel = Channel(sock)
     given = asdict(options)
-    hello: Message = {
-        "op": "hello",
-        "protocol": PROTOCOL,
-        "release": RELEASE,
-        "token": endpoint.token,
-        "client": client,
-        "pid": os.getpid(),
-        "host": target.host,
-        "port": target.port,
-        "read_only": target.read_only_flag,
-        "where": where.value,
-        "options": {k: _absolute(k, given[k]) for k in CLIENT_OPTIONS},
-        "bounds": given["bounds"],  # a served console's, from serve: kept at the agent
-    }
+    sent = hello(
+        endpoint.token,
+        client=client,
+        pid=os.getpid(),
+        host=target.host,
+        port=target.port,
+        read_only=target.read_only_flag,
+        where=where.value,
+        options={k: _absolute(k, given[k]) for k in CLIENT_OPTIONS},
+        bounds=given["bounds"],  # a served console's, from serve: kept at the agent
+    )
     try:
-        channel.send(hello)
+        channel.send(sent)
         answer = channel.receive()
     except (ChannelClosed, OSError):
+        channel.close()
+        return None
+    if not proven(endpoint.token, sent, answer):  # not the agent: a port it left, taken
         channel.close()
         return None
     if answer.get("op") == "refused":
@@ -125,21 +125,15 @@ def agent_status() -> Message | None:
         return None
     sock, endpoint = reached
     channel = Channel(sock)
+    sent = hello(endpoint.token, want="status")
     try:
-        channel.send(
-            {
-                "op": "hello",
-                "protocol": PROTOCOL,
-                "release": RELEASE,
-                "token": endpoint.token,
-                "want": "status",
-            }
-        )
-        return channel.receive()
+        channel.send(sent)
+        answer = channel.receive()
     except (ChannelClosed, OSError):
         return None
     finally:
         channel.close()
+    return answer if proven(endpoint.token, sent, answer) else None
 
 
 class RemoteEngine:

@@ -26,7 +26,7 @@ from ..protocol.request import Request
 from ..session import Session
 from ..session.types import Disconnected, NotSent, Reply, State, TransportError
 from . import endpoint as endpoints
-from .wire import PROTOCOL, RELEASE, Channel, ChannelClosed, Message
+from .wire import Channel, ChannelClosed, hello, proven
 
 LOG = logging.getLogger("rac_console")
 
@@ -46,23 +46,23 @@ def attach_requests(target: Target, timeout: float, client: str = "script") -> A
         return None
     sock, endpoint = reached
     channel = Channel(sock)
-    hello: Message = {
-        "op": "hello",
-        "protocol": PROTOCOL,
-        "release": RELEASE,
-        "token": endpoint.token,
-        "client": client,
-        "pid": os.getpid(),
-        "host": target.host,
-        "port": target.port,
-        "read_only": target.read_only_flag,
-        "want": "requests",
-        "timeout": timeout,
-    }
+    sent = hello(
+        endpoint.token,
+        client=client,
+        pid=os.getpid(),
+        host=target.host,
+        port=target.port,
+        read_only=target.read_only_flag,
+        want="requests",
+        timeout=timeout,
+    )
     try:
-        channel.send(hello)
+        channel.send(sent)
         answer = channel.receive()
     except (ChannelClosed, OSError):
+        channel.close()
+        return None
+    if not proven(endpoint.token, sent, answer):  # not the agent: a port it left, taken
         channel.close()
         return None
     if answer.get("op") != "welcome":  # not held, or another release: direct

@@ -35,7 +35,7 @@ from . import endpoint as endpoints
 from .batches import POLL_FRAMES_PER_SECOND, send_batches
 from .exporters import EXPORTER, Export, Exporters
 from .lines import may_write
-from .wire import Channel, ChannelClosed, Message, hello_problem
+from .wire import Channel, ChannelClosed, Message, hello_problem, proof
 
 #: A client has this long to say hello.
 HELLO_TIMEOUT = 5.0
@@ -238,11 +238,13 @@ class Agent:
         token = self.endpoint.token if self.endpoint is not None else ""
         if problem is None and tcp and not hmac.compare_digest(str(hello.get("token", "")), token):
             problem = "the agent's token was not given"
+        # Every answer proves the agent holds the token (a client on Windows checks it).
+        signed = {"proof": proof(token, hello.get("nonce"))} if token else {}
         if problem is not None:
-            self._send_quietly(channel, {"op": "refused", "why": problem})
+            self._send_quietly(channel, {"op": "refused", "why": problem, **signed})
             return None
         if hello.get("want") == "status":
-            self._send_quietly(channel, {"op": "status", **self.status()})
+            self._send_quietly(channel, {"op": "status", **self.status(), **signed})
             return None
         held = self._holding(hello.get("host"), hello.get("port"))
         if held is None:
@@ -268,6 +270,7 @@ class Agent:
             channel,
             {
                 "op": "welcome",
+                **signed,
                 "client": client.name,
                 "agent_pid": os.getpid(),
                 "target": held.name,

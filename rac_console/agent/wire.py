@@ -8,6 +8,9 @@ must both be this one's, else the client is refused in one line and goes direct.
 from __future__ import annotations
 
 import contextlib
+import hashlib
+import hmac
+import secrets
 import socket
 import sys
 import threading
@@ -114,3 +117,30 @@ def hello_problem(message: Message) -> str | None:
             "restart the agent with this release, or use --direct"
         )
     return None
+
+
+def hello(token: str, **fields: object) -> Message:
+    """A client's first message: this release, the agent's token (Windows), a nonce the
+    agent proves it holds the token with (:func:`proven`), and ``fields``."""
+    return {
+        "op": "hello",
+        "protocol": PROTOCOL,
+        "release": RELEASE,
+        "token": token,
+        "nonce": secrets.token_hex(16),
+        **fields,
+    }
+
+
+def proof(token: str, nonce: object) -> str:
+    """What the agent answers a hello with: the client's nonce signed with the token."""
+    return hmac.new(token.encode(), str(nonce).encode(), hashlib.sha256).hexdigest()
+
+
+def proven(token: str, sent: Message, answer: Message) -> bool:
+    """Whether ``answer`` came from the agent that wrote ``token``: on Windows, where a
+    port left by an agent that died could be taken by any program, it must carry the
+    proof; a Unix socket's peer is checked by the kernel (no token there)."""
+    if not token:
+        return True
+    return hmac.compare_digest(str(answer.get("proof", "")), proof(token, sent.get("nonce")))
