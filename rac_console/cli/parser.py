@@ -53,10 +53,13 @@ AGENT_HELP = (
     "yours on this machine"
 )
 AGENT_EPILOG = """\
-While it runs, a console, a REPL, a one-shot command or a script for a target it
-holds goes through it (the status line says "via agent"): one connection to the
-controller, polled once for everyone, every write through its one gate in the order
-received. --direct opens a session of its own. See docs/agent.md.
+While it runs, a console, a REPL, a one-shot command, watch, run or a script for a
+target it holds goes through it (the status line says "via agent"): one connection to
+the controller, polled once for everyone, every write through its one gate in the
+order received. --direct opens a session of its own.
+  rac-console -H cell3 agent --watch plant.toml --mqtt mqtt://broker/cell3
+feeds the plant the rows of plant.toml from the agent, whoever is attached (also
+--metrics PORT, --log-csv FILE). See docs/agent.md.
 """
 
 
