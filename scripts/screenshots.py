@@ -9,18 +9,23 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
+import os
 import shutil
 import sys
 import tempfile
+import threading
 from collections.abc import Iterator
 from pathlib import Path
 
+from rac_console.agent.client import attach
+from rac_console.agent.server import Agent
 from rac_console.commands.plant import parse_mqtt_address
 from rac_console.commands.policy import TargetProfile, WritePolicy, Writes, parse_allow
 from rac_console.commands.target import Target
-from rac_console.engine import Engine
+from rac_console.engine import Engine, EngineLike
 from rac_console.engine.cell.cell import Cell
 from rac_console.engine.setup.options import EngineOptions
+from rac_console.engine.setup.where import Where
 from rac_console.present.history import History
 from rac_console.sim.cell import SimulatedCellThread
 from rac_console.sim.thread import SimulatorThread
@@ -142,6 +147,30 @@ HOSTILE_SCENES = {
 }
 
 
+#: The console through an agent (``via agent`` on its status line), its poll frames
+#: hidden (F3), with another client of the agent (a REPL) writing I 10: its PUT and
+#: read-back in the console's frame log, tagged with who sent them.
+AGENT_SCENES = {
+    "agent-120x40": ((120, 40), ["watch I 10 parts", "watch IO 128-131"], ["f3"]),
+}
+
+
+@contextlib.contextmanager
+def agent_holding(port: int) -> Iterator[Target]:
+    """An agent of this process holding the simulator at ``port``, in a folder of its own."""
+    with tempfile.TemporaryDirectory() as folder:
+        os.environ["RAC_CONSOLE_AGENT_DIR"] = folder
+        target = Target("127.0.0.1", port)
+        agent = Agent([("sim", target)], say=lambda text: None)
+        agent.open()
+        threading.Thread(target=agent.serve, daemon=True).start()
+        try:
+            yield target
+        finally:
+            agent.stop()
+            del os.environ["RAC_CONSOLE_AGENT_DIR"]
+
+
 @contextlib.contextmanager
 def mosquitto() -> Iterator[int | None]:
     """The benchmark's broker (benchmarks/plant_publish.py) on a free port; None when
@@ -185,7 +214,7 @@ async def take(
     lines: list[str],
     typed: str,
     keys: list[str] | None = None,
-    engine: Engine | Cell | None = None,
+    engine: EngineLike | Cell | None = None,
 ) -> None:
     with tempfile.TemporaryDirectory() as home:
         engine = engine or Engine(None, interval=0.2, cycles=True)
@@ -249,6 +278,22 @@ async def main(only: list[str]) -> None:
             await take(name, size, lines, typed, engine=engine)
         finally:
             hostile.close()
+    for name, (size, lines, keys) in AGENT_SCENES.items():
+        if not wanted(name):
+            continue
+        with SimulatorThread() as sim, agent_holding(sim.port) as target:
+            options = EngineOptions(interval=0.2, cycles=True)
+            console = attach(target, options, client="console", where=Where.CONSOLE)
+            other = attach(target, EngineOptions(), client="REPL", where=Where.REPL)
+            assert console is not None and other is not None
+            other.start()
+            writes = threading.Timer(3.0, lambda: other.submit("put I 10 7"))
+            writes.start()
+            try:
+                await take(name, size, lines, "", keys, engine=console)
+            finally:
+                writes.cancel()
+                other.stop()
     for name, (size, lines, keys) in CELL_SCENES.items():
         if wanted(name):
             with SimulatedCellThread(2) as sims:
