@@ -287,7 +287,7 @@ async def main(only: list[str]) -> None:
             other = attach(target, EngineOptions(), client="REPL", where=Where.REPL)
             assert console is not None and other is not None
             other.start()
-            writes = threading.Timer(3.0, lambda: other.submit("put I 10 7"))
+            writes = threading.Timer(3.0, other.submit, args=("put I 10 7",))
             writes.start()
             try:
                 await take(name, size, lines, "", keys, engine=console)
