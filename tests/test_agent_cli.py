@@ -294,3 +294,32 @@ def test_an_agent_feed_with_nothing_to_feed_is_refused_in_one_line(
     assert refused.returncode == 2
     assert says in one_error_line(refused)
     assert not agent_socket(env).exists()
+
+
+def test_the_agent_keeps_one_frame_log_of_every_client_naming_who_asked(
+    env: dict[str, str], recording, tmp_path: Path
+) -> None:
+    controller: RecordingServer = recording(Memory())
+    record, transcript = tmp_path / "agent.jsonl", tmp_path / "agent.log"
+    where = ["-H", "127.0.0.1", "-p", str(controller.port)]
+    agent = start_agent(env, *where, "--record", str(record), "--log", str(transcript))
+    try:
+        put = cli(env, *where, "put", "I", "8", "21")
+        got = cli(env, *where, "get", "I", "8")
+    finally:
+        agent.stop()
+    assert "via agent, as command 1" in put.stderr and "via agent, as command 2" in got.stderr
+    lines = [json.loads(line) for line in record.read_text(encoding="utf-8").splitlines()]
+    sent = [(line["client"], line["text"]) for line in lines if line["dir"] == "tx"]
+    assert ("command 1", "PUT:RC8:8:I:3,21") in sent
+    assert ("command 2", "GET:RC8:8:I:") in sent
+    said = transcript.read_text(encoding="utf-8")
+    assert "PUT:RC8:8:I:3,21   [command 1]" in said
+
+
+def test_a_clients_name_for_itself_is_a_plain_word_in_the_others_logs() -> None:
+    from rac_console.agent.hellos import client_kind
+
+    assert client_kind("REPL") == "REPL" and client_kind("served console") == "served console"
+    for hostile in ("\x1b[2Jx", "a" * 40, "", None, "x\ny", "robot[1]"):
+        assert client_kind(hostile) == "client"

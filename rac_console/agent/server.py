@@ -25,7 +25,7 @@ from ..commands.language import Raw
 from ..commands.target import Target
 from ..engine import Alert, Engine, EngineOptions, Outbox, Result
 from ..engine.exchange.gate import rules_refusal
-from ..engine.setup.poll_bounds import UNBOUNDED, PollBounds, bounds_for
+from ..engine.files.frame_files import FrameFiles
 from ..engine.setup.where import Where
 from ..protocol.request import Request
 from ..session import Session
@@ -34,6 +34,7 @@ from ..session.types import Frame, NotSent, TransportError
 from . import endpoint as endpoints
 from .batches import POLL_FRAMES_PER_SECOND, send_batches
 from .exporters import EXPORTER, Export, Exporters
+from .hellos import client_kind, served_bounds
 from .lines import may_write
 from .wire import Channel, ChannelClosed, Message, hello_problem, proof
 
@@ -133,6 +134,7 @@ class Agent:
         self.endpoint: endpoints.Endpoint | None = None
         self.started = time.time()
         self.exporters = Exporters(say)
+        self._files: FrameFiles | None = None
 
     # ------------------------------------------------------------ its life
 
@@ -185,8 +187,19 @@ class Agent:
             held.connection.close()
             if held.stop_simulator is not None:
                 held.stop_simulator()
+        if self._files is not None:
+            self._files.close()
         if self.endpoint is not None:
             endpoints.forget(self.endpoint)
+
+    def keep_frames(self, files: FrameFiles) -> None:
+        """The agent's own frame log (``--record``, ``--log``): every frame of each held
+        connection, naming the client that asked (and the target, when several)."""
+        self._files = files
+        several = len(self.held) > 1
+        for place, held in enumerate(self.held, 1):
+            view = files.view(held.name, place) if several else files
+            held.connection.record = view.frame
 
     def export(self, exports: Sequence[Export], options: EngineOptions) -> None:
         """Feed the plant (``--mqtt``, ``--metrics``, ``--log-csv``) from the targets
@@ -251,8 +264,8 @@ class Agent:
             self._send_quietly(channel, {"op": "not_held"})
             return None
         client = Client(
-            next(self._numbers), str(hello.get("client", "client")), int(hello.get("pid", 0)),
-            held, channel,
+            next(self._numbers), client_kind(hello.get("client")), int(hello.get("pid", 0)), held,
+            channel,
         )  # fmt: skip
         if hello.get("want") == "requests":  # a script's connection: no engine of its own
             timeout = float(hello.get("timeout") or self.timeout)
@@ -309,7 +322,7 @@ class Agent:
         )
         where = Where(hello.get("where", Where.CONSOLE.value))
         engine_options = EngineOptions(
-            **options, sessions=session, bounds=_bounds(where, hello.get("bounds"))
+            **options, sessions=session, bounds=served_bounds(where, hello.get("bounds"))
         )
         engine = Engine(
             target=target, options=engine_options, outbox=client_outbox, where=where,
@@ -445,18 +458,6 @@ class Agent:
                 for c in clients
             ],
         }
-
-
-def _bounds(where: Where, given: object) -> PollBounds:
-    """A served console's poll bounds as ``serve`` gave them to it (in its environment,
-    which is not the agent's); serve's defaults when it sent none; none for any other
-    client."""
-    if where is not Where.SERVED:
-        return UNBOUNDED
-    if isinstance(given, dict):
-        rows = given.get("max_rows")
-        return PollBounds(float(given["min_interval"]), None if rows is None else int(rows))
-    return bounds_for(Where.SERVED, {})
 
 
 def _unseen(frame: Frame) -> None:

@@ -221,6 +221,19 @@ def _run(args: argparse.Namespace) -> int:
         for stop in stops.values():
             stop()
         return 2
+    if args.record or getattr(args, "transcript", None):
+        from ..engine.files.frame_files import FrameFiles
+
+        try:
+            files = FrameFiles(args.record, getattr(args, "transcript", None), _say)
+        except InputError as exc:
+            print(f"rac-console: {terminal_safe(str(exc))}", file=sys.stderr)
+            agent.stop()
+            return 2
+        agent.keep_frames(files)
+        _say("every frame to the controller goes to " + " and ".join(
+            str(path) for path in (args.record, getattr(args, "transcript", None)) if path
+        ))  # fmt: skip
     for notice in getattr(args, "plant_notices", ()):
         _say(notice)
     if exports:

@@ -142,6 +142,8 @@ class SharedConnection:
         self._read: dict[bytes, tuple[float, Reply]] = {}
         self.requests = 0  # requests sent
         self.shared_polls = 0  # polls answered by a read made for another
+        #: The agent's own frame log (``--record``, ``--log``): every frame, tagged.
+        self.record: Callable[[Frame], None] | None = None
         session.add_frame_observer(self._frame)
         session.add_state_observer(self._state)
         session.add_resend_observer(self._resend)
@@ -209,8 +211,10 @@ class SharedConnection:
                     self.shared_polls += 1
                     asker.answered[key] = read[0]
                     return read[1]
-            observed = observe or any(
-                s is not asker and (not poll or s.shows_polls) for s in self._sessions
+            observed = (
+                observe
+                or self.record is not None
+                or any(s is not asker and (not poll or s.shows_polls) for s in self._sessions)
             )
             self._asking = asker
             self.session.timeout = asker.timeout
@@ -266,14 +270,23 @@ class SharedConnection:
         for_all = frame.unsolicited or not frame.poll  # a poll's only where polls show
         if asker is not None and (for_all or asker.shows_polls):
             asker.frame(frame)
-        tagged: Frame | None = None  # made once, and only when another engine takes it
+        tagged: Frame | None = None  # made once, and only when another takes it
+        record = self.record
+        if record is not None:
+            tagged = self._tagged(frame, asker)
+            record(tagged)
         for shared in self._attached():
             if shared is not asker and (for_all or shared.shows_polls):
                 if tagged is None:
-                    tagged = frame
-                    if asker is not None and not frame.unsolicited:
-                        tagged = dataclasses.replace(frame, source=asker.source)
+                    tagged = self._tagged(frame, asker)
                 shared.foreign(tagged)
+
+    @staticmethod
+    def _tagged(frame: Frame, asker: SharedSession | None) -> Frame:
+        """``frame`` naming the client that asked (a line nobody asked for names none)."""
+        if asker is None or frame.unsolicited:
+            return frame
+        return dataclasses.replace(frame, source=asker.source)
 
     def _state(self, state: State) -> None:
         asker = self._asking

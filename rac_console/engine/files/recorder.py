@@ -123,6 +123,8 @@ class FrameRecorder(LineFile):
         if place is not None:
             record["member"] = place
         record["dir"] = frame.direction
+        if frame.source is not None:  # the agent's log: the client that asked
+            record["client"] = frame.source
         record["text"] = escape_bytes(data)
         if frame.rtt is not None:
             record["rtt_ms"] = round(frame.rtt * 1000, 3)

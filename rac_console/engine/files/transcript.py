@@ -52,7 +52,8 @@ class FrameTranscript(LineFile):
         stamp = stamp_text(frame.time) + _named(target)
         complete = frame.data.endswith(b"\r")
         text = escape_bytes(frame.data[:-1] if complete else frame.data)
-        lines = [f"{stamp}{DIRECTIONS[frame.direction]} {text}\n"]
+        asked = f"   [{terminal_safe(frame.source)}]" if frame.source is not None else ""
+        lines = [f"{stamp}{DIRECTIONS[frame.direction]} {text}{asked}\n"]
         if frame.unsolicited:
             lines.append(f"{stamp}-- the line above came with no request waiting\n")
         if not complete:
