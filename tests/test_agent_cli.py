@@ -323,3 +323,23 @@ def test_a_clients_name_for_itself_is_a_plain_word_in_the_others_logs() -> None:
     assert client_kind("REPL") == "REPL" and client_kind("served console") == "served console"
     for hostile in ("\x1b[2Jx", "a" * 40, "", None, "x\ny", "robot[1]"):
         assert client_kind(hostile) == "client"
+
+
+def test_an_agent_feed_whose_csv_log_cannot_be_written_is_one_line_and_leaves_nothing(
+    env: dict[str, str], tmp_path: Path
+) -> None:
+    rows = tmp_path / "rows.toml"
+    rows.write_text('[[watch]]\ntype = "I"\nindex = 3\n', encoding="utf-8")
+    csv = tmp_path / "no such folder" / "x.csv"
+    refused = cli(env, "agent", "--watch", str(rows), "--log-csv", str(csv), timeout=60)
+    assert refused.returncode == 2
+    assert "cannot write the CSV log" in one_error_line(refused)
+    assert not agent_socket(env).exists()
+
+
+def test_an_agent_folder_that_is_a_file_is_said_so(env: dict[str, str], tmp_path: Path) -> None:
+    taken = tmp_path / "a file"
+    taken.write_text("", encoding="utf-8")
+    refused = cli(env | {"RAC_CONSOLE_AGENT_DIR": str(taken)}, "agent")
+    assert refused.returncode == 2
+    assert "is a file, not a folder" in one_error_line(refused)

@@ -344,14 +344,14 @@ def test_poll_frames_beyond_the_budget_are_left_out_and_said_while_writes_come_w
     try:
         a.run("watch I 0-9")
         a.run("interval 0")
-        a.until(lambda: any("poll frames left out in" in note for note in a.notes), "the note")
+        a.until(lambda: any("not sent by the agent" in note for note in a.notes), "the note")
         assert a.outcome("put I 3 8").verified
         a.until(lambda: b"PUT:RC8:3:I:3,8\r" in a.sent(), "the PUT's frame")
     finally:
         a.engine.stop()
         started.stop()
-    (said, *_) = [note for note in a.notes if "poll frames left out in" in note]
-    assert "the agent sends a client at most 20 a second" in said
+    (said, *_) = [note for note in a.notes if "not sent by the agent" in note]
+    assert "not sent by the agent (20/s at most)" in said
     put = [f for f in a.frames if f.data.startswith(b"PUT")]
     replies = [f for f in a.frames if f.direction == "rx" and f.request is not None
                and f.request.command == "PUT"]  # fmt: skip
@@ -461,3 +461,39 @@ def test_a_port_left_by_a_dead_agent_and_taken_by_another_program_is_no_agent(
     finally:
         running.stop()
     assert controller.lines.count(b"PUT:RC8:6:I:3,3") == 1
+
+
+def test_a_client_of_the_agents_simulator_is_told_its_values_went_with_it(
+    agent_dir: Path,
+) -> None:
+    from rac_console.agent.client import AGENT_SIMULATOR_GONE
+    from rac_console.sim.thread import SimulatorThread
+
+    simulator = SimulatorThread().start()
+    held = Target(simulator.host, simulator.port, simulated=True)
+    agent = Agent([("sim", held)], timeout=5.0, say=lambda text: None,
+                  simulators={"sim": simulator.stop})  # fmt: skip
+    agent.open()
+    threading.Thread(target=agent.serve, daemon=True).start()
+    engine = attach(Target(None, 5006), EngineOptions(timeout=5.0), client="REPL", where=Where.REPL)
+    assert isinstance(engine, RemoteEngine)
+    engine.start()
+    a = Front(engine)  # type: ignore[arg-type]
+    try:
+        assert a.outcome("put I 5 11").verified
+        agent.stop()
+        a.until(lambda: any("the agent stopped" in text for text in a.alerts), "the one line")
+    finally:
+        engine.stop()
+    assert AGENT_SIMULATOR_GONE in a.alerts
+
+
+def test_the_repls_toolbar_says_via_agent() -> None:
+    from dataclasses import replace
+
+    from rac_console.repl.prompt_parts import toolbar_fragments
+    from tests.support.samples import CELL3
+
+    shown = "".join(part[1] for part in toolbar_fragments(replace(CELL3, via="via agent")))
+    alone = "".join(part[1] for part in toolbar_fragments(CELL3))
+    assert "via agent" in shown and "via agent" not in alone

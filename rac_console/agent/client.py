@@ -39,6 +39,11 @@ VIA = "via agent"
 AGENT_SIMULATOR = "SIMULATOR (the agent's)"
 #: Said when the agent went away and this front end goes on by itself.
 AGENT_GONE = "the agent stopped: going on with a session of our own to {target}"
+#: Said instead when the target was the agent's built-in simulator (gone with it).
+AGENT_SIMULATOR_GONE = (
+    "the agent stopped, and its simulator with it: going on with a simulator of our own, "
+    "whose values start afresh (what was written is gone)"
+)
 #: The answer to a line the agent took and never answered.
 UNANSWERED = (
     "the agent stopped before this line was answered: its outcome is unknown "
@@ -47,11 +52,8 @@ UNANSWERED = (
 
 
 #: Said in the frame log when the agent left poll frames out (at most this often, s).
-LEFT_OUT_EVERY = 5.0
-LEFT_OUT = (
-    "{count:,} poll frames left out in {seconds:.1f} s: the agent sends a client at most "
-    "{rate:,} a second (requests, writes and their replies come whole)"
-)
+LEFT_OUT_EVERY = 30.0
+LEFT_OUT = "{count:,} poll frames in {seconds:.0f} s not sent by the agent ({rate:,}/s at most)"
 
 
 class Refused(Exception):
@@ -344,7 +346,8 @@ class RemoteEngine:
         from ..commands.outcome import ExitStatus, Outcome
         from ..engine import Alert, Result
 
-        self.outbox.put(Alert(AGENT_GONE.format(target=self._target_text())))
+        gone = AGENT_SIMULATOR_GONE if self._rules.host is None else AGENT_GONE
+        self.outbox.put(Alert(gone.format(target=self._target_text())))
         local = Engine(
             target=self._rules, options=self.options, outbox=self.outbox, where=self.where,
             numbers=self.numbers,

@@ -49,6 +49,11 @@ def folder() -> Path:
     base = Path(override) if override else _runtime_base()
     if base.is_symlink():  # planted in /tmp by another: never followed
         raise EndpointError(f"{base} is a symbolic link: the agent will not use it")
+    if base.exists() and not base.is_dir():
+        raise EndpointError(
+            f"{base} is a file, not a folder: the agent's folder must be one "
+            "(RAC_CONSOLE_AGENT_DIR names it)"
+        )
     base.mkdir(mode=0o700, parents=True, exist_ok=True)
     if not WINDOWS:
         info = os.lstat(base)
@@ -143,7 +148,10 @@ def _lock(base: Path) -> IO[bytes]:
             fcntl.flock(held.fileno(), fcntl.LOCK_EX | fcntl.LOCK_NB)
     except OSError:
         held.close()
-        raise EndpointError(f"an agent is already running (it holds {base / LOCK_NAME})") from None
+        raise EndpointError(
+            f"an agent is already running (it holds {base / LOCK_NAME}): rac-console agent "
+            "status says which; stop it first (Ctrl-C where it runs, or kill its pid)"
+        ) from None
     return held
 
 

@@ -149,7 +149,8 @@ class Agent:
                 state = f"not connected yet: {exc}"
             except Exception as exc:  # a TransportError: said, and the clients retry
                 state = f"not connected yet: {exc}"
-            self.say(f"holding {held.name} ({held.address}): {state}")
+            named = held.name if held.name == held.address else f"{held.name} ({held.address})"
+            self.say(f"holding {named}: {state}")
         return self.endpoint
 
     def serve(self) -> None:

@@ -197,7 +197,7 @@ def _run(args: argparse.Namespace) -> int:
         (member_name(args.target), args.target)
     ]
     try:
-        exports = _exports(args, [name for name, _ in members])
+        exports = _exports(args, ["sim" if t.host is None else name for name, t in members])
     except InputError as exc:
         print(f"rac-console: {terminal_safe(str(exc))}", file=sys.stderr)
         return 2
@@ -237,9 +237,14 @@ def _run(args: argparse.Namespace) -> int:
     for notice in getattr(args, "plant_notices", ()):
         _say(notice)
     if exports:
-        agent.export(exports, _export_options(args))
-        rows = " and ".join(f"{e.name}'s" for e in exports)
-        _say(f"feeding the plant {rows} watch list, whoever is attached")
+        try:
+            agent.export(exports, _export_options(args))
+        except InputError as exc:  # a --log-csv file that cannot be written
+            print(f"rac-console: {terminal_safe(str(exc))}", file=sys.stderr)
+            agent.stop()
+            return 2
+        rows = ", ".join(e.name for e in exports)
+        _say(f"feeding the plant the watch list's rows of {rows}, whoever is attached")
     _say(f"listening on {endpoint} for this user's front ends; Ctrl-C stops")
     serving = threading.Thread(target=agent.serve, name="rac-agent-accept", daemon=True)
     serving.start()
@@ -314,6 +319,10 @@ def _export_options(args: argparse.Namespace) -> EngineOptions:
     )
 
 
+def _count(number: int, word: str) -> str:
+    return f"{number:,} {word}{'' if number == 1 else 's'}"
+
+
 def _stop_on_terminate() -> None:
     """SIGTERM (systemd's stop, kill) stops the agent as Ctrl-C does: its clients are
     told, its socket removed."""
@@ -337,24 +346,24 @@ def _status(args: argparse.Namespace) -> int:
             print("no agent is running for this user", file=sys.stderr)
         return 1
     del status["op"]
+    status.pop("proof", None)  # the agent's proof of its token: checked, not shown
     if args.json:
         print(json.dumps({"running": True, **status}))
         return 0
     print(f"agent pid {status['pid']}, listening on {terminal_safe(str(status['endpoint']))}")
     for target in status["targets"]:
+        name, address = terminal_safe(target["name"]), terminal_safe(target["address"])
+        waiting = target.get("writes_waiting")
         print(
-            f"  target {terminal_safe(target['name'])} {terminal_safe(target['address'])}: "
-            f"{terminal_safe(str(target['state']))}, {target['clients']} client(s), "
-            f"{target['requests']} requests, {target['shared_polls']} polls shared"
-            + (
-                f", {target['writes_waiting']} write(s) waiting for an earlier one"
-                if target.get("writes_waiting")
-                else ""
-            )
+            f"  target {name if name == address else f'{name} {address}'}: "
+            f"{terminal_safe(str(target['state']))}, {_count(target['clients'], 'client')}, "
+            f"{_count(target['requests'], 'request')}, {target['shared_polls']:,} polls shared"
+            + (f", {_count(waiting, 'write')} waiting for an earlier one" if waiting else "")
         )
     for feed in status.get("exporters", ()):
         print(
-            f"  exporter on {terminal_safe(feed['target'])}: {feed['rows']} row(s) fed to the plant"
+            f"  exporter on {terminal_safe(feed['target'])}: {_count(feed['rows'], 'row')} "
+            "fed to the plant"
         )
     for client in status["clients"]:
         missed = f", {client['missed']} frames missed" if client["missed"] else ""

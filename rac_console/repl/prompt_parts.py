@@ -88,8 +88,9 @@ def prompt_fragments(
 
 def toolbar_fragments(status: Status) -> FormattedText:
     """The toolbar's target: the profile's label in its colour, the target, what it
-    lets be written (``READ-ONLY``, ``CONFIRM WRITES``, ``writes open``), and
-    ``POLLING PAUSED`` after ``pause``, as the console's status line says it."""
+    lets be written (``READ-ONLY``, ``CONFIRM WRITES``, ``writes open``),
+    ``POLLING PAUSED`` after ``pause``, and ``via agent``, as the console's status line
+    says it."""
     parts: StyleAndTextTuples = []
     label = target_label(status)
     if label is not None:
@@ -103,6 +104,8 @@ def toolbar_fragments(status: Status) -> FormattedText:
         parts.append(("class:toolbar.open", " writes open "))
     if status.paused:
         parts.append(("class:toolbar.paused", " POLLING PAUSED "))
+    if status.via:  # the session is the agent's, shared with its other clients
+        parts.append(("", f" {terminal_safe(status.via)} "))
     return FormattedText(parts)
 
 
