@@ -32,7 +32,7 @@ if TYPE_CHECKING:
     )
     from .library.results import Reading, Sent, Value, Written
 
-__version__ = "0.1.0"
+from .release import __version__ as __version__
 
 _names = exports(
     __name__,

@@ -17,7 +17,7 @@ import threading
 from collections.abc import Iterator
 from typing import Any
 
-from .. import __version__
+from ..release import __version__
 from . import codec
 
 #: Changes whenever a message changes; the release must match too (the events are the
