@@ -24,7 +24,7 @@ from ..engine.setup.where import Where
 from . import endpoint as endpoints
 from .lines import may_write
 from .server import CLIENT_OPTIONS
-from .wire import Channel, ChannelClosed, Message, hello, proven
+from .wire import Channel, ChannelClosed, Message, greet
 
 if TYPE_CHECKING:
     from ..commands.language import Command, VarRef
@@ -77,7 +77,8 @@ def attach(
     sock, endpoint = reached
     channel = Channel(sock)
     given = asdict(options)
-    sent = hello(
+    answer = greet(
+        channel,
         endpoint.token,
         client=client,
         pid=os.getpid(),
@@ -88,14 +89,7 @@ def attach(
         options={k: _absolute(k, given[k]) for k in CLIENT_OPTIONS},
         bounds=given["bounds"],  # a served console's, from serve: kept at the agent
     )
-    try:
-        channel.send(sent)
-        answer = channel.receive()
-    except (ChannelClosed, OSError):
-        channel.close()
-        return None
-    if not proven(endpoint.token, sent, answer):  # not the agent: a port it left, taken
-        channel.close()
+    if answer is None:
         return None
     if answer.get("op") == "refused":
         channel.close()
@@ -127,15 +121,9 @@ def agent_status() -> Message | None:
         return None
     sock, endpoint = reached
     channel = Channel(sock)
-    sent = hello(endpoint.token, want="status")
-    try:
-        channel.send(sent)
-        answer = channel.receive()
-    except (ChannelClosed, OSError):
-        return None
-    finally:
-        channel.close()
-    return answer if proven(endpoint.token, sent, answer) else None
+    answer = greet(channel, endpoint.token, want="status")
+    channel.close()
+    return answer
 
 
 class RemoteEngine:

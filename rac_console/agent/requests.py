@@ -26,7 +26,7 @@ from ..protocol.request import Request
 from ..session import Session
 from ..session.types import Disconnected, NotSent, Reply, State, TransportError
 from . import endpoint as endpoints
-from .wire import Channel, ChannelClosed, hello, proven
+from .wire import Channel, ChannelClosed, greet
 
 LOG = logging.getLogger("rac_console")
 
@@ -46,7 +46,8 @@ def attach_requests(target: Target, timeout: float, client: str = "script") -> A
         return None
     sock, endpoint = reached
     channel = Channel(sock)
-    sent = hello(
+    answer = greet(
+        channel,
         endpoint.token,
         client=client,
         pid=os.getpid(),
@@ -56,14 +57,7 @@ def attach_requests(target: Target, timeout: float, client: str = "script") -> A
         want="requests",
         timeout=timeout,
     )
-    try:
-        channel.send(sent)
-        answer = channel.receive()
-    except (ChannelClosed, OSError):
-        channel.close()
-        return None
-    if not proven(endpoint.token, sent, answer):  # not the agent: a port it left, taken
-        channel.close()
+    if answer is None:
         return None
     if answer.get("op") != "welcome":  # not held, or another release: direct
         channel.close()

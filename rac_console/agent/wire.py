@@ -144,3 +144,19 @@ def proven(token: str, sent: Message, answer: Message) -> bool:
     if not token:
         return True
     return hmac.compare_digest(str(answer.get("proof", "")), proof(token, sent.get("nonce")))
+
+
+def greet(channel: Channel, token: str, **fields: object) -> Message | None:
+    """A client's hello (:func:`hello`) and the agent's answer; None, the channel closed,
+    when no answer comes or it is not the agent's (:func:`proven`)."""
+    sent = hello(token, **fields)
+    try:
+        channel.send(sent)
+        answer = channel.receive()
+    except (ChannelClosed, OSError):
+        channel.close()
+        return None
+    if not proven(token, sent, answer):  # not the agent: a port it left, taken
+        channel.close()
+        return None
+    return answer
