@@ -486,6 +486,12 @@ def test_a_client_of_the_agents_simulator_is_told_its_values_went_with_it(
     finally:
         engine.stop()
     assert AGENT_SIMULATOR_GONE in a.alerts
+    # Stopped as its own engine started: that engine and its simulator stop too.
+    a.until(lambda: not {"rac-engine", "rac-sim"} & engine_threads(), "no engine left running")
+
+
+def engine_threads() -> set[str]:
+    return {thread.name for thread in threading.enumerate()}
 
 
 def test_the_repls_toolbar_says_via_agent() -> None:

@@ -219,9 +219,11 @@ class RemoteEngine:
         return local.submit_command(what, line, seq, then, publish)
 
     def stop(self, timeout: float = 5.0) -> None:
-        self._stopping = True
-        if self._local is not None:
-            self._local.stop(timeout)
+        with self._lock:  # an engine of our own made meanwhile sees it and stops
+            self._stopping = True
+            local = self._local
+        if local is not None:
+            local.stop(timeout)
         self._send({"op": "bye"})
         self._channel.close()
         self._reader.join(timeout)
@@ -344,9 +346,14 @@ class RemoteEngine:
             local.add_frame_observer(observer)
         local.start()
         with self._lock:  # from here every line goes to our own engine
+            stopped = self._stopping  # stopped while ours started: it goes too
             pending, self._pending = dict(self._pending), {}
             thens, self._then = dict(self._then), {}
-            self._local = local
+            if not stopped:
+                self._local = local
+        if stopped:
+            local.stop()
+            return
         for seq, (line, writes) in pending.items():
             unknown = Outcome(
                 None, ExitStatus.TRANSPORT, error=UNANSWERED, input_line=line, write_unknown=writes
