@@ -15,6 +15,7 @@ from collections.abc import Callable
 from ..commands.language import VarRef
 from ..engine import Outbox, RowView, Status
 from ..engine.published.events import Event
+from ..session.shared import FrameBudget
 from ..session.types import Frame
 from .wire import Channel, ChannelClosed
 
@@ -30,6 +31,7 @@ def send_batches(
     channel: Channel,
     missed: Callable[[int], None],
     poll_frames_per_second: int = POLL_FRAMES_PER_SECOND,
+    budget: FrameBudget | None = None,
 ) -> None:
     """Send the client what its engine publishes into ``outbox`` (``wake`` set when it
     does) until the channel closes; ``missed`` is told the frames the outbox shed.
@@ -44,6 +46,8 @@ def send_batches(
         wake.clear()
         batch = outbox.drain()
         events, left_out = polls.thin(batch.events)
+        if budget is not None:  # the polls whose frames were never built for it
+            left_out += budget.take_left_out()
         # A row or the status as the client already has it is not sent again.
         rows = {var: row for var, row in batch.rows.items() if sent_rows.get(var) != row}
         sent_rows.update(rows)
@@ -51,7 +55,7 @@ def send_batches(
             sent_rows.pop(var, None)
         status = batch.status if batch.status != sent_status else None
         sent_status = status or sent_status
-        if not (events or rows or batch.removed or status or batch.frames_dropped):
+        if not (events or rows or batch.removed or status or batch.frames_dropped or left_out):
             continue
         missed(batch.frames_dropped)
         try:

@@ -29,7 +29,7 @@ from ..engine.files.frame_files import FrameFiles
 from ..engine.setup.where import Where
 from ..protocol.request import Request
 from ..session import Session
-from ..session.shared import SharedConnection, SharedSession
+from ..session.shared import FrameBudget, SharedConnection, SharedSession
 from ..session.types import Frame, NotSent, TransportError
 from . import endpoint as endpoints
 from .batches import POLL_FRAMES_PER_SECOND, send_batches
@@ -87,6 +87,7 @@ class Client:
     missed: int = 0
     lines: int = 0  # lines received
     read_only: bool = False  # a script's connection started read_only=True
+    budget: FrameBudget | None = None  # its poll frames a second (none: it keeps files)
     ending: bool = False
 
     @property
@@ -312,9 +313,12 @@ class Agent:
         options = {k: given[k] for k in CLIENT_OPTIONS if k in given}
         held = client.held
         client_outbox = Outbox(notify=client.wake.set)
+        if not (options.get("record") or options.get("transcript")):  # files want all
+            client.budget = FrameBudget(POLL_FRAMES_PER_SECOND)
         session = _sessions_on(
-            held, client.name, client_outbox.put, lambda text: client_outbox.put(Alert(text))
-        )
+            held, client.name, client_outbox.put, lambda text: client_outbox.put(Alert(text)),
+            client.budget,
+        )  # fmt: skip
 
         target = dataclasses.replace(
             held.target,
@@ -399,7 +403,10 @@ class Agent:
         def missed(frames: int) -> None:
             client.missed += frames
 
-        send_batches(engine.outbox, client.wake, client.channel, missed, POLL_FRAMES_PER_SECOND)
+        send_batches(
+            engine.outbox, client.wake, client.channel, missed, POLL_FRAMES_PER_SECOND,
+            client.budget,
+        )  # fmt: skip
 
     def _end(self, client: Client, why: str) -> None:
         """The client is gone: its engine stops (its watches with it) before it leaves
@@ -466,7 +473,11 @@ def _unseen(frame: Frame) -> None:
 
 
 def _sessions_on(
-    held: Held, name: str, foreign: Callable[[Frame], None], told: Callable[[str], None] | None
+    held: Held,
+    name: str,
+    foreign: Callable[[Frame], None],
+    told: Callable[[str], None] | None,
+    budget: FrameBudget | None = None,
 ) -> Callable[[str, int, float], Session]:
     """How the engine of ``name`` opens sessions: the held connection for the held
     address (``foreign`` takes the other clients' frames, ``told`` what the client is
@@ -475,7 +486,7 @@ def _sessions_on(
 
     def session(host: str, port: int, timeout: float) -> Session:
         if (host, port) == (held.connection.host, held.connection.port):
-            return held.connection.attach(name, foreign, timeout, told)
+            return held.connection.attach(name, foreign, timeout, told, budget)
         return Session(host, port, timeout=timeout)
 
     return session
