@@ -503,3 +503,31 @@ def test_the_repls_toolbar_says_via_agent() -> None:
     shown = "".join(part[1] for part in toolbar_fragments(replace(CELL3, via="via agent")))
     alone = "".join(part[1] for part in toolbar_fragments(CELL3))
     assert "via agent" in shown and "via agent" not in alone
+
+
+def test_a_client_that_records_its_frames_records_every_poll_whatever_the_budget(
+    agent_dir: Path, controller: RecordingServer, monkeypatch: pytest.MonkeyPatch, tmp_path: Path
+) -> None:
+    import json
+
+    from rac_console.agent import server
+
+    monkeypatch.setattr(server, "POLL_FRAMES_PER_SECOND", 20)
+    started = Running(controller)
+    record = tmp_path / "client.jsonl"
+    options = EngineOptions(timeout=5.0, interval=0.0, record=str(record))
+    engine = attach(started.target, options, client="test", where=Where.CONSOLE)
+    assert isinstance(engine, RemoteEngine)
+    engine.start()
+    a = Front(engine)  # type: ignore[arg-type]
+    try:
+        a.run("watch I 0-9")
+        a.until(lambda: controller.lines.count(b"GET:RC8:5:I:") >= 100, "a hundred cycles")
+        a.run("pause")
+    finally:
+        engine.stop()
+        started.stop()
+    polled = sum(1 for line in controller.lines if line.startswith(b"GET"))
+    lines = [json.loads(line) for line in record.read_text(encoding="utf-8").splitlines()]
+    recorded = sum(1 for line in lines if line["dir"] == "tx" and line["text"].startswith("GET"))
+    assert recorded == polled > 1000  # 20 a second would have kept a few dozen
