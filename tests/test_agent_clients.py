@@ -531,3 +531,38 @@ def test_a_client_that_records_its_frames_records_every_poll_whatever_the_budget
     lines = [json.loads(line) for line in record.read_text(encoding="utf-8").splitlines()]
     recorded = sum(1 for line in lines if line["dir"] == "tx" and line["text"].startswith("GET"))
     assert recorded == polled > 1000  # 20 a second would have kept a few dozen
+
+
+def test_a_line_typed_while_the_client_goes_on_alone_runs_on_its_own_session(
+    running: Running, controller: RecordingServer, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The agent gone, its one line said, and the client's own engine still starting: a
+    line typed then never reached the agent; it runs once that engine is up, never
+    answered "outcome unknown"."""
+    from rac_console.agent import client as client_module
+    from rac_console.engine import Engine
+
+    starting = threading.Event()
+    made = Engine
+
+    def slow_engine(**given: object) -> object:
+        assert starting.wait(FRONT_WAIT), "the test never let the engine start"
+        return made(**given)  # type: ignore[arg-type]
+
+    monkeypatch.setattr(client_module, "Engine", slow_engine)
+    a = client(running.target)
+    try:
+        running.stop()
+        a.until(lambda: any("the agent stopped" in text for text in a.alerts), "the one line")
+        seq = a.engine.submit("get I 9")
+        starting.set()
+        a.until(lambda: seq in a.results, "its answer")
+        (outcome,) = a.results[seq].feedback
+    finally:
+        starting.set()
+        a.engine.stop()
+    assert getattr(outcome, "ok", False), outcome
+    assert controller.accepted == 2 and controller.lines.count(b"GET:RC8:9:I:") == 1
+
+
+FRONT_WAIT = 30.0

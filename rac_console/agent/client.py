@@ -155,6 +155,12 @@ class RemoteEngine:
         self._local: Engine | None = None  # after the agent went away
         self._stopping = False
         self.died: str | None = None
+        #: The agent went away (its channel closed): a line submitted from then on never
+        #: reached it, and waits here (:attr:`_held`) for our own engine.
+        self._gone = False
+        self._held: list[
+            tuple[str | Command, str | None, int, Callable[[Result], None] | None, bool]
+        ] = []
         self._left_out = 0  # poll frames the agent left out, not said yet
         self._left_out_since: float | None = None  # since when
         self._left_out_said = -LEFT_OUT_EVERY  # when they were last said
@@ -212,6 +218,9 @@ class RemoteEngine:
             local = self._local
             if local is None:
                 number = next(self.numbers) if seq is None else seq
+                if self._gone:  # the agent went: held for our own engine, never lost
+                    self._held.append((what, line, number, then, publish))
+                    return number
                 self._then[number] = (then, publish)
                 self._pending[number] = (line, writes)
                 self._send({"op": "line", "seq": number, "what": what, "line": line})
@@ -273,6 +282,8 @@ class RemoteEngine:
             pass
         except Exception:  # a batch of no use: as if the agent went away
             self._channel.close()
+        with self._lock:  # lines from now on wait for our own engine
+            self._gone = True
         if not self._stopping:
             self._go_alone()
 
@@ -349,6 +360,7 @@ class RemoteEngine:
             stopped = self._stopping  # stopped while ours started: it goes too
             pending, self._pending = dict(self._pending), {}
             thens, self._then = dict(self._then), {}
+            held, self._held = self._held, []
             if not stopped:
                 self._local = local
         if stopped:
@@ -366,6 +378,8 @@ class RemoteEngine:
                 self.outbox.put(result)
         for row in self._rows.values():  # in the order they were added
             local.submit_command(Watch((row.var,), row.label, row.every), None, publish=False)
+        for what, line, number, then, publish in held:  # typed after the agent went
+            local.submit_command(what, line, number, then, publish)
 
     def _target_text(self) -> str:
         host = self._rules.host
