@@ -22,6 +22,7 @@ from ..commands.target import Target
 from ..engine import Engine, EngineOptions, Outbox
 from ..engine.setup.where import Where
 from . import endpoint as endpoints
+from .hellos import greet_agent
 from .lines import may_write
 from .server import CLIENT_OPTIONS
 from .wire import Channel, ChannelClosed, Message, greet
@@ -71,26 +72,17 @@ def attach(
 ) -> RemoteEngine | None:
     """An engine through the running agent that holds ``target``; None when no agent
     runs, or it does not hold that target. :class:`Refused` when it turns us away."""
-    reached = endpoints.reach()
-    if reached is None:
-        return None
-    sock, endpoint = reached
-    channel = Channel(sock)
     given = asdict(options)
-    answer = greet(
-        channel,
-        endpoint.token,
-        client=client,
-        pid=os.getpid(),
-        host=target.host,
-        port=target.port,
-        read_only=target.read_only_flag,
+    greeted = greet_agent(
+        target,
+        client,
         where=where.value,
         options={k: _absolute(k, given[k]) for k in CLIENT_OPTIONS},
         bounds=given["bounds"],  # a served console's, from serve: kept at the agent
     )
-    if answer is None:
+    if greeted is None:
         return None
+    channel, answer = greeted
     if answer.get("op") == "refused":
         channel.close()
         raise Refused(str(answer.get("why")))

@@ -1,10 +1,15 @@
-"""What a client's hello says of itself, as the agent takes it: a word for its kind,
-and a served console's poll bounds."""
+"""A client's hello: made and sent for a target (:func:`greet_agent`), and what it says
+of itself as the agent takes it (a word for its kind, a served console's poll bounds)."""
 
 from __future__ import annotations
 
+import os
+
+from ..commands.target import Target
 from ..engine.setup.poll_bounds import UNBOUNDED, PollBounds, bounds_for
 from ..engine.setup.where import Where
+from . import endpoint as endpoints
+from .wire import Channel, Message, greet
 
 
 def client_kind(said: object) -> str:
@@ -25,3 +30,25 @@ def served_bounds(where: Where, given: object) -> PollBounds:
         rows = given.get("max_rows")
         return PollBounds(float(given["min_interval"]), None if rows is None else int(rows))
     return bounds_for(Where.SERVED, {})
+
+
+def greet_agent(target: Target, client: str, **fields: object) -> tuple[Channel, Message] | None:
+    """The running agent reached and greeted for ``target`` as ``client`` (this process,
+    its ``--read-only``, and ``fields``): the channel and the agent's answer, or None when
+    no agent answers (none runs, or not the agent: :func:`greet`)."""
+    reached = endpoints.reach()
+    if reached is None:
+        return None
+    sock, endpoint = reached
+    channel = Channel(sock)
+    answer = greet(
+        channel,
+        endpoint.token,
+        client=client,
+        pid=os.getpid(),
+        host=target.host,
+        port=target.port,
+        read_only=target.read_only_flag,
+        **fields,
+    )
+    return None if answer is None else (channel, answer)

@@ -17,7 +17,6 @@ from __future__ import annotations
 
 import contextlib
 import logging
-import os
 import threading
 from collections.abc import Callable
 
@@ -26,7 +25,8 @@ from ..protocol.request import Request
 from ..session import Session
 from ..session.types import Disconnected, NotSent, Reply, State, TransportError
 from . import endpoint as endpoints
-from .wire import Channel, ChannelClosed, greet
+from .hellos import greet_agent
+from .wire import Channel, ChannelClosed
 
 LOG = logging.getLogger("rac_console")
 
@@ -41,24 +41,10 @@ def attach_requests(target: Target, timeout: float, client: str = "script") -> A
     no agent, it does not hold that target, or it turns this release away."""
     if not endpoints.present():
         return None
-    reached = endpoints.reach()
-    if reached is None:
+    greeted = greet_agent(target, client, want="requests", timeout=timeout)
+    if greeted is None:
         return None
-    sock, endpoint = reached
-    channel = Channel(sock)
-    answer = greet(
-        channel,
-        endpoint.token,
-        client=client,
-        pid=os.getpid(),
-        host=target.host,
-        port=target.port,
-        read_only=target.read_only_flag,
-        want="requests",
-        timeout=timeout,
-    )
-    if answer is None:
-        return None
+    channel, answer = greeted
     if answer.get("op") != "welcome":  # not held, or another release: direct
         channel.close()
         return None

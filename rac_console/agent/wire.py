@@ -10,6 +10,7 @@ from __future__ import annotations
 import contextlib
 import hashlib
 import hmac
+import os
 import secrets
 import socket
 import sys
@@ -91,7 +92,6 @@ class Channel:
             return True
         if self.sock.family != socket.AF_UNIX:
             return True
-        import os
         import struct
 
         size = struct.calcsize("3i")
