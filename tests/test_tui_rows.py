@@ -11,6 +11,7 @@ from typing import Any
 import pytest
 from textual import events
 from textual.command import CommandPalette
+from textual.geometry import Size
 from textual.pilot import Pilot
 from textual.widgets import DataTable
 
@@ -25,7 +26,7 @@ from rac_console.tui.app import RacConsoleApp
 from rac_console.tui.help_screen import console_key_groups
 from rac_console.tui.palette_commands import profile_help
 from rac_console.tui.watch_table import REVEAL_TRIES
-from tests.support.drivers import make_app, type_line, until
+from tests.support.drivers import make_app, pause_polling, type_line, until
 
 P = kind_of("P")
 NOW = 1000.0
@@ -252,6 +253,66 @@ def palette_text(app: RacConsoleApp) -> str:
 
     options = app.screen.query_one(CommandList).options
     return "\n".join(str(option.prompt) for option in options)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("hidden", [("vertical",), ("vertical", "horizontal")])
+async def test_rows_are_scrolled_to_before_the_layout_shows_the_scrollbars(
+    tmp_path: Path, hidden: tuple[str, ...]
+) -> None:
+    """The table can have measured its new rows before the layout that follows has
+    shown its scrollbars; scrolling to them then did nothing (the thumb, once shown,
+    left at the top), or scrolled as if the horizontal scrollbar, to come, took no
+    room: a row stayed out of view (a snapshot at 80x24 caught both under load)."""
+    app = make_app(tmp_path)
+    async with app.run_test(size=(80, 24)) as pilot:
+        table = app.main_screen.panes.table
+        await watch_ok(pilot, "watch J 1 T 1 IO 128-131", 6)
+        await pause_polling(pilot)  # no values to come: the table holds still
+        room = table.scrollable_content_region.height - table.header_height
+        assert room < 6 and table.max_scroll_y > 0
+        assert table.show_horizontal_scrollbar, "values cut at 80 columns: a scrollbar"
+        table.scroll_home(animate=False, immediate=True)
+        # As in the moment before that layout: the scrollbars the rows and the values
+        # call for are not shown yet (the horizontal one would take a row from the view).
+        for name in hidden:
+            setattr(table, f"show_{name}_scrollbar", False)
+        table.reveal_rows(2, 5)
+        table.refresh(layout=True)  # the layout that shows them
+        await until(pilot, lambda: round(table.scroll_y) == 6 - room, "the new rows in view")
+        await until(pilot, lambda: table.show_vertical_scrollbar, "the scrollbar")
+        assert table.show_horizontal_scrollbar and round(table.scroll_y) == 6 - room
+        assert table.vertical_scrollbar.position == table.scroll_y, "the thumb where the view is"
+
+
+@pytest.mark.slow
+async def test_rows_just_shown_stay_in_view_when_their_values_widen_the_table(
+    tmp_path: Path,
+) -> None:
+    """Rows shown before their values came: the values make the table wider than its
+    pane, the horizontal scrollbar takes a line from the view, and the last new row
+    went out of view under it (a snapshot at 80x24 caught it under load)."""
+    app = make_app(tmp_path)
+    async with app.run_test(size=(80, 24)) as pilot:
+        table = app.main_screen.panes.table
+        await watch_ok(pilot, "watch J 1 T 1 IO 128-131", 6)
+        await pause_polling(pilot)  # no values to come: the table holds still
+        wide = table.virtual_size
+        assert table.show_horizontal_scrollbar, "values cut at 80 columns: a scrollbar"
+        table.scroll_home(animate=False, immediate=True)
+        # The rows as they were before their values came: narrow enough for the pane.
+        table.virtual_size = Size(table.scrollable_content_region.width, wide.height)
+        table.refresh(layout=True)
+        await until(pilot, lambda: not table.show_horizontal_scrollbar, "no scrollbar")
+        room = table.scrollable_content_region.height - table.header_height
+        table.reveal_rows(2, 5)
+        assert round(table.scroll_y) == 6 - room, "the new rows in view"
+        table.virtual_size = wide  # the values came
+        table.refresh(layout=True)
+        await until(pilot, lambda: table.show_horizontal_scrollbar, "the scrollbar")
+        await until(
+            pilot, lambda: round(table.scroll_y) == 6 - (room - 1), "the new rows in view still"
+        )
 
 
 @pytest.mark.slow

@@ -177,6 +177,9 @@ class WatchTable(DataTable[object]):
         self._stale: set[str] = set()
         #: Rows to bring into view once the table has measured them (first, last, tries).
         self._reveal: tuple[int, int, int] | None = None
+        #: Rows just brought into view (first and last key) and the scroll that showed
+        #: them: kept in view while the layout changes under them and nothing scrolls.
+        self._revealed: tuple[str, str, float] | None = None
 
     def on_mount(self) -> None:
         for key, label in self.columns_shown:
@@ -269,7 +272,7 @@ class WatchTable(DataTable[object]):
         half second, they made the keys typed then wait."""
         cell = bool(self.cell)
         if removed:  # the rows waiting to be shown are counted in the old order
-            self._reveal = None
+            self._reveal = self._revealed = None
         for name, var in removed:
             key = table_key(name, var, cell)
             self._added.pop(key, None)
@@ -334,10 +337,8 @@ class WatchTable(DataTable[object]):
         of them when they fit, else the first; the least scroll that does it. The
         cursor stays where it is. Until the table has measured its new rows it cannot
         scroll that far: then again each time it measures, a few times at most."""
-        self._reveal = None
-        room = self.scrollable_content_region.height - (
-            self.header_height if self.show_header else 0
-        )
+        self._reveal = self._revealed = None
+        room = self._rows_room()
         if room <= 0:
             return
         top = round(self.scroll_y)
@@ -345,14 +346,58 @@ class WatchTable(DataTable[object]):
         target = min(max(top, last - room + 1), first) if last - first < room else first
         if target > self.max_scroll_y and tries > 0:
             self._reveal = (first, last, tries - 1)
-        elif target != top:
-            self.scroll_to(y=target, animate=False, immediate=True)
+        else:
+            if target != top:
+                # force: the layout that shows the scrollbar may not have run yet.
+                self.scroll_to(y=target, animate=False, immediate=True, force=True)
+            order = self._order
+            if last < len(order):
+                self._revealed = (order[first], order[last], self.scroll_y)
+
+    def _rows_room(self) -> int:
+        """The rows in view once laid out: the region less the header, and less the
+        horizontal scrollbar that values wider than the table call for, which the
+        layout after a measuring has not always shown yet."""
+        region = self.scrollable_content_region
+        room = region.height - (self.header_height if self.show_header else 0)
+        if not self.show_horizontal_scrollbar and self.virtual_size.width > region.width:
+            room -= self.styles.scrollbar_size_horizontal
+        return room
 
     def watch_virtual_size(self) -> None:
         """The table measured its rows: rows waiting to be shown can be scrolled to
         (after the refresh that lays the new size out)."""
         if self._reveal is not None:
             self.call_after_refresh(self._reveal_waiting)
+
+    def watch_show_vertical_scrollbar(self, shown: bool) -> None:
+        if shown:  # scrolled while it was hidden: its thumb where the view is
+            self.vertical_scrollbar.position = self.scroll_y
+        self._scrollbars_changed()
+
+    def watch_show_horizontal_scrollbar(self, shown: bool) -> None:
+        if shown:
+            self.horizontal_scrollbar.position = self.scroll_x
+        self._scrollbars_changed()
+
+    def _scrollbars_changed(self) -> None:
+        """The layout showed (or hid) a scrollbar: the room the rows waiting to be shown
+        are measured against has changed; the rows just shown may have lost a line to
+        it (their values came and the table grew wider than its pane)."""
+        if self._reveal is not None:
+            self.call_after_refresh(self._reveal_waiting)
+        elif self._revealed is not None:
+            self.call_after_refresh(self._keep_revealed)
+
+    def _keep_revealed(self) -> None:
+        """The rows just shown, in view again unless the view was scrolled since."""
+        if self._revealed is None or self._reveal is not None:
+            return
+        first, last, shown_at = self._revealed
+        if self.scroll_y != shown_at or first not in self._order or last not in self._order:
+            self._revealed = None
+            return
+        self.reveal_rows(self._order.index(first), self._order.index(last), tries=0)
 
     def _reveal_waiting(self) -> None:
         """The rows waiting to be shown then (newer rows may have taken their turn)."""

@@ -42,7 +42,7 @@ from prompt_toolkit.output import DummyOutput
 from prompt_toolkit.output.vt100 import Vt100_Output
 from textual import events
 from textual.pilot import Pilot
-from textual.widgets import RichLog, Static
+from textual.widgets import DataTable, RichLog, Static
 
 import rac_console.tui.panes as panes_module
 from rac_console.commands.outcome import Outcome
@@ -264,11 +264,22 @@ STAGED_FRAMES: list[tuple[Literal["tx", "rx"], bytes, float | None]] = [
 
 
 async def watch_then_pause(pilot: Pilot[Any], lines: tuple[str, ...], rows: int) -> None:
-    """Watch, wait for every row's first value from the simulator, then pause."""
+    """Watch, wait for every row's first value from the simulator, then pause. Each
+    line's rows are in the table before the next line is typed: rows added together
+    are scrolled to as one (the first at the top when they do not all fit), so lines
+    the app took in one go under load would show another view."""
+    app = cast(RacConsoleApp, pilot.app)
+    table = app.main_screen.panes.table
     for line in lines:
+        grown = more_rows_than(table, table.row_count)
         await type_line(pilot, line)
+        await until(pilot, grown, f"the rows of {line!r}")
     await rows_read(pilot, rows)
     await pause_polling(pilot)
+
+
+def more_rows_than(table: DataTable[Any], rows: int) -> Callable[[], bool]:
+    return lambda: table.row_count > rows
 
 
 async def rows_read(pilot: Pilot[Any], rows: int) -> None:
