@@ -28,7 +28,7 @@ if TYPE_CHECKING:
 def attach_for(args: argparse.Namespace, kind: str, where: Where) -> Attach | None:
     """How ``kind`` (the console, the REPL, ``watch``, …) attaches a target to a running agent;
     None with ``--direct``. A front end that feeds the plant itself (``--mqtt``,
-    ``--metrics``) goes direct: the agent's exporters are the agent's own."""
+    ``--metrics``, ``--opcua``) goes direct: the agent's exporters are the agent's own."""
     if getattr(args, "direct", False):
         return None
 
@@ -37,7 +37,8 @@ def attach_for(args: argparse.Namespace, kind: str, where: Where) -> Attach | No
     ) -> EngineLike | None:
         from ..agent.endpoint import present
 
-        if options.publish is not None or options.metrics is not None or not present():
+        feeds = options.publish or options.metrics or options.opcua
+        if feeds is not None or not present():
             return None
         from ..agent.client import Refused, attach
         from ..engine.setup.where import Where
@@ -267,7 +268,7 @@ def _exports(args: argparse.Namespace, names: list[str]) -> list[Export]:
     from ..engine.watch.watchlist import load
 
     plant = getattr(args, "plant", {})
-    feeds = plant.get("publish") is not None or plant.get("metrics") is not None
+    feeds = any(plant.get(name) is not None for name in ("publish", "metrics", "opcua"))
     feeds = feeds or getattr(args, "log_csv", None) is not None
     feeds = feeds or any(getattr(t.profile, "publish", None) for t in _targets(args))
     watch_file = getattr(args, "watch", None)
@@ -279,12 +280,12 @@ def _exports(args: argparse.Namespace, names: list[str]) -> list[Export]:
         if watch_file is not None:
             raise InputError(
                 "agent --watch FILE gives the agent's own feeds their rows: give --mqtt, "
-                "--metrics or --log-csv with it (the clients watch what they like)"
+                "--metrics, --opcua or --log-csv with it (the clients watch what they like)"
             )
         return []
     if watch_file is None and not lines:
         raise InputError(
-            "the agent's --mqtt, --metrics and --log-csv feed the rows of a watch list: "
+            "the agent's --mqtt, --metrics, --opcua and --log-csv feed the rows of a watch list: "
             "give it with --watch FILE (or a cell's watch lines)"
         )
     if watch_file is not None:

@@ -35,7 +35,7 @@ def refusal(args: argparse.Namespace) -> str | None:
             f"--history names the console's and the REPL's history file: "
             f"{_name(command)} keeps no history"
         )
-    for option in ("mqtt", "metrics"):
+    for option in ("mqtt", "metrics", "opcua"):
         if getattr(args, option, None) is not None and command not in POLLING_COMMANDS:
             return (
                 f"--{option} feeds the plant the watched values: the console, the REPL, "
@@ -87,6 +87,10 @@ _TOP_DEFAULTS = {
     "interval": None,
     "mqtt": None,
     "metrics": None,
+    "opcua": None,
+    "opcua_security": None,
+    "opcua_writes": False,
+    "opcua_user": None,
 }
 
 

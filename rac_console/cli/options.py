@@ -166,7 +166,8 @@ def global_options(parser: argparse.ArgumentParser, suppress: bool) -> list[argp
 
 
 def plant_options(parser: argparse._ActionsContainer, suppress: bool) -> list[argparse.Action]:
-    """``--mqtt`` and ``--metrics``: the console's, the REPL's and watch's."""
+    """``--mqtt``, ``--metrics`` and ``--opcua``: the console's, the REPL's, watch's and
+    the agent's."""
     default = argparse.SUPPRESS if suppress else None
     return [
         parser.add_argument(
@@ -182,6 +183,33 @@ def plant_options(parser: argparse._ActionsContainer, suppress: bool) -> list[ar
             default=default,
             help="serve the watched values to Prometheus at http://HOST:PORT/metrics "
             "(127.0.0.1 unless another address is written out)",
+        ),
+        parser.add_argument(
+            "--opcua",
+            metavar="ENDPOINT",
+            default=default,
+            help="serve the watched values over OPC UA at opc.tcp://HOST:PORT "
+            "(another address than loopback needs --opcua-security)",
+        ),
+        parser.add_argument(
+            "--opcua-security",
+            choices=("none", "sign", "encrypt"),
+            default=default,
+            help="Basic256Sha256: sign, or sign and encrypt (none: loopback only)",
+        ),
+        parser.add_argument(
+            "--opcua-writes",
+            action="store_true",
+            default=argparse.SUPPRESS if suppress else False,
+            help="let OPC UA clients write the watched variables, through the same "
+            "checks as a typed put (read-only, profiles, read-back)",
+        ),
+        parser.add_argument(
+            "--opcua-user",
+            metavar="NAME",
+            default=default,
+            help="OPC UA clients must log in as NAME, with the password in "
+            "RAC_OPCUA_PASSWORD (needs --opcua-security)",
         ),
     ]
 

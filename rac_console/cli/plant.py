@@ -98,7 +98,53 @@ def _plant_options(args: argparse.Namespace, notices: list[str]) -> dict[str, An
                 f"--metrics {where} is open to the network: anyone who reaches this "
                 "machine can read the watched values"
             )
+    _opcua_options(args, options, notices)
     return options
+
+
+def _opcua_options(args: argparse.Namespace, options: dict[str, Any], notices: list[str]) -> None:
+    """``--opcua``: the server started now (a port taken, a missing extra: refused)."""
+    import os
+
+    from ..commands.opcua import PASSWORD_ENV, opcua_settings
+
+    given = getattr(args, "opcua", None)
+    extra = [
+        name for name in ("opcua_security", "opcua_user") if getattr(args, name, None) is not None
+    ]
+    if getattr(args, "opcua_writes", False):
+        extra.append("opcua_writes")
+    if given is None:
+        if extra:
+            shown = ", ".join("--" + name.replace("_", "-") for name in extra)
+            raise InputError(f"{shown} go with --opcua opc.tcp://HOST:PORT")
+        return
+    settings = opcua_settings(
+        given,
+        getattr(args, "opcua_security", None),
+        bool(getattr(args, "opcua_writes", False)),
+        getattr(args, "opcua_user", None),
+        os.environ.get(PASSWORD_ENV),
+    )
+    from ..plant.extras import need
+
+    need("asyncua", "--opcua")
+    from ..plant.opcua_server import OpcUaServer
+
+    server = OpcUaServer(settings)
+    server.start()
+    atexit.register(server.stop)
+    options["opcua"] = server
+    writes = "writes through the write gate" if settings.writes else "read-only"
+    notices.append(f"serving the watched values over OPC UA at {server} ({writes})")
+    if server.certificate is not None:
+        from ..plant.opcua_security import opcua_folder
+
+        made = "made now" if server.certificate_made else "its certificate"
+        notices.append(
+            f"OPC UA certificate ({made}): {server.certificate}; clients are let in when "
+            f"their certificate is in {opcua_folder() / 'trusted'}"
+        )
 
 
 def _check_ca_file(ca_file: str | None) -> None:

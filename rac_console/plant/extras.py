@@ -12,6 +12,7 @@ from ..protocol import InputError
 _EXTRAS = {
     "paho.mqtt.client": ("mqtt", "paho-mqtt"),
     "prometheus_client": ("metrics", "prometheus-client"),
+    "asyncua": ("opcua", "asyncua"),
 }
 
 

@@ -56,8 +56,6 @@ CUT_FOCUSED = "values cut: d shows the row in full"
 REVEAL_TRIES = 5
 
 
-#: Rows out of view are brought up to date this often (seconds); the rows in view at
-#: every refresh.
 #: Rows out of view brought up to date per refresh (the rest wait their turn, or their
 #: scroll into view): a constant cost per refresh, whatever the table holds.
 OFF_VIEW_PER_REFRESH = 16
@@ -376,8 +374,6 @@ class WatchTable(DataTable[object]):
         self._scrollbars_changed()
 
     def watch_show_horizontal_scrollbar(self, shown: bool) -> None:
-        if shown:
-            self.horizontal_scrollbar.position = self.scroll_x
         self._scrollbars_changed()
 
     def _scrollbars_changed(self) -> None:

@@ -27,11 +27,14 @@ if TYPE_CHECKING:
     from ...commands.target import Target
     from ...plant.metrics import MetricsBoard
     from ...plant.mqtt import MqttFeed
+    from ...plant.opcua_server import OpcUaServer
     from ..setup.options import EngineOptions
+    from .plant_writes import PlantWrites, Submit
 
 
 class PlantTap:
-    """The MQTT feed (while publishing) and the metrics board (with --metrics)."""
+    """The MQTT feed (while publishing), the metrics board (with --metrics) and the OPC
+    UA server (with --opcua)."""
 
     def __init__(
         self,
@@ -40,15 +43,22 @@ class PlantTap:
         board: MetricsBoard | None,
         say: Callable[[str], None],
         changed: Callable[[], None] = lambda: None,
+        opcua: OpcUaServer | None = None,
+        writes: PlantWrites | None = None,
     ) -> None:
         """``name``: the target in topics and labels; ``say``: tell the user, ``changed``:
-        the broker's state changed, for the status line (any thread)."""
+        the broker's state changed, for the status line (any thread); ``writes``: where
+        an OPC UA client's writes go (when the server takes them)."""
         self._changed = changed
         self.name = name
         self._credentials = credentials
         self._board = board
         self._say = say
         self.mqtt: MqttFeed | None = None
+        self._opcua = opcua
+        self._writes = writes
+        if opcua is not None:
+            opcua.attach(name, writes, say)
 
     @property
     def broker_state(self) -> str | None:
@@ -95,6 +105,9 @@ class PlantTap:
         said of it, if publishing."""
         if self._board is not None:
             self._board.forget(self.name)
+        if self._opcua is not None:
+            self._opcua.detach(self.name, forget=True)
+            self._opcua.attach(name, self._writes, self._say)
         old, self.name = self.name, name
         feed = self.mqtt
         if feed is None or name == old:
@@ -114,6 +127,8 @@ class PlantTap:
         views = read(changed)
         if self.mqtt is not None:
             self._to_mqtt(self.mqtt, views, wall)
+        if self._opcua is not None:
+            self._opcua.update(self.name, views, wall)
         board = self._board
         if board is not None:
             from ...plant.payload import OK, numeric_fields
@@ -134,6 +149,8 @@ class PlantTap:
         if self._board is not None:
             for var in variables:
                 self._board.remove(self.name, str(var))
+        if self._opcua is not None:
+            self._opcua.remove(self.name, variables)
         if self.mqtt is not None:
             from ...plant.payload import payload
 
@@ -158,6 +175,8 @@ class PlantTap:
 
     def close(self) -> None:
         self.stop_publishing(wait=True)
+        if self._opcua is not None:  # the engine ended: its values are no longer read
+            self._opcua.detach(self.name)
 
     def _to_mqtt(self, feed: MqttFeed, views: Iterable[RowView], wall: float) -> None:
         from ...plant.payload import Reading
@@ -198,9 +217,16 @@ def open_tap(
     target: Target,
     say: Callable[[str], None],
     changed: Callable[[], None],
+    writes_to: tuple[Submit, Callable[[], Target]] | None = None,
 ) -> PlantTap:
-    """An engine's tap."""
-    return PlantTap(name_of(options, target), options.credentials, options.metrics, say, changed)
+    """An engine's tap; ``writes_to``: the engine's submit and its rules as they stand,
+    for an OPC UA client's writes."""
+    from .plant_writes import PlantWrites
+
+    writes = PlantWrites(*writes_to) if writes_to is not None else None
+    name = name_of(options, target)
+    metrics, opcua = options.metrics, options.opcua
+    return PlantTap(name, options.credentials, metrics, say, changed, opcua, writes)
 
 
 def open_at_start(
@@ -217,7 +243,7 @@ def open_at_start(
         from ...commands.plant import parse_mqtt_address
 
         address = parse_mqtt_address(profile.publish)
-    if address is None and options.metrics is None:
+    if address is None and options.metrics is None and options.opcua is None:
         return
     made = tap()
     if address is not None:

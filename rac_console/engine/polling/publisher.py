@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable
+from dataclasses import replace
 from typing import TYPE_CHECKING
 
 from ...commands.language import VarRef
@@ -36,6 +37,8 @@ class Publisher:
         #: A front end shows poll frames (the console's log does; the REPL never does).
         self.poll_frames = frames
         self.observers: list[Callable[[Frame], None]] = []  # Engine.add_frame_observer
+        #: Who asked for the job running now, when not a typed line (``OPC UA``).
+        self.source: str | None = None
         self._events: list[Event] = []
         #: Row views since the last flush, handed over with the events: a front end
         #: never sees a row change before the frames and notes that came before it.
@@ -66,6 +69,8 @@ class Publisher:
 
     def frame(self, frame: Frame) -> None:
         """A frame crossed the wire: to the files, and to the front ends in a batch."""
+        if self.source is not None and frame.source is None and not frame.poll:
+            frame = replace(frame, source=self.source)
         self.files.frame(frame)
         for observer in self.observers:
             observer(frame)

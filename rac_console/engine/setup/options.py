@@ -18,6 +18,7 @@ from .poll_bounds import UNBOUNDED, PollBounds
 
 if TYPE_CHECKING:
     from ...plant.metrics import MetricsBoard
+    from ...plant.opcua_server import OpcUaServer
     from ...session import Session
 
 DEFAULT_INTERVAL = 0.5
@@ -44,6 +45,7 @@ class EngineOptions:
     publish: MqttAddress | None = None
     credentials: Credentials = NO_CREDENTIALS
     metrics: MetricsBoard | None = None
+    opcua: OpcUaServer | None = None  # --opcua: the server the watched values are served by
     plant_name: str | None = None
     #: How much polling may be asked of the controller (a served console's bounds).
     bounds: PollBounds = UNBOUNDED

@@ -213,14 +213,15 @@ class Engine:
         seq: int | None = None,
         then: Callable[[Result], None] | None = None,
         publish: bool = True,
+        source: str | None = None,
     ) -> int:
         """Queue a command a front end made itself (F2's pause, Space on an IO row):
         run like a typed line, never parsed; ``line`` is how it is shown (the echo,
         the result), or None for nothing to echo. ``seq``: the number its cell gave
         the line (else the next of :attr:`numbers`). ``then`` is handed its Result on
         this engine's thread once it is out (``publish``: in the outbox; else to
-        ``then`` alone), even when the job is not run."""
-        seq = self._inbox.put(command, line, seq, then, publish).seq
+        ``then`` alone), even when the job is not run; ``source`` tags its frames."""
+        seq = self._inbox.put(command, line, seq, then, publish, source).seq
         self._answer_if_dead()
         return seq
 
@@ -344,6 +345,7 @@ class Engine:
         from ..published.events import Message, Result
         from .engine_context import EngineContext
 
+        self._publisher.source = job.source
         try:
             feedback: list[Feedback]
             if job.cancelled():
@@ -364,6 +366,7 @@ class Engine:
             raise
         finally:
             self._inbox.end()
+            self._publisher.source = None
         self.publish_status(force=True)
         self._answer(job, Result(job.seq, tuple(feedback), job.line, command))
 
@@ -423,8 +426,9 @@ class Engine:
 
         if self._publisher.tap is None:
             self._publisher.tap = open_tap(
-                self.options, self._rules, self._alert_plant, self._plant_changed
-            )
+                self.options, self._rules, self._alert_plant, self._plant_changed,
+                (self.submit_command, lambda: self._rules),
+            )  # fmt: skip
         return self._publisher.tap
 
     def _open_plant(self) -> None:

@@ -43,13 +43,15 @@ class Inbox:
         seq: int | None = None,
         then: Callable[[Result], None] | None = None,
         publish: bool = True,
+        source: str | None = None,
     ) -> Job:
-        """Queue a line or a command (``seq``: the number its cell gave it; ``then``
-        and ``publish``: see :class:`~.job.Job`)."""
+        """Queue a line or a command (``seq``: the number its cell gave it; ``then``,
+        ``publish`` and ``source``: see :class:`~.job.Job`)."""
         from .job import Job
 
         with self._lock:
-            job = Job(next(self.numbers) if seq is None else seq, what, line, then, publish)
+            number = next(self.numbers) if seq is None else seq
+            job = Job(number, what, line, then, publish, source)
             self._jobs.append(job)
             self._lock.notify()
         return job

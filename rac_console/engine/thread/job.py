@@ -30,6 +30,7 @@ class Job:
     shown: str | None = None  # how a command object is shown (a typed line shows itself)
     then: Callable[[Result], None] | None = None
     publish: bool = True
+    source: str | None = None  # its frames say who asked (``OPC UA``): not a typed line
     _cancelled: threading.Event = field(default_factory=threading.Event, repr=False)
 
     @property
