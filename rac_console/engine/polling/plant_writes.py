@@ -74,7 +74,8 @@ class PlantWrites:
         def done(result: Result) -> None:
             answer.set_result(answer_of(result))
 
-        self._submit(put, f"put {var} {put.value_text}", then=done, source=OPCUA_SOURCE)
+        shown = f"put {var.kind.code} {var.index} {text}   [{OPCUA_SOURCE}]"  # not typed here
+        self._submit(put, shown, then=done, source=OPCUA_SOURCE)
         return answer
 
 
