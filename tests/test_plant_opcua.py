@@ -368,3 +368,61 @@ async def test_the_agent_serves_its_watch_lists_rows_labelled(
         await until("I1 Good", lambda: good(node))
         assert (await node.read_display_name()).Text == "parts made"
         assert "parts made" in (await node.read_description()).Text
+
+
+async def test_with_a_user_only_its_password_lets_a_client_in(
+    env: dict[str, str], running: list[Running], tmp_path: Path
+) -> None:
+    from asyncua.crypto.cert_gen import setup_self_signed_certificate
+    from asyncua.crypto.security_policies import SecurityPolicyBasic256Sha256
+    from cryptography.x509.oid import ExtendedKeyUsageOID
+
+    folder = tmp_path / "opcua"
+    (folder / "trusted").mkdir(parents=True)
+    key, cert = tmp_path / "client-key.pem", folder / "trusted" / "client-cert.der"
+    uri = "urn:rac-console:tests:client"
+    await setup_self_signed_certificate(
+        key, cert, uri, "localhost", [ExtendedKeyUsageOID.CLIENT_AUTH], {"commonName": "tests"}
+    )
+    env = env | {"RAC_CONSOLE_OPCUA_DIR": str(folder), "RAC_OPCUA_PASSWORD": "s3cret"}
+    run = Running(env, "watch", "I", "1", "--opcua", "opc.tcp://127.0.0.1:0",
+                  "--opcua-security", "encrypt", "--opcua-user", "operator")  # fmt: skip
+    running.append(run)
+    run.wait_for("the server", lambda: any(SERVING.search(line) for line in run.err))
+    url = next(m.group(1) for line in run.err if (m := SERVING.search(line)))
+    assert not any("s3cret" in line for line in run.err + run.out)
+
+    async def read_as(user: str, password: str) -> Any:
+        client = Client(url)
+        client.application_uri = uri
+        client.set_user(user)
+        client.set_password(password)
+        await client.set_security(
+            SecurityPolicyBasic256Sha256,
+            str(cert),
+            str(key),
+            server_certificate=str(folder / "server-cert.der"),
+            mode=ua.MessageSecurityMode.SignAndEncrypt,
+        )
+        async with client:
+            node = await variable(client, "sim", "I1")
+            await until("I1 Good", lambda: good(node))
+            return await node.read_value()
+
+    for user, password in (("operator", "wrong"), ("admin", "s3cret")):
+        with pytest.raises(ua.UaStatusCodeError) as refused:
+            await read_as(user, password)
+        assert "Identity" in type(refused.value).__name__ or "Denied" in str(refused.value)
+    assert await read_as("operator", "s3cret") == 1
+
+
+def test_a_user_without_security_or_password_is_refused(env: dict[str, str]) -> None:
+    no_security = cli(env, "watch", "I", "1", "--opcua", "opc.tcp://127.0.0.1:0",
+                      "--opcua-user", "operator")  # fmt: skip
+    assert no_security.returncode == 2
+    assert "RAC_OPCUA_PASSWORD" in one_error_line(no_security)
+    secured = env | {"RAC_OPCUA_PASSWORD": "s3cret"}
+    plain = cli(secured, "watch", "I", "1", "--opcua", "opc.tcp://127.0.0.1:0",
+                "--opcua-user", "operator")  # fmt: skip
+    assert plain.returncode == 2
+    assert "unencrypted" in one_error_line(plain)
