@@ -308,9 +308,9 @@ async def test_a_secured_endpoint_lets_in_only_a_client_whose_certificate_is_tru
     run = Running(env, "watch", "I", "1", "--opcua", "opc.tcp://127.0.0.1:0",
                   "--opcua-security", "encrypt")  # fmt: skip
     running.append(run)
-    run.wait_for("the server", lambda: any(SERVING.search(line) for line in run.err))
+    made = str(folder / "server-cert.der")
+    run.wait_for("the certificate said", lambda: any(made in line for line in run.err))
     url = next(m.group(1) for line in run.err if (m := SERVING.search(line)))
-    assert any(str(folder / "server-cert.der") in line for line in run.err), run.err
     key, cert = tmp_path / "client-key.pem", tmp_path / "client-cert.der"
     uri = "urn:rac-console:tests:client"
     await setup_self_signed_certificate(
@@ -343,6 +343,38 @@ async def test_a_secured_endpoint_lets_in_only_a_client_whose_certificate_is_tru
     with pytest.raises(Exception):  # noqa: B017 - no unsecured endpoint is offered
         async with Client(url) as client:
             await (await variable(client, "sim", "I1")).read_value()
+
+
+async def test_a_secured_endpoint_takes_no_session_on_an_unsecured_channel(
+    env: dict[str, str], running: list[Running], tmp_path: Path
+) -> None:
+    """A client may ask for the endpoints on a channel with no security (that is how it
+    learns the server's certificate), but a session there would read and write in the
+    clear without any certificate checked: asyncua takes one unless told not to."""
+    env = env | {"RAC_CONSOLE_OPCUA_DIR": str(tmp_path / "opcua")}
+    run = Running(env, "watch", "I", "1", "--opcua", "opc.tcp://127.0.0.1:0",
+                  "--opcua-security", "encrypt", "--opcua-writes")  # fmt: skip
+    running.append(run)
+    run.wait_for("the server", lambda: any(SERVING.search(line) for line in run.err))
+    url = next(m.group(1) for line in run.err if (m := SERVING.search(line)))
+    client = Client(url)
+    await client.connect_socket()
+    try:
+        await client.send_hello()
+        await client.open_secure_channel()  # SecurityPolicy#None
+        endpoints = await client.uaclient.get_endpoints(ua.GetEndpointsParameters(EndpointUrl=url))
+        assert endpoints, "the endpoints are given on it"
+        params = ua.CreateSessionParameters()
+        params.ClientDescription = ua.ApplicationDescription(ApplicationUri="urn:tests:raw")
+        params.ClientNonce = b"n" * 32
+        params.EndpointUrl = url
+        params.SessionName = "raw"
+        params.RequestedSessionTimeout = 60_000
+        with pytest.raises(ua.UaStatusCodeError) as refused:
+            await client.uaclient.create_session(params)
+        assert "SecurityPolicyRejected" in type(refused.value).__name__
+    finally:
+        client.disconnect_socket()
 
 
 # ------------------------------------------------------------------------- the agent

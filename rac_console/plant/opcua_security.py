@@ -10,9 +10,11 @@ client must also give that user's password.
 
 from __future__ import annotations
 
+import hashlib
 import hmac
 import os
 import platform
+import time
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -37,6 +39,14 @@ _POLICIES = {
     Security.SIGN: ua.SecurityPolicyType.Basic256Sha256_Sign,
     Security.ENCRYPT: ua.SecurityPolicyType.Basic256Sha256_SignAndEncrypt,
 }
+POLICY_URI = "http://opcfoundation.org/UA/SecurityPolicy#Basic256Sha256"
+
+
+def mode_of(security: Security) -> ua.MessageSecurityMode:
+    """The message security mode a channel must have."""
+    if security is Security.SIGN:
+        return ua.MessageSecurityMode.Sign
+    return ua.MessageSecurityMode.SignAndEncrypt
 
 
 def opcua_folder() -> Path:
@@ -87,6 +97,7 @@ class TrustedFolder:
         self.trusted = folder / "trusted"
         self.rejected = folder / "rejected"
         self._say = say
+        self._said: dict[bytes, float] = {}  # a certificate refused: when it was said
 
     async def __call__(self, cert: x509.Certificate, app: ua.ApplicationDescription) -> None:
         options = (
@@ -102,20 +113,29 @@ class TrustedFolder:
             await store.load()  # a folder of no certificate: ValueError
             await CertificateValidator(options, store).validate(cert, app)
         except (ServiceError, ValueError, OSError):
-            kept = self._keep_rejected(cert)
-            self._say(
-                "an OPC UA client's certificate was refused (not trusted, or not valid now): "
-                f"to let it in, move {kept} into {self.trusted}"
-            )
+            self._refused(cert)
             raise ServiceError(ua.StatusCodes.BadCertificateUntrusted) from None
 
-    def _keep_rejected(self, cert: x509.Certificate) -> Path:
+    def _refused(self, cert: x509.Certificate) -> None:
+        """Kept in ``rejected`` (a hundred at most: anyone who reaches the port can try)
+        and said, each certificate once a minute at most."""
+        der = cert.public_bytes(Encoding.DER)
+        now = time.monotonic()
+        if now - self._said.get(der, -60.0) < 60 or len(self._said) > 1000:
+            return
+        self._said[der] = now
         self.rejected.mkdir(parents=True, exist_ok=True)
         name = cert.subject.rfc4514_string() or "client"
         safe = "".join(c if c.isalnum() or c in "-_." else "_" for c in name)[:60]
-        path = self.rejected / f"{safe}-{cert.serial_number % 10**8}.der"
-        path.write_bytes(cert.public_bytes(Encoding.DER))
-        return path
+        path = self.rejected / f"{safe}-{hashlib.sha256(der).hexdigest()[:12]}.der"
+        if not path.exists() and sum(1 for _ in self.rejected.iterdir()) >= 100:
+            self._say(f"an OPC UA client's certificate was refused ({self.rejected} is full)")
+            return
+        path.write_bytes(der)
+        self._say(
+            "an OPC UA client's certificate was refused (not trusted, or not valid now): "
+            f"to let it in, move {path} into {self.trusted}"
+        )
 
 
 async def secure(
@@ -136,7 +156,7 @@ async def secure(
         folder.chmod(0o700)
     (folder / "trusted").mkdir(exist_ok=True)
     key, cert = folder / "server-key.pem", folder / "server-cert.der"
-    made = not cert.is_file()
+    before = cert.read_bytes() if cert.is_file() else None  # remade when it expires
     await setup_self_signed_certificate(
         key,
         cert,
@@ -150,5 +170,6 @@ async def secure(
     await server.load_certificate(str(cert))
     await server.load_private_key(str(key))
     server.set_security_policy([_POLICIES[settings.security]])
+    made = before != cert.read_bytes()
     server.set_certificate_validator(TrustedFolder(folder, say))
     return cert, made

@@ -81,15 +81,19 @@ class OpcUaServer:
 
     def start(self) -> None:
         """Start the server's process and wait until it listens."""
-        root = str(Path(__file__).resolve().parents[2])  # the folder (or zip) of the package
+        # -P: not the current folder's modules first. Its own process group: Ctrl-C at
+        # the REPL is the REPL's, not the server's. Below the polls' priority.
         flags = getattr(subprocess, "CREATE_NO_WINDOW", 0)
+        flags |= getattr(subprocess, "CREATE_NEW_PROCESS_GROUP", 0)
+        flags |= getattr(subprocess, "BELOW_NORMAL_PRIORITY_CLASS", 0)
         self._process = process = subprocess.Popen(
-            [sys.executable, "-m", "rac_console.plant.opcua_space"],
+            [sys.executable, "-P", "-m", "rac_console.plant.opcua_space"],
             stdin=subprocess.PIPE,
             stdout=subprocess.PIPE,
             stderr=subprocess.DEVNULL,
-            env=_child_environment(root),
+            env=_child_environment(Path(__file__).resolve().parents[2]),
             creationflags=flags,
+            start_new_session=sys.platform != "win32",
         )
         assert process.stdin is not None and process.stdout is not None
         self._pipe = pipe = Pipe(process.stdout, process.stdin)  # type: ignore[arg-type]
@@ -188,11 +192,16 @@ class OpcUaServer:
     def _read(self) -> None:
         pipe = self._pipe
         assert pipe is not None
-        while (message := pipe.receive()) is not None:
-            if message[0] == "say":
-                self._say(message[1], message[2])
-            elif message[0] == "write":
-                self._write(*message[1:])
+        try:
+            while (message := pipe.receive()) is not None:
+                if message[0] == "say":
+                    self._say(str(message[1]), message[2])
+                elif message[0] == "write":
+                    self._write(*message[1:])
+        except Exception as exc:  # never a traceback over the console: said, and ended
+            self._say(f"the OPC UA server at {self}: {exc!r}")
+        if self._process is not None and self._process.poll() is None:
+            self._process.kill()  # nobody reads it any more: it must not wait on us
         if not self._stopping:
             self._say(f"the OPC UA server at {self} stopped: its process ended")
 
@@ -223,11 +232,16 @@ class OpcUaServer:
         writes.write(var, text).add_done_callback(lambda done: answer(*done.result()))
 
 
-def _child_environment(root: str) -> dict[str, str]:
-    """This environment, the package importable from where it was loaded (a zip too)."""
+def _child_environment(root: Path) -> dict[str, str]:
+    """This environment without the password (it goes over the pipe), and the package
+    importable when it was loaded from a zip (installed, or a checkout on the path, the
+    same interpreter finds it)."""
     import os
 
-    env = dict(os.environ)
-    paths = [root, *filter(None, env.get("PYTHONPATH", "").split(os.pathsep))]
-    env["PYTHONPATH"] = os.pathsep.join(paths)
+    from ..commands.opcua import PASSWORD_ENV
+
+    env = {name: value for name, value in os.environ.items() if name != PASSWORD_ENV}
+    if root.is_file():
+        paths = [str(root), *filter(None, env.get("PYTHONPATH", "").split(os.pathsep))]
+        env["PYTHONPATH"] = os.pathsep.join(paths)
     return env

@@ -106,6 +106,10 @@ class Space:
         host, port = settings.address.host, settings.address.port
         server.set_endpoint(f"opc.tcp://{f'[{host}]' if ':' in host else host}:{port}/")
         secured = await secure(server, settings, self.say)
+        if secured is not None:
+            from .opcua_channels import guard_channels
+
+            guard_channels(settings, server.iserver.certificate_validator)
         iserver = server.iserver
         iserver.max_connections = MAX_CONNECTIONS
         iserver.max_subscriptions = MAX_SUBSCRIPTIONS

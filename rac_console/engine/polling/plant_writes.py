@@ -10,6 +10,7 @@ engine's jobs, in turn with the typed lines and the polls, through the job's wri
 
 from __future__ import annotations
 
+import time
 from collections.abc import Callable
 from concurrent.futures import Future
 from typing import TYPE_CHECKING, Protocol
@@ -30,6 +31,9 @@ OPCUA_SOURCE = "OPC UA"
 
 #: How a write ended, for the client: a status name (OPC UA's) and what was said.
 WriteAnswer = tuple[str, str]
+#: A plant's write not started (or not sent) within this many seconds is not sent at all:
+#: its client is answered within 30 s (plant/opcua_space.py), and never written after.
+RUN_WITHIN = 20.0
 
 
 class Submit(Protocol):
@@ -41,6 +45,7 @@ class Submit(Protocol):
         then: Callable[[Result], None] | None = None,
         publish: bool = True,
         source: str | None = None,
+        valid: Callable[[], bool] | None = None,
     ) -> int: ...
 
 
@@ -74,8 +79,15 @@ class PlantWrites:
         def done(result: Result) -> None:
             answer.set_result(answer_of(result))
 
+        # Sent only to the target it was meant for (not another opened since with
+        # `connect`), and while its client still waits (never after its answer said so).
+        until = time.monotonic() + RUN_WITHIN
+
+        def valid() -> bool:
+            return self._rules() is rules and time.monotonic() < until
+
         shown = f"put {var.kind.code} {var.index} {text}   [{OPCUA_SOURCE}]"  # not typed here
-        self._submit(put, shown, then=done, source=OPCUA_SOURCE)
+        self._submit(put, shown, then=done, source=OPCUA_SOURCE, valid=valid)
         return answer
 
 
@@ -83,9 +95,12 @@ def answer_of(result: Result) -> WriteAnswer:
     """The client's answer to the job that wrote: Good only when the controller took
     the value and, read back, holds it."""
     outcome = next((item for item in result.feedback if isinstance(item, Outcome)), None)
-    if outcome is None:
+    if outcome is None:  # not run (nothing sent), or the engine died running it
         said = "; ".join(getattr(item, "text", "") for item in result.feedback) or "not run"
-        return ("BadUserAccessDenied", said)
+        return ("BadResourceUnavailable" if said.startswith("not run") else "BadTimeout", said)
+    if outcome.read_back_error is not None and outcome.response is not None:
+        why = outcome.read_back_error
+        return ("BadCommunicationError", f"the controller took it, but it was not read back: {why}")
     if outcome.write_unknown:
         return ("BadTimeout", outcome.error or "no answer: the write may have been applied")
     if outcome.status is ExitStatus.REFUSED:

@@ -214,14 +214,15 @@ class Engine:
         then: Callable[[Result], None] | None = None,
         publish: bool = True,
         source: str | None = None,
+        valid: Callable[[], bool] | None = None,
     ) -> int:
         """Queue a command a front end made itself (F2's pause, Space on an IO row):
         run like a typed line, never parsed; ``line`` is how it is shown (the echo,
         the result), or None for nothing to echo. ``seq``: the number its cell gave
         the line (else the next of :attr:`numbers`). ``then`` is handed its Result on
         this engine's thread once it is out (``publish``: in the outbox; else to
-        ``then`` alone), even when the job is not run; ``source`` tags its frames."""
-        seq = self._inbox.put(command, line, seq, then, publish, source).seq
+        ``then`` alone), even when the job is not run; ``source``, ``valid``: see Job."""
+        seq = self._inbox.put(command, line, seq, then, publish, source, valid).seq
         self._answer_if_dead()
         return seq
 

@@ -44,14 +44,15 @@ class Inbox:
         then: Callable[[Result], None] | None = None,
         publish: bool = True,
         source: str | None = None,
+        valid: Callable[[], bool] | None = None,
     ) -> Job:
         """Queue a line or a command (``seq``: the number its cell gave it; ``then``,
-        ``publish`` and ``source``: see :class:`~.job.Job`)."""
+        ``publish``, ``source`` and ``valid``: see :class:`~.job.Job`)."""
         from .job import Job
 
         with self._lock:
             number = next(self.numbers) if seq is None else seq
-            job = Job(number, what, line, then, publish, source)
+            job = Job(number, what, line, then, publish, source, valid)
             self._jobs.append(job)
             self._lock.notify()
         return job

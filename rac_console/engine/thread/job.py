@@ -31,6 +31,9 @@ class Job:
     then: Callable[[Result], None] | None = None
     publish: bool = True
     source: str | None = None  # its frames say who asked (``OPC UA``): not a typed line
+    #: While it holds, the job may run (asked before it starts and before each send): a
+    #: plant's write, only on the target and within the time its client waits for it.
+    valid: Callable[[], bool] | None = None
     _cancelled: threading.Event = field(default_factory=threading.Event, repr=False)
 
     @property
@@ -41,4 +44,4 @@ class Job:
         self._cancelled.set()
 
     def cancelled(self) -> bool:
-        return self._cancelled.is_set()
+        return self._cancelled.is_set() or (self.valid is not None and not self.valid())
