@@ -281,7 +281,7 @@ def test_the_agents_own_feed_serves_its_watch_list_whoever_is_attached(
     ("args", "says"),
     [
         (("--mqtt", "mqtt://127.0.0.1/cell"), "give it with --watch FILE"),
-        (("--watch", "WATCH"), "give --mqtt, --metrics or --log-csv with it"),
+        (("--watch", "WATCH"), "give --mqtt, --metrics, --opcua or --log-csv with it"),
     ],
 )
 def test_an_agent_feed_with_nothing_to_feed_is_refused_in_one_line(

@@ -270,6 +270,10 @@ TOP_OPTIONS = OPTIONS | {
     "--interval": Option("--interval", "SECONDS"),
     "--mqtt": Option("--mqtt", "URL"),
     "--metrics": Option("--metrics", "[HOST:]PORT"),
+    "--opcua": Option("--opcua", "ENDPOINT"),
+    "--opcua-security": Option("--opcua-security", "POLICY"),
+    "--opcua-writes": Option("--opcua-writes", None),
+    "--opcua-user": Option("--opcua-user", "NAME"),
 }
 
 

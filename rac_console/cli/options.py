@@ -193,9 +193,10 @@ def plant_options(parser: argparse._ActionsContainer, suppress: bool) -> list[ar
         ),
         parser.add_argument(
             "--opcua-security",
+            metavar="POLICY",
             choices=("none", "sign", "encrypt"),
             default=default,
-            help="Basic256Sha256: sign, or sign and encrypt (none: loopback only)",
+            help="none (loopback only), sign or encrypt (Basic256Sha256; encrypt also signs)",
         ),
         parser.add_argument(
             "--opcua-writes",
