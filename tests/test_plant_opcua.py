@@ -458,3 +458,42 @@ def test_a_user_without_security_or_password_is_refused(env: dict[str, str]) -> 
                 "--opcua-user", "operator")  # fmt: skip
     assert plain.returncode == 2
     assert "unencrypted" in one_error_line(plain)
+
+
+async def test_while_polling_is_paused_values_are_uncertain_then_good_again(
+    env: dict[str, str],
+) -> None:
+    """F2 (or ``pause``) stops reading: the values served are no longer the controller's
+    present ones, so not Good, until polling resumes."""
+    from rac_console.commands.opcua import opcua_settings
+    from rac_console.engine import Engine
+    from rac_console.engine.setup.options import EngineOptions
+    from rac_console.plant.opcua_server import OpcUaServer
+    from tests.support.drivers import Front
+
+    server = OpcUaServer(opcua_settings("opc.tcp://127.0.0.1:0", None, False, None, None))
+    await asyncio.to_thread(server.start)
+    engine = Engine(None, options=EngineOptions(interval=0.1, opcua=server))
+    try:
+        await asyncio.to_thread(engine.start)
+        front = Front(engine)
+        await asyncio.to_thread(front.run, "watch I 1")
+        async with Client(str(server)) as client:
+            node = await variable(client, "sim", "I1")
+            await until("I1 Good", lambda: good(node))
+
+            async def code() -> int:
+                return int((await data_value(node)).StatusCode.value)
+
+            await asyncio.to_thread(front.run, "pause")
+
+            async def uncertain() -> bool:
+                return bool(await code() == ua.StatusCodes.UncertainLastUsableValue)
+
+            await until("I1 Uncertain", uncertain)
+            assert (await data_value(node)).Value.Value == 1  # the last value, kept
+            await asyncio.to_thread(front.run, "resume")
+            await until("I1 Good again", lambda: good(node))
+    finally:
+        await asyncio.to_thread(engine.stop)
+        await asyncio.to_thread(server.stop)

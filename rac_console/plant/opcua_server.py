@@ -159,6 +159,12 @@ class OpcUaServer:
                 self._queue((target, str(var)), row)
         self._wake.set()
 
+    def paused(self, target: str, paused: bool) -> None:
+        """The target's polling paused (its values no longer read: not Good) or resumed."""
+        with self._lock:
+            self._out.append(["paused", target, paused])
+        self._wake.set()
+
     def remove(self, target: str, variables: Iterable[VarRef]) -> None:
         """Rows unwatched: their variables leave the address space."""
         with self._lock:

@@ -42,6 +42,8 @@ MAX_MONITORED_ITEMS = 20_000
 #: the write may still be applied; it is never sent again).
 WRITE_DEADLINE = 30.0
 ROOT = "RacConsole"
+#: The key, beside a target's variables, of its polling paused or resumed.
+PAUSED = "\x00paused"
 
 
 @dataclass
@@ -49,6 +51,7 @@ class _Variable:
     node: Node
     status_node: Node
     status: str = ""
+    served: Served | None = None  # the last value served
 
 
 class Space:
@@ -67,6 +70,7 @@ class Space:
         self._wake = asyncio.Event()
         self.stopped = asyncio.Event()
         self._answers: dict[int, asyncio.Future[tuple[str, str]]] = {}
+        self._paused: set[str] = set()  # the targets whose polling is paused
         self._numbers = itertools.count(1)
 
     def say(self, text: str, target: str | None = None) -> None:
@@ -86,6 +90,12 @@ class Space:
             answer = self._answers.pop(message[1], None)
             if answer is not None and not answer.done():
                 answer.set_result((message[2], message[3]))
+        elif word == "paused":
+            target, paused = message[1], message[2]
+            (self._paused.add if paused else self._paused.discard)(target)
+            self._pending.pop((target, PAUSED), None)
+            self._pending[(target, PAUSED)] = None
+            self._wake.set()
         elif word == "stop":
             self.stopped.set()
 
@@ -140,6 +150,13 @@ class Space:
 
     async def _apply(self, target: str, key: str, row: Row | str | None) -> None:
         server = self.server
+        if key == PAUSED:  # its polling paused or resumed: every value said again
+            paused = target in self._paused
+            for (owner, _), held in list(self._variables.items()):
+                if owner == target and held.served is not None:
+                    shown = data_value(held.served, paused)
+                    await server.write_attribute_value(held.node.nodeid, shown)
+            return
         if isinstance(row, str):  # the whole target
             await self._end_target(target, forget=row == FORGET)
             return
@@ -153,10 +170,12 @@ class Space:
         code, index, label, value, status, stale, wall = row
         variant = Variant(0, value) if value is not None else None
         served = Served(VarRef(kind_of(code), index), label, variant, status, stale, wall)
+        paused = target in self._paused
         if variable is None:
-            variable = await self._make_variable(target, served)  # its value written first
+            variable = await self._make_variable(target, served, paused)  # its value first
         else:
-            await server.write_attribute_value(variable.node.nodeid, data_value(served))
+            await server.write_attribute_value(variable.node.nodeid, data_value(served, paused))
+        variable.served = served
         if status != variable.status:
             variable.status = status
             shown = ua.DataValue(ua.Variant(status, ua.VariantType.String))
@@ -177,7 +196,7 @@ class Space:
         for key in keys:
             await self.server.write_attribute_value(self._variables[key].node.nodeid, ended)
 
-    async def _make_variable(self, target: str, served: Served) -> _Variable:
+    async def _make_variable(self, target: str, served: Served, paused: bool) -> _Variable:
         ns, var = self._ns, served.var
         folder = self._folders.get(target)
         if folder is None:
@@ -192,7 +211,7 @@ class Space:
             node_id, ua.QualifiedName(str(var), ns), initial_value(kind), variant_type(kind)
         )
         # Its first value before anything else: never a Good 0 to a client browsing now.
-        await self.server.write_attribute_value(node_id, data_value(served))
+        await self.server.write_attribute_value(node_id, data_value(served, paused))
         if is_array(kind):
             await node.write_value_rank(1)
             await node.write_array_dimensions([kind.count])

@@ -70,8 +70,10 @@ class Served:
     wall: float  # when it was read (time.time())
 
 
-def data_value(served: Served) -> ua.DataValue:
-    """The DataValue a client reads: the value and Good, or Bad and no value."""
+def data_value(served: Served, paused: bool = False) -> ua.DataValue:
+    """The DataValue a client reads: the value and Good, or Bad and no value; while its
+    target's polling is paused, a good value is UncertainLastUsableValue: not read
+    since."""
     source = datetime.fromtimestamp(served.wall, UTC)
     now = datetime.now(UTC)
     good = served.status == OK and not served.stale and served.variant is not None
@@ -80,7 +82,8 @@ def data_value(served: Served) -> ua.DataValue:
             value = opcua_variant(served.var.kind, served.variant)
         except (TypeError, ValueError, OverflowError):
             return bad(ua.StatusCodes.BadTypeMismatch, source, now)
-        return ua.DataValue(value, ua.StatusCode(ua.StatusCodes.Good), source, now)
+        code = ua.StatusCodes.UncertainLastUsableValue if paused else ua.StatusCodes.Good
+        return ua.DataValue(value, ua.StatusCode(code), source, now)
     if served.status in NO_ANSWER or served.status == OK:  # OK and stale: no answer since
         return bad(ua.StatusCodes.BadCommunicationError, source, now)
     return bad(ua.StatusCodes.BadDeviceFailure, source, now)

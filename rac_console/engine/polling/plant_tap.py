@@ -57,6 +57,7 @@ class PlantTap:
         self.mqtt: MqttFeed | None = None
         self._opcua = opcua
         self._writes = writes
+        self._paused = False  # the polling, as last told to the OPC UA server
         if opcua is not None:
             opcua.attach(name, writes, say)
 
@@ -159,6 +160,9 @@ class PlantTap:
                 self.mqtt.retire(str(var), payload(self.name, var, "", None, UNWATCHED, wall))
 
     def status(self, status: Status) -> None:
+        if self._opcua is not None and status.paused != self._paused:
+            self._paused = status.paused
+            self._opcua.paused(self.name, status.paused)
         if self._board is not None:
             from ...plant.metrics import TargetFigures
 
