@@ -497,3 +497,54 @@ async def test_while_polling_is_paused_values_are_uncertain_then_good_again(
     finally:
         await asyncio.to_thread(engine.stop)
         await asyncio.to_thread(server.stop)
+
+
+async def test_a_write_queued_behind_a_connect_is_sent_to_neither_controller(
+    env: dict[str, str], recording: Recording
+) -> None:
+    """A client's write is meant for the target it was served from: queued behind a
+    typed ``connect`` to another controller, it must not run there (nor at the first)."""
+    import threading
+
+    from rac_console.commands.opcua import opcua_settings
+    from rac_console.engine import Engine
+    from rac_console.engine.setup.options import EngineOptions
+    from rac_console.plant.opcua_server import OpcUaServer
+    from tests.support.drivers import Front
+
+    held = threading.Event()
+    first = recording(Memory(hold=(b"GET:RC8:5:I:", held)))
+    second = recording(Memory())
+    server = OpcUaServer(opcua_settings("opc.tcp://127.0.0.1:0", None, True, None, None))
+    await asyncio.to_thread(server.start)
+    options = EngineOptions(interval=0.1, opcua=server, plant_name="cell")  # a member's name
+    engine = Engine("127.0.0.1", first.port, options=options)
+    try:
+        await asyncio.to_thread(engine.start)
+        front = Front(engine)
+        await asyncio.to_thread(front.run, "watch I 1")
+        async with Client(str(server)) as client:
+            node = await variable(client, "cell", "I1")
+            await until("I1 Good", lambda: good(node))
+            engine.submit("get I 5")  # held at the first controller: the jobs wait
+            engine.submit(f"connect 127.0.0.1:{second.port}")
+            await asyncio.to_thread(
+                front.until, lambda: b"GET:RC8:5:I:" in first.lines, "the held get"
+            )
+            submitted = threading.Event()  # the write handed to the engine, behind the connect
+            hand = server._write
+
+            def handed(*args: Any) -> None:
+                hand(*args)
+                submitted.set()
+
+            server._write = handed  # type: ignore[method-assign,assignment]
+            writing = asyncio.create_task(write_status(node, ua.Variant(7, ua.VariantType.Int32)))
+            assert await asyncio.to_thread(submitted.wait, DEADLINE), "the write handed over"
+            held.set()
+            assert await writing == "BadResourceUnavailable"
+    finally:
+        held.set()
+        await asyncio.to_thread(engine.stop)
+        await asyncio.to_thread(server.stop)
+    assert puts(first) == [] and puts(second) == []
