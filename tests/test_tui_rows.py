@@ -154,9 +154,11 @@ async def test_d_shows_the_row_under_the_cursor_in_full_at_80_columns(tmp_path: 
         await watch_ok(pilot, "watch P 1 J 1", 2)
         value = str(app.main_screen.panes.table.get_cell_at((0, 5)))  # type: ignore[arg-type]
         assert "Fig" in value  # the table holds it all, but the screen cuts it
-        assert (
-            app.main_screen.panes.table.virtual_size.width
-            > app.main_screen.panes.table.scrollable_content_region.width
+        table = app.main_screen.panes.table
+        await until(  # the widths measured once the table's queue runs dry
+            pilot,
+            lambda: table.virtual_size.width > table.scrollable_content_region.width,
+            "the values wider than the table",
         )
         await pilot.press("f6", "d")
         await until(pilot, lambda: app.main_screen.panes.row_detail.is_open, "the detail")
