@@ -271,9 +271,13 @@ async def test_rows_are_scrolled_to_before_the_layout_shows_the_scrollbars(
         table = app.main_screen.panes.table
         await watch_ok(pilot, "watch J 1 T 1 IO 128-131", 6)
         await pause_polling(pilot)  # no values to come: the table holds still
+        await until(  # measured and laid out: the values cut at 80 columns, the rows too many
+            pilot,
+            lambda: table.show_horizontal_scrollbar and table.max_scroll_y > 0,
+            "a scrollbar each way",
+        )
         room = table.scrollable_content_region.height - table.header_height
-        assert room < 6 and table.max_scroll_y > 0
-        assert table.show_horizontal_scrollbar, "values cut at 80 columns: a scrollbar"
+        assert room < 6
         table.scroll_home(animate=False, immediate=True)
         # As in the moment before that layout: the scrollbars the rows and the values
         # call for are not shown yet (the horizontal one would take a row from the view).
@@ -299,8 +303,12 @@ async def test_rows_just_shown_stay_in_view_when_their_values_widen_the_table(
         table = app.main_screen.panes.table
         await watch_ok(pilot, "watch J 1 T 1 IO 128-131", 6)
         await pause_polling(pilot)  # no values to come: the table holds still
+        await until(  # measured and laid out: the values cut at 80 columns, the rows too many
+            pilot,
+            lambda: table.show_horizontal_scrollbar and table.max_scroll_y > 0,
+            "a scrollbar each way",
+        )
         wide = table.virtual_size
-        assert table.show_horizontal_scrollbar, "values cut at 80 columns: a scrollbar"
         table.scroll_home(animate=False, immediate=True)
         # The rows as they were before their values came: narrow enough for the pane.
         table.virtual_size = Size(table.scrollable_content_region.width, wide.height)
