@@ -285,6 +285,23 @@ async def test_a_write_that_cannot_go_is_refused_with_nothing_on_the_wire(
 # ------------------------------------------------------------------------- security
 
 
+async def secured_client(url: str, uri: str, cert: Path, key: Path, folder: Path) -> Client:
+    """A client with its own certificate, Basic256Sha256 SignAndEncrypt, trusting the
+    server's certificate in ``folder``."""
+    from asyncua.crypto.security_policies import SecurityPolicyBasic256Sha256
+
+    client = Client(url)
+    client.application_uri = uri
+    await client.set_security(
+        SecurityPolicyBasic256Sha256,
+        str(cert),
+        str(key),
+        server_certificate=str(folder / "server-cert.der"),
+        mode=ua.MessageSecurityMode.SignAndEncrypt,
+    )
+    return client
+
+
 @pytest.mark.parametrize("address", ["opc.tcp://0.0.0.0:4840", "opc.tcp://192.0.2.7:4840"])
 def test_an_endpoint_off_loopback_without_security_is_refused(
     env: dict[str, str], address: str
@@ -300,7 +317,6 @@ async def test_a_secured_endpoint_lets_in_only_a_client_whose_certificate_is_tru
     env: dict[str, str], running: list[Running], tmp_path: Path
 ) -> None:
     from asyncua.crypto.cert_gen import setup_self_signed_certificate
-    from asyncua.crypto.security_policies import SecurityPolicyBasic256Sha256
     from cryptography.x509.oid import ExtendedKeyUsageOID
 
     folder = tmp_path / "opcua"
@@ -318,15 +334,7 @@ async def test_a_secured_endpoint_lets_in_only_a_client_whose_certificate_is_tru
     )
 
     async def read_with_certificate() -> Any:
-        client = Client(url)
-        client.application_uri = uri
-        await client.set_security(
-            SecurityPolicyBasic256Sha256,
-            str(cert),
-            str(key),
-            server_certificate=str(folder / "server-cert.der"),
-            mode=ua.MessageSecurityMode.SignAndEncrypt,
-        )
+        client = await secured_client(url, uri, cert, key, folder)
         async with client:
             return await (await variable(client, "sim", "I1")).read_data_value()
 
@@ -406,7 +414,6 @@ async def test_with_a_user_only_its_password_lets_a_client_in(
     env: dict[str, str], running: list[Running], tmp_path: Path
 ) -> None:
     from asyncua.crypto.cert_gen import setup_self_signed_certificate
-    from asyncua.crypto.security_policies import SecurityPolicyBasic256Sha256
     from cryptography.x509.oid import ExtendedKeyUsageOID
 
     folder = tmp_path / "opcua"
@@ -425,17 +432,9 @@ async def test_with_a_user_only_its_password_lets_a_client_in(
     assert not any("s3cret" in line for line in run.err + run.out)
 
     async def read_as(user: str, password: str) -> Any:
-        client = Client(url)
-        client.application_uri = uri
+        client = await secured_client(url, uri, cert, key, folder)
         client.set_user(user)
         client.set_password(password)
-        await client.set_security(
-            SecurityPolicyBasic256Sha256,
-            str(cert),
-            str(key),
-            server_certificate=str(folder / "server-cert.der"),
-            mode=ua.MessageSecurityMode.SignAndEncrypt,
-        )
         async with client:
             node = await variable(client, "sim", "I1")
             await until("I1 Good", lambda: good(node))
