@@ -522,7 +522,8 @@ def test_a_client_that_records_its_frames_records_every_poll_whatever_the_budget
     a = Front(engine)  # type: ignore[arg-type]
     try:
         a.run("watch I 0-9")
-        a.until(lambda: controller.lines.count(b"GET:RC8:5:I:") >= 100, "a hundred cycles")
+        # 101 reads of I5: at least 101 cycles begun, more than 1,000 reads in all.
+        a.until(lambda: controller.lines.count(b"GET:RC8:5:I:") >= 101, "a hundred cycles")
         a.run("pause")
     finally:
         engine.stop()
