@@ -219,6 +219,8 @@ async def test_a_write_is_refused_by_default_with_nothing_on_the_wire(
         answer = await write_status(node, ua.Variant(42, ua.VariantType.Int32))
         assert answer in ("BadNotWritable", "BadUserAccessDenied")
         assert await node.read_value() == 1
+    # Refused before any job is made for it (answered by the server's process): nothing
+    # can still be on its way to the controller once the answer is in.
     assert puts(controller) == []
 
 
@@ -279,6 +281,8 @@ async def test_a_write_that_cannot_go_is_refused_with_nothing_on_the_wire(
         node = await variable(client, f"127.0.0.1:{controller.port}", name)
         await until(f"{name} served", lambda: served(node))
         assert await write_status(node, value) == expected
+    # Refused before the engine runs anything for it (the value, then the rules, are
+    # checked as the write arrives): nothing can still be on its way once answered.
     assert puts(controller) == []
 
 
